@@ -1,0 +1,3 @@
+"""Import every command module so that it registers itself on the app."""
+
+from odomkit.cli import track  # noqa: F401

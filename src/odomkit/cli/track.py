@@ -1,0 +1,1 @@
+"""odomkit track / demo (placeholder, filled in by the foundation work)."""

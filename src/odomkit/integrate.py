@@ -1,0 +1,104 @@
+"""Dead reckoning: body steps -> pose track, vectorised over samples.
+
+The heading is a prefix sum of Δθ, so it is known for every step at once; each step's
+displacement then depends only on that heading, and positions are prefix sums too. No
+Python loop runs per sample.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit.errors import ModelError
+from odomkit.kinematics import METHODS, Method, step_displacement
+
+
+def _pose0(pose0: ArrayLike) -> NDArray[np.float64]:
+    p = np.asarray(pose0, dtype=float).reshape(-1)
+    if p.shape != (3,) or not np.all(np.isfinite(p)):
+        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
+    return p
+
+
+def dead_reckon(
+    dd: ArrayLike,
+    dtheta: ArrayLike,
+    pose0: ArrayLike = (0.0, 0.0, 0.0),
+    method: Method = "exact",
+) -> NDArray[np.float64]:
+    """Integrate body steps into a pose track.
+
+    Parameters
+    ----------
+    dd : array_like, shape (M,)
+        Arc length travelled by the reference point in each step [m] (negative = reverse).
+    dtheta : array_like, shape (M,)
+        Heading change of each step [rad].
+    pose0 : array_like, shape (3,)
+        Initial pose [x (m), y (m), θ (rad)].
+    method : {"exact", "midpoint", "euler"}
+        See :func:`odomkit.kinematics.step_displacement`.
+
+    Returns
+    -------
+    poses : ndarray, shape (M + 1, 3)
+        ``[x, y, θ]`` before the first step and after each step; θ is continuous (not
+        wrapped).
+
+    Examples
+    --------
+    A quarter circle of radius 1 m driven in 1000 steps ends at (1, 1, π/2):
+
+    >>> n = 1000
+    >>> p = dead_reckon(np.full(n, np.pi / 2 / n), np.full(n, np.pi / 2 / n))
+    >>> np.allclose(p[-1], [1.0, 1.0, np.pi / 2])
+    True
+    """
+    if method not in METHODS:
+        raise ModelError(f"unknown integration method {method!r}; expected one of {', '.join(METHODS)}")
+    dd = np.asarray(dd, dtype=float)
+    dtheta = np.asarray(dtheta, dtype=float)
+    if dd.shape != dtheta.shape or dd.ndim != 1:
+        raise ModelError(f"dd and dtheta must be 1-D of equal length, got {dd.shape} and {dtheta.shape}")
+    p0 = _pose0(pose0)
+    poses = np.empty((dd.size + 1, 3))
+    poses[0] = p0
+    np.cumsum(dtheta, out=poses[1:, 2])
+    poses[1:, 2] += p0[2]
+    dx, dy = step_displacement(poses[:-1, 2], dd, dtheta, method)
+    np.cumsum(dx, out=poses[1:, 0])
+    np.cumsum(dy, out=poses[1:, 1])
+    poses[1:, :2] += p0[:2]
+    return poses
+
+
+def dead_reckon_direct_heading(
+    dd: ArrayLike,
+    heading: ArrayLike,
+    xy0: ArrayLike = (0.0, 0.0),
+    method: Method = "exact",
+) -> NDArray[np.float64]:
+    """Direct-heading odometry (Kelly section 4.1): heading is measured, not integrated.
+
+    Parameters
+    ----------
+    dd : array_like, shape (M,)
+        Distance travelled in each step [m].
+    heading : array_like, shape (M + 1,)
+        Measured heading at every row [rad]; it is unwrapped so that a compass jump from
+        +π to −π is not read as a full turn.
+    xy0 : array_like, shape (2,)
+        Initial position [m].
+    """
+    heading = np.unwrap(np.asarray(heading, dtype=float))
+    dd = np.asarray(dd, dtype=float)
+    if heading.shape != (dd.size + 1,):
+        raise ModelError(f"heading must have one more sample than dd: {heading.shape} vs {dd.shape}")
+    xy0 = np.asarray(xy0, dtype=float).reshape(2)
+    return dead_reckon(dd, np.diff(heading), (xy0[0], xy0[1], heading[0]), method)
+
+
+def path_length(dd: ArrayLike) -> float:
+    """Distance travelled by the reference point, Σ|Δd| [m] (reversing counts)."""
+    return float(np.sum(np.abs(np.asarray(dd, dtype=float))))

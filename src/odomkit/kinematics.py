@@ -1,0 +1,176 @@
+"""Sensor increments -> body motion (Δd, Δθ) per step, and the step's Jacobians.
+
+A *step* k goes from log row k to row k+1. Body motion is the travelled arc length Δd
+[m] of the reference point (differential drive: axle centre; tricycle: rear axle
+centre) and the heading change Δθ [rad].
+
+The exact-arc step map (constant curvature over the step; Wang's compensation as used in
+the Sun–Gao exercise, eq. for x_n, y_n) is::
+
+    x' = x + Δd · sinc(Δθ/2) · cos(θ + Δθ/2)
+    y' = y + Δd · sinc(Δθ/2) · sin(θ + Δθ/2)          sinc(u) = sin(u)/u, sinc(0) = 1
+    θ' = θ + Δθ
+
+which equals Chong–Kleeman eq. (14) rewritten without the radius, so it stays finite on
+straight lines (r -> ∞).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+Method = Literal["euler", "midpoint", "exact"]
+METHODS: tuple[Method, ...] = ("euler", "midpoint", "exact")
+
+# Below this |u| the series of sinc and its derivative is used: the direct formula
+# loses accuracy to cancellation in (u·cos u − sin u)/u².
+_SERIES_BELOW = 1e-3
+
+
+def sinc_half(dtheta: ArrayLike) -> NDArray[np.float64]:
+    """``sin(Δθ/2)/(Δθ/2)``, the chord-to-arc factor, exact at Δθ = 0.
+
+    >>> float(sinc_half(0.0)), round(float(sinc_half(np.pi)), 12)
+    (1.0, 0.636619772368)
+    """
+    # numpy's sinc is sin(πx)/(πx) and handles x = 0 exactly.
+    return np.sinc(np.asarray(dtheta, dtype=float) / (2.0 * np.pi))
+
+
+def sinc_half_derivative(dtheta: ArrayLike) -> NDArray[np.float64]:
+    """d/dΔθ of :func:`sinc_half`, numerically safe at Δθ -> 0 (limit −Δθ/12)."""
+    u = 0.5 * np.asarray(dtheta, dtype=float)
+    small = np.abs(u) < _SERIES_BELOW
+    safe_u = np.where(small, 1.0, u)
+    direct = (safe_u * np.cos(safe_u) - np.sin(safe_u)) / safe_u**2
+    series = -u / 3.0 + u**3 / 30.0  # d/du sinc(u) = −u/3 + u³/30 − …
+    return 0.5 * np.where(small, series, direct)
+
+
+def diff_body_steps(
+    d_left: ArrayLike, d_right: ArrayLike, wheel_base: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Wheel travels -> (Δd, Δθ), Borenstein–Feng eq. (2.2)–(2.4).
+
+    Parameters
+    ----------
+    d_left, d_right : array_like, shape (M,)
+        Signed distance each wheel travelled over each step [m].
+    wheel_base : float
+        Effective wheel base b [m].
+
+    Returns
+    -------
+    dd, dtheta : ndarray, shape (M,)
+        ``(d_right + d_left)/2`` [m] and ``(d_right − d_left)/b`` [rad].
+    """
+    d_left = np.asarray(d_left, dtype=float)
+    d_right = np.asarray(d_right, dtype=float)
+    return 0.5 * (d_right + d_left), (d_right - d_left) / wheel_base
+
+
+def diff_body_jacobian(wheel_base: float) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(d_left, d_right), shape (2, 2); constant for a differential drive."""
+    return np.array([[0.5, 0.5], [-1.0 / wheel_base, 1.0 / wheel_base]])
+
+
+def tricycle_body_steps(
+    travel: ArrayLike, steer: ArrayLike, wheel_to_axle: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Front-wheel travel and steering angle -> (Δd, Δθ) of the rear-axle centre.
+
+    ``Δd = s·cos α``, ``Δθ = s·sin α / L`` (Sun–Gao, Snowhite model; OptiOdom tricycle).
+
+    Parameters
+    ----------
+    travel : array_like, shape (M,)
+        Distance s the steering/driving front wheel rolled over each step [m].
+    steer : array_like, shape (M,)
+        Steering angle α [rad], positive to the left, offset already applied.
+    wheel_to_axle : float
+        L [m].
+    """
+    travel = np.asarray(travel, dtype=float)
+    steer = np.asarray(steer, dtype=float)
+    return travel * np.cos(steer), travel * np.sin(steer) / wheel_to_axle
+
+
+def tricycle_body_jacobian(
+    travel: ArrayLike, steer: ArrayLike, wheel_to_axle: float
+) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(s, α, L), shape (M, 2, 3)."""
+    s = np.asarray(travel, dtype=float)
+    a = np.asarray(steer, dtype=float)
+    jac = np.zeros(s.shape + (2, 3))
+    jac[..., 0, 0] = np.cos(a)
+    jac[..., 0, 1] = -s * np.sin(a)
+    jac[..., 1, 0] = np.sin(a) / wheel_to_axle
+    jac[..., 1, 1] = s * np.cos(a) / wheel_to_axle
+    jac[..., 1, 2] = -s * np.sin(a) / wheel_to_axle**2
+    return jac
+
+
+def step_displacement(
+    theta: ArrayLike, dd: ArrayLike, dtheta: ArrayLike, method: Method = "exact"
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """World-frame displacement (Δx, Δy) of each step, starting at heading ``theta``.
+
+    ``euler`` uses the heading at the start of the step, ``midpoint`` (RK2) the heading
+    at its middle, ``exact`` the constant-curvature arc (midpoint heading times the
+    chord factor sinc(Δθ/2)). All arrays broadcast; shapes (M,).
+    """
+    theta = np.asarray(theta, dtype=float)
+    dd = np.asarray(dd, dtype=float)
+    dtheta = np.asarray(dtheta, dtype=float)
+    if method == "euler":
+        heading, length = theta, dd
+    elif method == "midpoint":
+        heading, length = theta + 0.5 * dtheta, dd
+    elif method == "exact":
+        heading, length = theta + 0.5 * dtheta, dd * sinc_half(dtheta)
+    else:
+        raise ValueError(f"unknown integration method {method!r}; expected one of {METHODS}")
+    return length * np.cos(heading), length * np.sin(heading)
+
+
+def step_jacobians(
+    theta: ArrayLike, dd: ArrayLike, dtheta: ArrayLike, method: Method = "exact"
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Jacobians of one step of :func:`step_displacement` plus ``θ' = θ + Δθ``.
+
+    Returns
+    -------
+    F : ndarray, shape (M, 3, 3)
+        ∂(x', y', θ')/∂(x, y, θ) = [[1, 0, −Δy], [0, 1, Δx], [0, 0, 1]]
+        (Chong–Kleeman eq. 16 in chord form, valid on straight lines too).
+    G : ndarray, shape (M, 3, 2)
+        ∂(x', y', θ')/∂(Δd, Δθ).
+    """
+    theta = np.asarray(theta, dtype=float)
+    dd = np.asarray(dd, dtype=float)
+    dtheta = np.asarray(dtheta, dtype=float)
+    theta, dd, dtheta = np.broadcast_arrays(theta, dd, dtheta)
+    dx, dy = step_displacement(theta, dd, dtheta, method)
+    m = theta.shape
+    F = np.zeros(m + (3, 3))
+    F[..., 0, 0] = F[..., 1, 1] = F[..., 2, 2] = 1.0
+    F[..., 0, 2] = -dy
+    F[..., 1, 2] = dx
+    G = np.zeros(m + (3, 2))
+    G[..., 2, 1] = 1.0
+    if method == "euler":
+        G[..., 0, 0], G[..., 1, 0] = np.cos(theta), np.sin(theta)
+        return F, G
+    heading = theta + 0.5 * dtheta
+    c, s = np.cos(heading), np.sin(heading)
+    factor = sinc_half(dtheta) if method == "exact" else np.ones_like(dtheta)
+    dfactor = sinc_half_derivative(dtheta) if method == "exact" else np.zeros_like(dtheta)
+    G[..., 0, 0] = factor * c
+    G[..., 1, 0] = factor * s
+    # d/dΔθ [Δd·f(Δθ)·cos(θ+Δθ/2)] = Δd·(f'·cos − f·sin/2)
+    G[..., 0, 1] = dd * (dfactor * c - 0.5 * factor * s)
+    G[..., 1, 1] = dd * (dfactor * s + 0.5 * factor * c)
+    return F, G

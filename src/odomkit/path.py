@@ -1,0 +1,107 @@
+"""Planned paths as sequences of constant-curvature segments.
+
+Used by ``predict`` (closed-form covariance) and ``simulate`` (Monte Carlo). A
+differential-drive segment is given by wheel travels; Kelly's gyro and compass models
+use speed, yaw rate and duration.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from odomkit.errors import ModelError
+
+
+@dataclass(frozen=True)
+class Arc:
+    """Differential drive: left and right wheel travel [m] of one constant-curvature arc
+    (Chong–Kleeman's L and R). ``left == right`` is a straight line, ``left == -right``
+    a spin on the spot; negative values drive backwards."""
+
+    left: float
+    right: float
+
+    def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
+        return self.left, self.right
+
+
+@dataclass(frozen=True)
+class Straight:
+    """Differential drive: a straight line of signed length ``distance`` [m]."""
+
+    distance: float
+
+    def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
+        return self.distance, self.distance
+
+
+@dataclass(frozen=True)
+class Spin:
+    """Differential drive: a turn on the spot by ``dtheta`` [rad] (positive = CCW)."""
+
+    dtheta: float
+
+    def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
+        half = 0.5 * wheel_base * self.dtheta
+        return -half, half
+
+
+@dataclass(frozen=True)
+class KellyArc:
+    """Gyro/compass models: constant speed ``speed`` [m/s] and yaw rate ``yaw_rate``
+    [rad/s] for ``duration`` [s] (Kelly eq. 14–15). ``yaw_rate == 0`` is a straight line
+    (Kelly eq. 13)."""
+
+    speed: float
+    yaw_rate: float
+    duration: float
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.duration) and self.duration >= 0):
+            raise ModelError(f"segment duration must be >= 0 s, got {self.duration!r}")
+
+
+DiffSegment = Arc | Straight | Spin
+Segment = Arc | Straight | Spin | KellyArc
+
+_SYNTAX = {
+    "diff": "arc:L,R | straight:D | spin:DTHETA",
+    "gyro": "arc:V,OMEGA,T | straight:V,T",
+    "compass": "arc:V,OMEGA,T | straight:V,T",
+}
+
+
+def parse_segment(text: str, model: str = "diff") -> Segment:
+    """Parse a ``--segment`` option.
+
+    >>> parse_segment("arc:3,1")
+    Arc(left=3.0, right=1.0)
+    >>> parse_segment("straight:0.5,10", model="gyro")
+    KellyArc(speed=0.5, yaw_rate=0.0, duration=10.0)
+    """
+    if model not in _SYNTAX:
+        raise ModelError(f"unknown model {model!r}; expected one of {', '.join(_SYNTAX)}")
+    kind, sep, rest = text.partition(":")
+    try:
+        values = [float(v) for v in rest.split(",")] if sep else []
+    except ValueError:
+        values = []
+        sep = ""
+    if sep and all(math.isfinite(v) for v in values):
+        kind = kind.strip().lower()
+        if model == "diff":
+            if kind == "arc" and len(values) == 2:
+                return Arc(*values)
+            if kind == "straight" and len(values) == 1:
+                return Straight(values[0])
+            if kind == "spin" and len(values) == 1:
+                return Spin(values[0])
+        else:
+            if kind == "arc" and len(values) == 3:
+                return KellyArc(*values)
+            if kind == "straight" and len(values) == 2:
+                return KellyArc(values[0], 0.0, values[1])
+    raise ModelError(
+        f"--segment {text!r} is not understood for model {model!r}; expected {_SYNTAX[model]}"
+    )

@@ -1,0 +1,211 @@
+"""Frozen parameter sets for every vehicle in the papers.
+
+A robot says how raw log channels become body motion; it holds no noise (see
+:mod:`odomkit.noise`) and no state. All lengths are metres, angles radians.
+
+Log channels each robot consumes (see :mod:`odomkit.io.log`):
+
+=========================  ======================================================
+robot                      channels
+=========================  ======================================================
+:class:`DiffDrive`         ``ticks_left``, ``ticks_right`` (increments), or
+                           ``dist_left``, ``dist_right`` (m increments)
+:class:`Tricycle`          ``ticks`` (traction-wheel increments) or ``speed`` (m/s),
+                           plus ``steer`` (rad, positive = left/CCW)
+:class:`GyroOdometry`      ``ticks``/``dist``/``speed`` plus ``yaw_rate`` (rad/s)
+:class:`CompassOdometry`   ``ticks``/``dist``/``speed`` plus ``heading`` (rad)
+=========================  ======================================================
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import Any
+
+from odomkit.errors import ModelError
+
+
+def _require_positive(owner: str, **values: float) -> None:
+    for name, value in values.items():
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise ModelError(f"{owner}.{name} must be a positive finite number, got {value!r}")
+
+
+def _require_finite(owner: str, **values: float) -> None:
+    for name, value in values.items():
+        if not (isinstance(value, int | float) and math.isfinite(value)):
+            raise ModelError(f"{owner}.{name} must be a finite number, got {value!r}")
+
+
+def metres_per_tick(wheel_diameter: float, encoder_resolution: float, gear_ratio: float = 1.0) -> float:
+    """Distance one encoder tick moves a wheel, Borenstein–Feng eq. (2.1).
+
+    ``c_m = π·D_n / (n·C_e)`` with D_n the nominal wheel diameter [m], n the gear ratio
+    between motor (where the encoder sits) and wheel, C_e the encoder resolution
+    [ticks per motor revolution].
+
+    >>> round(metres_per_tick(0.084, 64, 43.7), 10)   # OptiOdom differential robot
+    9.43557e-05
+    """
+    _require_positive("metres_per_tick", wheel_diameter=wheel_diameter,
+                      encoder_resolution=encoder_resolution, gear_ratio=gear_ratio)
+    return math.pi * wheel_diameter / (gear_ratio * encoder_resolution)
+
+
+@dataclass(frozen=True)
+class DiffDrive:
+    """Differential-drive robot.
+
+    Parameters
+    ----------
+    wheel_base : float
+        Nominal distance b between the wheel contact points [m].
+    m_per_tick_left, m_per_tick_right : float
+        Nominal distance per encoder tick of each wheel [m], Borenstein–Feng eq. (2.1).
+        Use 1.0 when the log already holds distances in metres.
+    c_left, c_right : float
+        Dimensionless wheel-scale corrections (Borenstein–Feng eq. 4.30–4.31): the
+        distance a wheel travelled is ``c · m_per_tick · ticks``.
+    c_wheel_base : float
+        Dimensionless wheel-base correction: the effective wheel base is
+        ``c_wheel_base · wheel_base`` (Borenstein–Feng eq. 4.32, b_new = E_b·b_nominal).
+    """
+
+    wheel_base: float
+    m_per_tick_left: float = 1.0
+    m_per_tick_right: float = 1.0
+    c_left: float = 1.0
+    c_right: float = 1.0
+    c_wheel_base: float = 1.0
+
+    def __post_init__(self) -> None:
+        _require_positive("DiffDrive", **{f.name: getattr(self, f.name) for f in fields(self)})
+
+    @classmethod
+    def from_wheels(
+        cls,
+        wheel_base: float,
+        wheel_diameter_left: float,
+        wheel_diameter_right: float | None = None,
+        encoder_resolution: float = 1.0,
+        gear_ratio: float = 1.0,
+        **corrections: float,
+    ) -> DiffDrive:
+        """Build from wheel diameters [m], encoder ticks per motor turn and gear ratio."""
+        right = wheel_diameter_left if wheel_diameter_right is None else wheel_diameter_right
+        return cls(
+            wheel_base=wheel_base,
+            m_per_tick_left=metres_per_tick(wheel_diameter_left, encoder_resolution, gear_ratio),
+            m_per_tick_right=metres_per_tick(right, encoder_resolution, gear_ratio),
+            **corrections,
+        )
+
+    @property
+    def effective_wheel_base(self) -> float:
+        """Wheel base used in the kinematics, ``c_wheel_base · wheel_base`` [m]."""
+        return self.c_wheel_base * self.wheel_base
+
+    @property
+    def scale_left(self) -> float:
+        """Metres per tick of the left wheel after correction."""
+        return self.c_left * self.m_per_tick_left
+
+    @property
+    def scale_right(self) -> float:
+        """Metres per tick of the right wheel after correction."""
+        return self.c_right * self.m_per_tick_right
+
+
+@dataclass(frozen=True)
+class Tricycle:
+    """Tricycle: one front wheel that steers and drives; the reference point is the
+    centre of the rear axle (Snowhite; OptiOdom ``tricyc``).
+
+    Parameters
+    ----------
+    wheel_to_axle : float
+        Distance L from the front wheel contact point to the rear axle centre [m].
+    m_per_tick : float
+        Traction-wheel distance per tick [m] (1.0 for a ``speed`` channel in m/s).
+    steering_offset : float
+        Added to the measured steering angle [rad]: α = α_measured + steering_offset.
+    c_scale : float
+        Dimensionless traction-wheel scale correction.
+    """
+
+    wheel_to_axle: float
+    m_per_tick: float = 1.0
+    steering_offset: float = 0.0
+    c_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        _require_positive("Tricycle", wheel_to_axle=self.wheel_to_axle,
+                          m_per_tick=self.m_per_tick, c_scale=self.c_scale)
+        _require_finite("Tricycle", steering_offset=self.steering_offset)
+
+    @property
+    def scale(self) -> float:
+        """Metres per tick of the traction wheel after correction."""
+        return self.c_scale * self.m_per_tick
+
+
+@dataclass(frozen=True)
+class GyroOdometry:
+    """Integrated-heading odometry (Kelly): speed from an encoder, heading rate from a gyro.
+
+    Parameters
+    ----------
+    m_per_tick : float
+        Distance per tick [m] (1.0 for a ``speed`` channel in m/s or ``dist`` in m).
+    gyro_bias : float
+        Subtracted from the measured yaw rate [rad/s].
+    gyro_scale : float
+        Dimensionless; the yaw rate used is ``gyro_scale · (measured − gyro_bias)``.
+    """
+
+    m_per_tick: float = 1.0
+    gyro_bias: float = 0.0
+    gyro_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        _require_positive("GyroOdometry", m_per_tick=self.m_per_tick, gyro_scale=self.gyro_scale)
+        _require_finite("GyroOdometry", gyro_bias=self.gyro_bias)
+
+
+@dataclass(frozen=True)
+class CompassOdometry:
+    """Direct-heading odometry (Kelly): speed from an encoder, heading from a compass.
+
+    Parameters
+    ----------
+    m_per_tick : float
+        Distance per tick [m] (1.0 for a ``speed`` channel in m/s or ``dist`` in m).
+    heading_offset : float
+        Added to the measured heading [rad].
+    """
+
+    m_per_tick: float = 1.0
+    heading_offset: float = 0.0
+
+    def __post_init__(self) -> None:
+        _require_positive("CompassOdometry", m_per_tick=self.m_per_tick)
+        _require_finite("CompassOdometry", heading_offset=self.heading_offset)
+
+
+Robot = DiffDrive | Tricycle | GyroOdometry | CompassOdometry
+
+ROBOT_TYPES: dict[str, type[Any]] = {
+    "diff": DiffDrive,
+    "tricycle": Tricycle,
+    "gyro": GyroOdometry,
+    "compass": CompassOdometry,
+}
+
+
+def robot_type_name(robot: Robot) -> str:
+    """The robot-file ``type`` string of a robot instance."""
+    for name, cls in ROBOT_TYPES.items():
+        if isinstance(robot, cls):
+            return name
+    raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
