@@ -17,10 +17,16 @@ straight lines (r -> ∞).
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+
+from odomkit.errors import InputError, ModelError
+from odomkit.log import OdometryLog
+from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle
 
 Method = Literal["euler", "midpoint", "exact"]
 METHODS: tuple[Method, ...] = ("euler", "midpoint", "exact")
@@ -174,3 +180,98 @@ def step_jacobians(
     G[..., 0, 1] = dd * (dfactor * c - 0.5 * factor * s)
     G[..., 1, 1] = dd * (dfactor * s + 0.5 * factor * c)
     return F, G
+
+
+@dataclass(frozen=True)
+class BodySteps:
+    """Body motion of every step of a log (step k goes from row k to row k+1).
+
+    Parameters
+    ----------
+    dd : ndarray, shape (M,)
+        Arc length travelled by the reference point [m].
+    dtheta : ndarray, shape (M,)
+        Heading change [rad]. For direct-heading odometry it is the change of the
+        measured heading.
+    dt : ndarray, shape (M,)
+        Step duration [s] (zero for repeated timestamps).
+    inputs : mapping of str to ndarray, shape (M,)
+        The raw per-step inputs the covariance engines need, in SI units:
+        diff ``d_left``, ``d_right`` [m]; tricycle ``travel`` [m], ``steer`` [rad];
+        gyro ``yaw_rate`` [rad/s]; compass ``heading`` (shape (M+1,)) [rad].
+    robot : Robot
+        The robot that produced these steps.
+
+    Notes
+    -----
+    The heading at the start of each step depends on the initial pose, so it is not
+    stored here: integrate with :func:`odomkit.integrate.dead_reckon` and take
+    ``poses[:-1, 2]``.
+    """
+
+    dd: NDArray[np.float64]
+    dtheta: NDArray[np.float64]
+    dt: NDArray[np.float64]
+    inputs: Mapping[str, NDArray[np.float64]]
+    robot: Robot
+
+    def __len__(self) -> int:
+        return int(self.dd.shape[0])
+
+
+def _travel(log: OdometryLog, scale: float, prefix: str = "") -> NDArray[np.float64]:
+    """Per-step distance [m] from ``ticks``/``dist`` increments or a ``speed`` rate."""
+    suffix = f"_{prefix}" if prefix else ""
+    if f"ticks{suffix}" in log.channels:
+        return log.channels[f"ticks{suffix}"][1:] * scale
+    if f"dist{suffix}" in log.channels:
+        return log.channels[f"dist{suffix}"][1:] * scale
+    if not prefix and "speed" in log.channels:
+        return log.channels["speed"][:-1] * np.diff(log.t) * scale
+    wanted = f"ticks{suffix} or dist{suffix}" + ("" if prefix else " or speed")
+    raise InputError(f"log has no {wanted} channel (it has {sorted(log.channels)})",
+                     source=log.source)
+
+
+def _steer_per_step(log: OdometryLog) -> NDArray[np.float64]:
+    """Steering angle over each step: with a speed rate (held from row k) the angle of
+    row k; with increments (counted over the step) the mean of both ends, which is
+    second-order accurate for a steering angle that changes during the step."""
+    steer = log.channel("steer")
+    if "speed" in log.channels and "ticks" not in log.channels and "dist" not in log.channels:
+        return steer[:-1]
+    return 0.5 * (steer[:-1] + steer[1:])
+
+
+def body_steps(robot: Robot, log: OdometryLog) -> BodySteps:
+    """Convert a log's sensor channels into body motion for ``robot``.
+
+    Parameters
+    ----------
+    robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry
+    log : OdometryLog, N rows
+
+    Returns
+    -------
+    BodySteps with M = N − 1 steps.
+    """
+    dt = np.diff(log.t)
+    if isinstance(robot, DiffDrive):
+        d_left = _travel(log, robot.scale_left, "left")
+        d_right = _travel(log, robot.scale_right, "right")
+        dd, dtheta = diff_body_steps(d_left, d_right, robot.effective_wheel_base)
+        return BodySteps(dd, dtheta, dt, {"d_left": d_left, "d_right": d_right}, robot)
+    if isinstance(robot, Tricycle):
+        travel = _travel(log, robot.scale)
+        steer = _steer_per_step(log) + robot.steering_offset
+        dd, dtheta = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+        return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
+    if isinstance(robot, GyroOdometry):
+        dd = _travel(log, robot.m_per_tick)
+        rate = robot.gyro_scale * (log.channel("yaw_rate")[:-1] - robot.gyro_bias)
+        return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+    if isinstance(robot, CompassOdometry):
+        dd = _travel(log, robot.m_per_tick)
+        heading = np.unwrap(log.channel("heading") + robot.heading_offset)
+        return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
+    raise ModelError(f"not an odomkit robot: {type(robot).__name__}")

@@ -1,0 +1,1 @@
+"""Readers and writers, one module per format. Side effects live here, not in the core."""

@@ -1,0 +1,51 @@
+"""The Halmstad course-exercise logs (Khepera encoder counts, Snowhite tricycle).
+
+Formats from ``data/halmstad-khepera-snowhite/SOURCE.md``: the Khepera files hold two
+whitespace-separated columns of *cumulative* pulse counts ``left right``; ``snowhite.txt``
+holds ``v [mm/s], alpha [rad], TrueX [mm], TrueY [mm], TrueTheta [rad]`` at T = 50 ms.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from odomkit.io.table import cumulative_to_increments, read_numeric, unwrap_counter
+from odomkit.log import OdometryLog
+
+#: Sampling period of the Snowhite log (exercise handout) [s].
+SNOWHITE_PERIOD = 0.05
+
+
+def read_khepera(path: str | Path, period: float = 1.0, wrap_bits: int | None = None) -> OdometryLog:
+    """Read a Khepera log of cumulative ``left right`` encoder counts.
+
+    Parameters
+    ----------
+    path : the text file
+    period : sampling period [s]; the handout does not state it, so time is in samples
+        by default.
+    wrap_bits : undo wrap-around of a counter of this width (None: the counts never wrap).
+    """
+    data = read_numeric(path, 2)
+    left, right = data[:, 0], data[:, 1]
+    if wrap_bits is not None:
+        left, right = unwrap_counter(left, wrap_bits), unwrap_counter(right, wrap_bits)
+    t = np.arange(data.shape[0]) * float(period)
+    channels = {"ticks_left": cumulative_to_increments(left),
+                "ticks_right": cumulative_to_increments(right)}
+    return OdometryLog(t, channels, None, str(path), {"format": "khepera"})
+
+
+def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> OdometryLog:
+    """Read ``snowhite.txt``: front-wheel speed and steering angle with ground truth.
+
+    Millimetres are converted to metres here; the ground-truth heading (given in
+    [0, 2π)) is unwrapped so that it is continuous like odomkit's θ.
+    """
+    data = read_numeric(path, 5)
+    t = np.arange(data.shape[0]) * float(period)
+    channels = {"speed": data[:, 0] / 1000.0, "steer": data[:, 1].copy()}
+    truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, np.unwrap(data[:, 4])))
+    return OdometryLog(t, channels, truth, str(path), {"format": "snowhite"})

@@ -1,0 +1,100 @@
+"""A log and a robot -> a pose track (and, with a noise model, its covariance)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit.errors import InputError
+from odomkit.integrate import dead_reckon, path_length
+from odomkit.kinematics import BodySteps, Method, body_steps
+from odomkit.log import OdometryLog
+from odomkit.robot import CompassOdometry, Robot
+
+
+@dataclass(frozen=True)
+class Track:
+    """A dead-reckoned pose track.
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Time of each pose [s].
+    poses : ndarray, shape (N, 3)
+        ``[x, y, θ]`` [m, m, rad], θ continuous.
+    cov : ndarray, shape (N, 3, 3), optional
+        Pose covariance, order x, y, θ; None when no noise model was given.
+    steps : BodySteps
+        The body motion the track was integrated from.
+    """
+
+    t: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    cov: NDArray[np.float64] | None
+    steps: BodySteps
+
+    @property
+    def path_length(self) -> float:
+        """Distance travelled by the reference point [m], reversing included."""
+        return path_length(self.steps.dd)
+
+    @property
+    def duration(self) -> float:
+        """Time from the first to the last row [s]."""
+        return float(self.t[-1] - self.t[0]) if self.t.size else 0.0
+
+
+def initial_pose(log: OdometryLog, pose0: ArrayLike | None) -> NDArray[np.float64]:
+    """``pose0`` if given, else the first ground-truth pose, else the origin."""
+    if pose0 is not None:
+        return np.asarray(pose0, dtype=float).reshape(3)
+    if log.ground_truth is not None:
+        return log.ground_truth[0].copy()
+    return np.zeros(3)
+
+
+def dead_reckon_log(
+    log: OdometryLog,
+    robot: Robot,
+    method: Method = "exact",
+    pose0: ArrayLike | None = None,
+    noise: object | None = None,
+    cov0: ArrayLike | None = None,
+) -> Track:
+    """Dead-reckon a whole log.
+
+    Parameters
+    ----------
+    log : OdometryLog, N rows
+    robot : Robot
+    method : {"exact", "midpoint", "euler"}
+    pose0 : array_like, shape (3,), optional
+        Initial pose; defaults to the first ground-truth pose, else the origin.
+    noise : noise model or tuple of noise models, optional
+        When given, the covariance of every pose is propagated
+        (:func:`odomkit.propagate.recursion.track_covariance`).
+    cov0 : array_like, shape (3, 3), optional
+        Initial covariance (default zero).
+
+    Returns
+    -------
+    Track with N poses.
+    """
+    if len(log) == 0:
+        raise InputError("the log is empty: no rows to dead-reckon", source=log.source)
+    steps = body_steps(robot, log)
+    p0 = initial_pose(log, pose0)
+    if isinstance(robot, CompassOdometry):
+        # Direct heading: the measured heading replaces the integrated one.
+        heading = steps.inputs["heading"]
+        p0 = np.array([p0[0], p0[1], heading[0]])
+    poses = dead_reckon(steps.dd, steps.dtheta, p0, method)
+    cov = None
+    if noise is not None:
+        from odomkit.propagate.recursion import track_covariance
+
+        c0 = np.zeros((3, 3)) if cov0 is None else np.asarray(cov0, dtype=float)
+        cov = track_covariance(steps, poses, noise, c0, method=method)
+    return Track(log.t, poses, cov, steps)
