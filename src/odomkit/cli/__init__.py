@@ -10,7 +10,6 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-import click
 import typer
 
 from odomkit.errors import OdomkitError
@@ -30,18 +29,14 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     args = list(sys.argv[1:] if argv is None else argv)
     try:
-        app(args=args, prog_name="odomkit", standalone_mode=False)
+        # Standalone mode lets click report usage errors itself (status 2).
+        app(args=args, prog_name="odomkit")
     except OdomkitError as exc:
         print(f"odomkit: error: {exc}", file=sys.stderr)
         return _exit(2, argv)
-    except click.exceptions.Exit as exc:
-        return _exit(exc.exit_code, argv)
-    except click.ClickException as exc:
-        exc.show()
-        return _exit(2, argv)
-    except click.Abort:
-        print("odomkit: aborted", file=sys.stderr)
-        return _exit(1, argv)
+    except SystemExit as exc:
+        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
+        return _exit(code, argv)
     return _exit(0, argv)
 
 

@@ -1,0 +1,525 @@
+"""Exact-model calibration: wheel scales, wheel base (or tricycle scale, steering offset,
+wheel-to-axle distance) by nonlinear least squares on the exact kinematics.
+
+UMBmark (Borenstein–Feng section IV) linearises the square path (``L sin γ ≈ Lγ``) and
+treats turns and straight legs as if they were driven perfectly apart from one error
+each. Here the logs are re-integrated with candidate parameters by the same exact-arc
+dead reckoning odomkit uses everywhere (:func:`odomkit.integrate.dead_reckon`), and the
+parameters are chosen so the integrated poses match the ground truth:
+
+* ``source="endpoints"``: only the final pose of each run is compared (what a UMBmark
+  experiment measures);
+* ``source="trajectory"``: every logged pose is compared (needs ground truth at every
+  row, e.g. a motion-capture system). This also observes the overall scale E_s.
+
+Why the overall scale is unobservable from closed-path endpoints: multiplying both wheel
+scales *and* the wheel base by the same factor s leaves every Δθ unchanged and multiplies
+every Δd by s, so the whole odometry track is scaled by s about the start pose. The end
+of a closed square lies near the start, so the end pose hardly moves. :func:`calibrate_exact`
+measures this (the scale direction's sensitivity relative to the largest one) and, when
+it is below ``SCALE_OBSERVABLE_BELOW``, keeps the mean wheel scale fixed, the constraint
+UMBmark uses implicitly (Borenstein–Feng eq. 4.28: the average diameter D_a is unchanged).
+The wheel base then absorbs any E_s: headings come out right, distances stay scaled.
+
+Standard errors are ``σ̂² (JᵀJ)⁻¹`` with ``σ̂² = |r|²/(m − p)``, J the (analytic)
+Jacobian of the weighted residuals at the solution. This assumes the residuals are
+independent with equal variance after weighting. It holds for endpoint residuals
+whitened by a noise model (``noise=``); for unweighted endpoints it is approximate
+(x, y and θ errors of one run are correlated); for trajectories it is optimistic,
+because the errors along one track are a random walk, strongly correlated from row to
+row — use :func:`jackknife_runs` there.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from odomkit.errors import InputError, ModelError
+from odomkit.kinematics import Method, body_steps, step_jacobians
+from odomkit.log import OdometryLog
+from odomkit.robot import DiffDrive, Tricycle
+from odomkit.track import initial_pose
+
+Source = Literal["endpoints", "trajectory"]
+
+#: Below this relative sensitivity the overall scale counts as unobservable.
+SCALE_OBSERVABLE_BELOW = 0.05
+
+
+def _wrap(angle: NDArray[np.float64]) -> NDArray[np.float64]:
+    return (angle + np.pi) % (2.0 * np.pi) - np.pi
+
+
+def integrate_with_sensitivity(
+    dd: NDArray[np.float64],
+    dtheta: NDArray[np.float64],
+    ddd_dp: NDArray[np.float64],
+    ddtheta_dp: NDArray[np.float64],
+    pose0: NDArray[np.float64],
+    method: Method = "exact",
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Dead-reckon body steps and, in the same vectorised pass, the derivative of every
+    pose with respect to P parameters the steps depend on.
+
+    Parameters
+    ----------
+    dd, dtheta : ndarray, shape (M,)
+        Body steps [m], [rad].
+    ddd_dp, ddtheta_dp : ndarray, shape (M, P)
+        Their derivatives with respect to the parameters.
+    pose0 : ndarray, shape (3,)
+        Initial pose (independent of the parameters).
+    method : {"exact", "midpoint", "euler"}
+
+    Returns
+    -------
+    poses : ndarray, shape (M + 1, 3)
+    dposes_dp : ndarray, shape (M + 1, 3, P)
+
+    Examples
+    --------
+    A straight metre with dd = p: x_end = p, so ∂x_end/∂p = 1.
+
+    >>> p, dp = integrate_with_sensitivity(np.full(4, 0.25), np.zeros(4), np.full((4, 1), 0.25),
+    ...                                    np.zeros((4, 1)), np.zeros(3))
+    >>> float(p[-1, 0]), float(dp[-1, 0, 0])
+    (1.0, 1.0)
+    """
+    m, n_par = ddd_dp.shape
+    theta = np.empty(m + 1)
+    theta[0] = pose0[2]
+    np.cumsum(dtheta, out=theta[1:])
+    theta[1:] += pose0[2]
+    dtheta_p = np.zeros((m + 1, n_par))
+    np.cumsum(ddtheta_dp, axis=0, out=dtheta_p[1:])
+    F, G = step_jacobians(theta[:-1], dd, dtheta, method)
+    # The step displacement depends on the parameters through (Δd, Δθ) of the step (G)
+    # and through the heading at its start (F[:, :2, 2] = (−Δy, Δx)).
+    ddx = G[:, 0, 0, None] * ddd_dp + G[:, 0, 1, None] * ddtheta_dp + F[:, 0, 2, None] * dtheta_p[:-1]
+    ddy = G[:, 1, 0, None] * ddd_dp + G[:, 1, 1, None] * ddtheta_dp + F[:, 1, 2, None] * dtheta_p[:-1]
+    poses = np.empty((m + 1, 3))
+    poses[0] = pose0
+    poses[1:, 0] = pose0[0] + np.cumsum(F[:, 1, 2])  # F[:, 1, 2] = Δx
+    poses[1:, 1] = pose0[1] - np.cumsum(F[:, 0, 2])  # F[:, 0, 2] = −Δy
+    poses[:, 2] = theta
+    dposes = np.zeros((m + 1, 3, n_par))
+    np.cumsum(ddx, axis=0, out=dposes[1:, 0])
+    np.cumsum(ddy, axis=0, out=dposes[1:, 1])
+    dposes[:, 2] = dtheta_p
+    return poses, dposes
+
+
+class _DiffModel:
+    """p = (c_left, c_right, c_wheel_base) of a DiffDrive."""
+
+    names = ("c_left", "c_right", "c_wheel_base")
+
+    def __init__(self, robot: DiffDrive, runs: Sequence[OdometryLog]):
+        self.robot = robot
+        raw = replace(robot, c_left=1.0, c_right=1.0, c_wheel_base=1.0)
+        steps = [body_steps(raw, log) for log in runs]
+        self.raw = [(s.inputs["d_left"], s.inputs["d_right"]) for s in steps]
+        self.p0 = np.array([robot.c_left, robot.c_right, robot.c_wheel_base])
+
+    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
+        a, r = self.raw[i]
+        b = p[2] * self.robot.wheel_base
+        d_left, d_right = p[0] * a, p[1] * r
+        # Borenstein–Feng (2.2)–(2.4) with (4.33): d = c·c_m·N, Δd = (dR + dL)/2, Δθ = (dR − dL)/b
+        dd = 0.5 * (d_left + d_right)
+        dtheta = (d_right - d_left) / b
+        ddd = np.stack([0.5 * a, 0.5 * r, np.zeros_like(a)], axis=1)
+        ddt = np.stack([-a / b, r / b, -dtheta / p[2]], axis=1)
+        return dd, dtheta, ddd, ddt
+
+    def make_robot(self, p: NDArray[np.float64]) -> DiffDrive:
+        return replace(self.robot, c_left=float(p[0]), c_right=float(p[1]), c_wheel_base=float(p[2]))
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """p = offset + T q keeping (c_left + c_right)/2 at its current value
+        (Borenstein–Feng eq. 4.28); q = (half difference, c_wheel_base)."""
+        mean = 0.5 * (p0[0] + p0[1])
+        T = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+        return np.array([mean, mean, 0.0]), T
+
+
+class _TricycleModel:
+    """p = (c_scale, steering_offset, wheel_to_axle) of a Tricycle."""
+
+    names = ("c_scale", "steering_offset", "wheel_to_axle")
+
+    def __init__(self, robot: Tricycle, runs: Sequence[OdometryLog]):
+        self.robot = robot
+        raw = replace(robot, c_scale=1.0, steering_offset=0.0)
+        steps = [body_steps(raw, log) for log in runs]
+        self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
+        self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_to_axle])
+
+    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
+        s0, a0 = self.raw[i]
+        s, alpha, L = p[0] * s0, a0 + p[1], p[2]
+        cos_a, sin_a = np.cos(alpha), np.sin(alpha)
+        # Tricycle model Δd = s·cos α, Δθ = s·sin α / L (kinematics.tricycle_body_steps)
+        dd, dtheta = s * cos_a, s * sin_a / L
+        ddd = np.stack([s0 * cos_a, -s * sin_a, np.zeros_like(s)], axis=1)
+        ddt = np.stack([s0 * sin_a / L, s * cos_a / L, -dtheta / L], axis=1)
+        return dd, dtheta, ddd, ddt
+
+    def make_robot(self, p: NDArray[np.float64]) -> Tricycle:
+        return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
+                       wheel_to_axle=float(p[2]))
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Keep c_scale; fit (steering_offset, wheel_to_axle)."""
+        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+
+
+def _model(robot: Any, runs: Sequence[OdometryLog]) -> _DiffModel | _TricycleModel:
+    if isinstance(robot, DiffDrive):
+        return _DiffModel(robot, runs)
+    if isinstance(robot, Tricycle):
+        return _TricycleModel(robot, runs)
+    raise ModelError(f"exact calibration supports DiffDrive and Tricycle robots, got {type(robot).__name__}")
+
+
+@dataclass(frozen=True)
+class ExactCalibration:
+    """Result of :func:`calibrate_exact`.
+
+    Parameters
+    ----------
+    robot : DiffDrive | Tricycle
+        The input robot with the fitted corrections in place.
+    names : tuple of str
+        Parameter names: ``c_left, c_right, c_wheel_base`` or
+        ``c_scale, steering_offset, wheel_to_axle`` (m for ``wheel_to_axle``, rad for the offset).
+    values, std_errors : ndarray, shape (3,)
+        Estimates and standard errors ``sqrt(diag(cov))``.
+    cov, corr : ndarray, shape (3, 3)
+        Parameter covariance ``σ̂²(JᵀJ)⁻¹`` and correlation matrix. With a fixed scale,
+        c_left and c_right are perfectly anti-correlated (corr −1) and their sum has zero
+        variance.
+    residual_variance : float
+        σ̂² of the weighted residuals (m² unless whitened, then dimensionless).
+    n_residuals, n_runs : int
+    source : {"endpoints", "trajectory"}
+    scale_fixed : bool
+        True when the mean scale was held at its input value (unobservable or asked).
+    scale_sensitivity : float
+        Relative sensitivity of the residuals to the overall scale at the start (0 = none).
+    notes : tuple of str
+        Human-readable remarks (why the scale was fixed, convergence).
+    """
+
+    robot: DiffDrive | Tricycle
+    names: tuple[str, ...]
+    values: NDArray[np.float64]
+    std_errors: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    corr: NDArray[np.float64]
+    residual_variance: float
+    n_residuals: int
+    n_runs: int
+    source: str
+    scale_fixed: bool
+    scale_sensitivity: float
+    notes: tuple[str, ...] = ()
+
+    @property
+    def E_d(self) -> float:
+        """Borenstein–Feng eq. (2.3), D_R/D_L (diff only): ratio of the corrected metres per tick."""
+        r = self._diff()
+        return r.scale_right / r.scale_left
+
+    @property
+    def E_b(self) -> float:
+        """Borenstein–Feng eq. (2.4), b_actual/b_nominal (diff only)."""
+        return self._diff().c_wheel_base
+
+    @property
+    def E_s(self) -> float:
+        """Scaling error (Borenstein–Feng section II-B): mean actual over mean nominal wheel
+        diameter, (scale_left + scale_right)/(m_per_tick_left + m_per_tick_right)."""
+        r = self._diff()
+        return (r.scale_left + r.scale_right) / (r.m_per_tick_left + r.m_per_tick_right)
+
+    def _diff(self) -> DiffDrive:
+        if not isinstance(self.robot, DiffDrive):
+            raise ModelError("E_d, E_b, E_s are defined for differential-drive robots only")
+        return self.robot
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict for JSON output."""
+        out: dict[str, Any] = {
+            "source": self.source,
+            "parameters": {n: float(v) for n, v in zip(self.names, self.values, strict=True)},
+            "std_errors": {n: float(v) for n, v in zip(self.names, self.std_errors, strict=True)},
+            "corr": self.corr.tolist(),
+            "residual_rms": float(np.sqrt(self.residual_variance)),
+            "n_residuals": self.n_residuals,
+            "n_runs": self.n_runs,
+            "scale_fixed": self.scale_fixed,
+            "scale_sensitivity": self.scale_sensitivity,
+            "notes": list(self.notes),
+        }
+        if isinstance(self.robot, DiffDrive):
+            out.update(E_d=self.E_d, E_b=self.E_b, E_s=self.E_s,
+                       wheel_base=self.robot.effective_wheel_base)
+        return out
+
+
+def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
+    if source not in ("endpoints", "trajectory"):
+        raise ModelError(f"source must be 'endpoints' or 'trajectory', got {source!r}")
+    if len(runs) < 1:
+        raise InputError("calibration needs at least one run with ground truth")
+    for log in runs:
+        if log.ground_truth is None:
+            raise InputError("run has no ground truth; calibration compares against it",
+                             source=log.source)
+        if len(log) < 2:
+            raise InputError("run has fewer than two rows", source=log.source)
+
+
+class _Problem:
+    """Weighted residuals and their Jacobian over all runs, for parameters p = off + T q."""
+
+    def __init__(self, model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog],
+                 source: str, heading_weight: float, every: int,
+                 whiten: list[NDArray[np.float64]] | None, method: Method):
+        self.model, self.source, self.method = model, source, method
+        self.pose0 = [initial_pose(log, None) for log in runs]
+        self.truth = []
+        for log in runs:
+            gt = log.ground_truth
+            assert gt is not None
+            rows = np.array([len(log) - 1]) if source == "endpoints" else np.arange(1, len(log), every)
+            if source == "trajectory" and rows[-1] != len(log) - 1:
+                rows = np.append(rows, len(log) - 1)
+            self.truth.append((rows, gt[rows]))
+        self.w = heading_weight
+        self.whiten = whiten
+        self.offset = np.zeros(3)
+        self.T = np.eye(3)
+
+    def full(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.offset + self.T @ q
+
+    def _run(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        dd, dth, ddd, ddt = self.model.steps(p, i)
+        poses, dposes = integrate_with_sensitivity(dd, dth, ddd, ddt, self.pose0[i], self.method)
+        rows, gt = self.truth[i]
+        res = poses[rows] - gt
+        res[:, 2] = _wrap(res[:, 2])
+        jac = dposes[rows]
+        if self.whiten is not None:
+            # Endpoint GLS: r ← L⁻¹ r with C = L Lᵀ the predicted end-pose covariance.
+            L = self.whiten[i]
+            res = np.linalg.solve(L, res[0])[None, :]
+            jac = np.linalg.solve(L, jac[0])[None, :, :]
+        else:
+            res[:, 2] *= self.w
+            jac = jac.copy()
+            jac[:, 2] *= self.w
+        return res.reshape(-1), jac.reshape(-1, jac.shape[-1])
+
+    def residuals(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        p = self.full(q)
+        return np.concatenate([self._run(p, i)[0] for i in range(len(self.pose0))])
+
+    def jacobian_full(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.concatenate([self._run(p, i)[1] for i in range(len(self.pose0))])
+
+    def jacobian(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
+        return self.jacobian_full(self.full(q)) @ self.T
+
+
+def scale_sensitivity(jac: NDArray[np.float64], p: NDArray[np.float64], scale_index: Sequence[int]) -> float:
+    """How much the residuals react to a uniform scaling, relative to the most sensitive
+    parameter direction: ``|J u| / (σ_max(J) |u|)`` with u = p on ``scale_index`` (the
+    generator of "scale all lengths by s"), zero elsewhere. 0 = unobservable."""
+    u = np.zeros_like(p)
+    u[list(scale_index)] = p[list(scale_index)]
+    smax = np.linalg.norm(jac, 2)
+    if smax == 0:
+        return 0.0
+    return float(np.linalg.norm(jac @ u) / (smax * np.linalg.norm(u)))
+
+
+def calibrate_exact(
+    runs: Sequence[OdometryLog],
+    robot: DiffDrive | Tricycle,
+    source: Source = "endpoints",
+    *,
+    heading_weight: float | None = None,
+    fix_scale: bool | None = None,
+    noise: Any = None,
+    every: int = 1,
+    method: Method = "exact",
+) -> ExactCalibration:
+    """Fit a robot's systematic parameters to ground truth on the exact kinematics.
+
+    Parameters
+    ----------
+    runs : sequence of OdometryLog
+        Logs with ``ground_truth`` (N, 3); diff robots need ``ticks_left/right`` (or
+        ``dist_*``), tricycles ``ticks`` (or ``dist``/``speed``) and ``steer``. Each run is
+        integrated from its first ground-truth pose.
+    robot : DiffDrive | Tricycle
+        Nominal parameters; its current corrections are the starting point.
+    source : {"endpoints", "trajectory"}
+        Compare only each run's final pose, or every row's pose.
+    heading_weight : float, optional
+        Length [m/rad] that turns a heading residual into a position-like one. Default:
+        a quarter of the mean path length of the runs (the side of a square: a heading
+        error δθ at the end counts like a lateral miss of side·δθ). 0 fits positions only.
+    fix_scale : bool, optional
+        Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
+        value. Default: automatically, when the residuals' relative sensitivity to a
+        uniform scaling is below ``SCALE_OBSERVABLE_BELOW`` (closed paths, endpoints).
+    noise : WheelNoise, optional
+        Diff endpoints only: whiten each run's end residual by the end-pose covariance that
+        this per-wheel noise predicts (Chong–Kleeman eq. 23), making the fit a generalised
+        least-squares fit whose standard errors are valid.
+    every : int
+        Trajectory source: use every ``every``-th row.
+    method : {"exact", "midpoint", "euler"}
+        Integration method, as in dead reckoning.
+
+    Returns
+    -------
+    ExactCalibration
+
+    Examples
+    --------
+    Noise-free straight-line-and-turn runs of a robot whose right wheel is 1 % large:
+
+    >>> from odomkit.log import OdometryLog
+    >>> from odomkit.integrate import dead_reckon
+    >>> from odomkit.kinematics import diff_body_steps
+    >>> nominal = DiffDrive(wheel_base=0.5)
+    >>> def run(left, right):
+    ...     a, r = np.full(200, left / 200), np.full(200, right / 200)
+    ...     gt = dead_reckon(*diff_body_steps(a, 1.01 * r, 0.5))
+    ...     ch = {"dist_left": np.r_[0, a], "dist_right": np.r_[0, r]}
+    ...     return OdometryLog(np.arange(201.0), ch, gt)
+    >>> cal = calibrate_exact([run(2, 2.5), run(2.5, 2)], nominal, "trajectory")
+    >>> [round(v, 6) for v in cal.values]
+    [1.0, 1.01, 1.0]
+    """
+    _check_runs(runs, source)
+    if every < 1:
+        raise ModelError(f"every must be a positive integer, got {every}")
+    model = _model(robot, runs)
+    if heading_weight is None:
+        lengths = [float(np.sum(np.abs(model.steps(model.p0, i)[0]))) for i in range(len(runs))]
+        heading_weight = 0.25 * float(np.mean(lengths))
+    if not (np.isfinite(heading_weight) and heading_weight >= 0):
+        raise ModelError(f"heading_weight must be >= 0 m/rad, got {heading_weight!r}")
+    whiten = None
+    if noise is not None:
+        whiten = _whitening(model, runs, source, noise, method)
+    prob = _Problem(model, runs, source, heading_weight, every, whiten, method)
+    p0 = model.p0.copy()
+    scale_index = (0, 1, 2) if isinstance(model, _DiffModel) else (0, 2)
+    sens = scale_sensitivity(prob.jacobian_full(p0), p0, scale_index)
+    notes: list[str] = []
+    if fix_scale is None:
+        fix_scale = sens < SCALE_OBSERVABLE_BELOW
+        if fix_scale:
+            notes.append(
+                f"overall scale unobservable (relative sensitivity {sens:.3g} < "
+                f"{SCALE_OBSERVABLE_BELOW}): mean wheel scale held fixed as in UMBmark; the "
+                "wheel base absorbs any scale error E_s"
+            )
+    if fix_scale:
+        prob.offset, prob.T = model.fixed_scale_map(p0)
+        q0 = np.linalg.lstsq(prob.T, p0 - prob.offset, rcond=None)[0]
+    else:
+        q0 = p0.copy()
+    n_res = prob.residuals(q0).size
+    if n_res <= q0.size:
+        raise InputError(
+            f"{n_res} residuals cannot determine {q0.size} parameters: give more runs "
+            "(UMBmark endpoints need runs in both directions)"
+        )
+    sol = least_squares(prob.residuals, q0, jac=prob.jacobian, method="lm", x_scale="jac",
+                        xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
+    if not sol.success:
+        notes.append(f"least_squares: {sol.message}")
+    J = sol.jac
+    dof = n_res - q0.size
+    var_res = float(2.0 * sol.cost / dof)
+    cov_q = var_res * np.linalg.pinv(J.T @ J)
+    cov = prob.T @ cov_q @ prob.T.T
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    corr[~np.isfinite(corr)] = 0.0
+    np.fill_diagonal(corr, np.where(std > 0, 1.0, 0.0))
+    p = prob.full(sol.x)
+    if np.any(p[[i for i in scale_index]] <= 0):
+        raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; "
+                         "check the channel assignment (left/right) and the robot file")
+    return ExactCalibration(
+        robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov,
+        corr=corr, residual_variance=var_res, n_residuals=n_res, n_runs=len(runs),
+        source=source, scale_fixed=bool(fix_scale), scale_sensitivity=sens, notes=tuple(notes),
+    )
+
+
+def _whitening(model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog], source: str,
+               noise: Any, method: Method) -> list[NDArray[np.float64]]:
+    from odomkit.calibrate.noise_fit import wheel_noise_basis
+    from odomkit.noise import WheelNoise
+
+    if source != "endpoints" or not isinstance(model, _DiffModel) or not isinstance(noise, WheelNoise):
+        raise ModelError("noise weighting is available for diff-drive endpoint fits with a WheelNoise")
+    out = []
+    for i in range(len(runs)):
+        a, r = model.raw[i]
+        A, B = wheel_noise_basis(model.p0[0] * a, model.p0[1] * r,
+                                 model.p0[2] * model.robot.wheel_base,
+                                 initial_pose(runs[i], None), method)
+        C = noise.k_left**2 * A + noise.k_right**2 * B
+        try:
+            out.append(np.linalg.cholesky(C))
+        except np.linalg.LinAlgError:
+            raise ModelError(f"predicted end-pose covariance of run {runs[i].source} is singular; "
+                             "both k_left and k_right must be > 0 for weighting") from None
+    return out
+
+
+def jackknife_runs(
+    runs: Sequence[OdometryLog], robot: DiffDrive | Tricycle, source: Source = "trajectory",
+    **kwargs: Any,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Delete-one-run jackknife standard errors of :func:`calibrate_exact`'s parameters.
+
+    Each run's residuals are correlated along the track but runs are independent, so
+    leaving out one run at a time gives honest standard errors where σ̂²(JᵀJ)⁻¹ does not
+    (trajectories). Needs at least 3 runs.
+
+    Returns
+    -------
+    values : ndarray, shape (3,)
+        The all-runs estimate.
+    std_errors : ndarray, shape (3,)
+        ``sqrt((n−1)/n · Σ (θ_i − θ̄)²)`` (Efron's jackknife).
+    """
+    n = len(runs)
+    if n < 3:
+        raise InputError(f"jackknife needs at least 3 runs, got {n}")
+    full = calibrate_exact(runs, robot, source, **kwargs).values
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        loo = np.array([calibrate_exact([r for j, r in enumerate(runs) if j != i], robot, source,
+                                        **kwargs).values for i in range(n)])
+    return full, np.sqrt((n - 1) / n * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))

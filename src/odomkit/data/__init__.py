@@ -1,0 +1,1 @@
+"""Built-in sample data (OptiOdom, MIT licence: see LICENSE-OptiOdom.txt)."""

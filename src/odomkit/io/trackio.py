@@ -1,0 +1,66 @@
+"""Writing pose tracks: odomkit CSV (with covariance) and TUM trajectory files."""
+
+from __future__ import annotations
+
+import io
+from pathlib import Path
+
+import numpy as np
+
+from odomkit.errors import InputError
+from odomkit.track import Track
+
+TRACK_COLUMNS = ("t", "x", "y", "theta", "cov_xx", "cov_xy", "cov_xtheta", "cov_yy",
+                 "cov_ytheta", "cov_thetatheta")
+_COV_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
+
+
+def _refuse_overwrite(path: Path, overwrite: bool) -> None:
+    if path.exists() and not overwrite:
+        raise InputError("exists already; pass --force to replace it", source=str(path))
+
+
+def track_table(track: Track) -> np.ndarray:
+    """The track as an ``(N, 10)`` array in :data:`TRACK_COLUMNS` order (NaN covariance
+    when none was propagated)."""
+    n = track.poses.shape[0]
+    table = np.full((n, len(TRACK_COLUMNS)), np.nan)
+    table[:, 0] = track.t
+    table[:, 1:4] = track.poses
+    if track.cov is not None:
+        for j, (a, b) in enumerate(_COV_INDEX):
+            table[:, 4 + j] = track.cov[:, a, b]
+    return table
+
+
+def write_track_csv(path: str | Path, track: Track, overwrite: bool = False) -> Path:
+    """Write ``t,x,y,theta,cov_xx,...`` (DESIGN.md); covariance cells are empty when the
+    track has no covariance. θ is written continuous (unwrapped)."""
+    path = Path(path)
+    _refuse_overwrite(path, overwrite)
+    table = track_table(track)
+    buffer = io.StringIO()
+    if track.cov is None:
+        np.savetxt(buffer, table[:, :4], delimiter=",", fmt="%.10g")
+        # Empty covariance cells keep every row as wide as the header.
+        body = "".join(line + ",,,,,,\n" for line in buffer.getvalue().splitlines())
+    else:
+        np.savetxt(buffer, table, delimiter=",", fmt="%.10g")
+        body = buffer.getvalue()
+    path.write_text(",".join(TRACK_COLUMNS) + "\n" + body, encoding="utf-8")
+    return path
+
+
+def write_tum(path: str | Path, track: Track, overwrite: bool = False) -> Path:
+    """Write a TUM trajectory (``timestamp tx ty tz qx qy qz qw``), readable by evo.
+
+    The planar pose becomes z = 0 and a rotation about z by θ: q = (0, 0, sin θ/2, cos θ/2).
+    """
+    path = Path(path)
+    _refuse_overwrite(path, overwrite)
+    theta = track.poses[:, 2]
+    n = theta.size
+    table = np.column_stack((track.t, track.poses[:, 0], track.poses[:, 1], np.zeros(n),
+                             np.zeros(n), np.zeros(n), np.sin(theta / 2), np.cos(theta / 2)))
+    np.savetxt(path, table, fmt="%.9f", delimiter=" ")
+    return path

@@ -1,0 +1,1 @@
+"""Covariance propagation: step recursion, Kelly transition matrix, closed forms."""

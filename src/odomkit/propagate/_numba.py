@@ -1,0 +1,126 @@
+"""The numba kernel of the step recursion (Chong–Kleeman eq. 2).
+
+The recurrence P_{k+1} = F_k P_k F_k^T + G_k Q_k G_k^T cannot be vectorised as written,
+so it runs here as one compiled loop that forms F_k and G_k inline from (θ, Δd, Δθ): no
+(M, 3, 3) Jacobian arrays are ever materialised. The Jacobians are the same as
+:func:`odomkit.kinematics.step_jacobians` (and, for ``METHOD_CLASSICAL``,
+:func:`odomkit.propagate.inputs.classical_step_jacobians`); the tests compare them.
+
+Importing this module imports numba; :mod:`odomkit.propagate.recursion` does so lazily
+and falls back to a numpy loop when numba is missing.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+# Method codes shared with recursion.py.
+METHOD_EXACT = 0
+METHOD_MIDPOINT = 1
+METHOD_EULER = 2
+METHOD_CLASSICAL = 3
+
+# Same threshold as odomkit.kinematics._SERIES_BELOW: below it the sinc series is used
+# because (u·cos u − sin u)/u² cancels catastrophically.
+_SERIES_BELOW = 1e-3
+
+
+@numba.njit(cache=True, nogil=True)
+def _sinc_and_derivative(dtheta: float) -> tuple[float, float]:
+    """sin(Δθ/2)/(Δθ/2) and its derivative d/dΔθ (kinematics.sinc_half[_derivative])."""
+    u = 0.5 * dtheta
+    if abs(u) < _SERIES_BELOW:
+        u2 = u * u
+        return 1.0 - u2 / 6.0 + u2 * u2 / 120.0, 0.5 * (-u / 3.0 + u * u2 / 30.0)
+    s = math.sin(u)
+    return s / u, 0.5 * (u * math.cos(u) - s) / (u * u)
+
+
+@numba.njit(cache=True, nogil=True)
+def recursion_kernel(
+    theta: np.ndarray,
+    dd: np.ndarray,
+    dtheta: np.ndarray,
+    cov_input: np.ndarray,
+    cov_start: np.ndarray,
+    out: np.ndarray,
+    method: int,
+) -> None:
+    """Run the recursion over n steps; ``out[i]`` receives P after step i.
+
+    theta, dd, dtheta : (n,); cov_input : (n, 2, 2); cov_start : (3, 3) P before the
+    first step; out : (n, 3, 3), written in place.
+    """
+    # Only the upper triangle (6 numbers) is carried and the lower one mirrored on
+    # output: P is symmetric by construction, so round-off in F P F^T cannot make P_ij
+    # and P_ji drift apart over 10^7 steps (filterpy symmetrises with (P + P^T)/2 for
+    # the same reason; an asymmetric P breaks Cholesky and eigh downstream).
+    p00 = cov_start[0, 0]
+    p01 = 0.5 * (cov_start[0, 1] + cov_start[1, 0])
+    p02 = 0.5 * (cov_start[0, 2] + cov_start[2, 0])
+    p11 = cov_start[1, 1]
+    p12 = 0.5 * (cov_start[1, 2] + cov_start[2, 1])
+    p22 = cov_start[2, 2]
+    for k in range(theta.shape[0]):
+        d = dd[k]
+        a = dtheta[k]
+        # Heading of the displacement, chord factor f, f' and ∂heading/∂Δθ (w):
+        # exact arc / midpoint use θ + Δθ/2; euler θ; classical (rotate α, then
+        # translate D, Chong–Kleeman eq. 1) θ + α.
+        if method == METHOD_EULER:
+            h = theta[k]
+            f, df, w = 1.0, 0.0, 0.0
+        elif method == METHOD_CLASSICAL:
+            h = theta[k] + a
+            f, df, w = 1.0, 0.0, 1.0
+        elif method == METHOD_MIDPOINT:
+            h = theta[k] + 0.5 * a
+            f, df, w = 1.0, 0.0, 0.5
+        else:
+            h = theta[k] + 0.5 * a
+            f, df = _sinc_and_derivative(a)
+            w = 0.5
+        c = math.cos(h)
+        s = math.sin(h)
+        dx = d * f * c
+        dy = d * f * s
+        # F = I + u e2^T with u = (−Δy, Δx, 0): Chong–Kleeman eq. (16), chord form.
+        u0 = -dy
+        u1 = dx
+        n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
+        n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
+        n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
+        n02 = p02 + u0 * p22
+        n12 = p12 + u1 * p22
+        # G = [[g00, g01], [g10, g11], [0, 1]]: Chong–Kleeman eq. (17) in chord form.
+        g00 = f * c
+        g10 = f * s
+        g01 = d * (df * c - w * f * s)
+        g11 = d * (df * s + w * f * c)
+        q00 = cov_input[k, 0, 0]
+        q01 = 0.5 * (cov_input[k, 0, 1] + cov_input[k, 1, 0])
+        q11 = cov_input[k, 1, 1]
+        # rows of G Q: r_i = g_i Q
+        r00 = g00 * q00 + g01 * q01
+        r01 = g00 * q01 + g01 * q11
+        r10 = g10 * q00 + g11 * q01
+        r11 = g10 * q01 + g11 * q11
+        p00 = n00 + r00 * g00 + r01 * g01
+        p01 = n01 + r00 * g10 + r01 * g11
+        p11 = n11 + r10 * g10 + r11 * g11
+        p02 = n02 + r01
+        p12 = n12 + r11
+        p22 = p22 + q11
+        o = out[k]
+        o[0, 0] = p00
+        o[0, 1] = p01
+        o[1, 0] = p01
+        o[0, 2] = p02
+        o[2, 0] = p02
+        o[1, 1] = p11
+        o[1, 2] = p12
+        o[2, 1] = p12
+        o[2, 2] = p22

@@ -1,0 +1,168 @@
+"""Inner loops of the Monte Carlo engine: one block of runs, one stretch of partitions.
+
+Every partition's body motion is an affine map of two standard normals ``z0, z1``::
+
+    Δd = dd0 + a_d·z0 + b_d·z1          Δθ = dθ0 + a_t·z0 + b_t·z1
+
+which covers all incremental models (wheel noise, speed + gyro, classical); see
+:mod:`odomkit.simulate.engine`. The pose is integrated with the exact arc
+(:func:`odomkit.kinematics.step_displacement`, ``method="exact"``)::
+
+    x' = x + Δd·sinc(Δθ/2)·cos(θ + Δθ/2),  y' = y + Δd·sinc(Δθ/2)·sin(θ + Δθ/2),  θ' = θ + Δθ
+
+The numba kernel avoids two of three transcendental calls per step: it carries the unit
+heading vector (cos θ, sin θ) and turns it twice by Δθ/2, with sin and cos of the small
+half angle from their Taylor series (exact to rounding for |Δθ/2| < 0.25, see
+:data:`_POLY_BELOW`). Rounding in the rotations would slowly denormalise the vector, so it
+is recomputed from the separately summed θ every :data:`RESYNC_EVERY` partitions (counted
+from the start of the path, so the numbers never depend on how partitions are chunked).
+:func:`advance_numpy` is the plain vectorised reference with the same arithmetic meaning.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.kinematics import sinc_half, step_displacement
+
+RESYNC_EVERY = 64
+# Taylor series of sin u/u to u^10 and cos u to u^12: the first omitted terms are
+# u^12/13! < 1e-17 and u^14/14! < 1e-19 for |u| < 0.25, below double rounding.
+_POLY_BELOW = 0.25
+
+State = NDArray[np.float64]  # shape (5, B): x, y, θ, cos θ, sin θ
+
+
+def new_state(pose0: NDArray[np.float64]) -> State:
+    """Kernel state for initial poses ``pose0`` of shape (B, 3)."""
+    state = np.empty((5, pose0.shape[0]))
+    state[0:3] = pose0.T
+    state[3] = np.cos(pose0[:, 2])
+    state[4] = np.sin(pose0[:, 2])
+    return state
+
+
+def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
+                  first_partition: int) -> None:
+    """Plain numpy reference: advance ``state`` in place over ``z.shape[0]`` partitions.
+
+    ``z`` has shape (P, 2, B); ``coef`` is ``[dd0, a_d, b_d, dθ0, a_t, b_t]``.
+    ``first_partition`` is unused (kept so both kernels share a signature).
+    """
+    dd = coef[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :]
+    dth = coef[3] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :]
+    theta = np.empty_like(dth)
+    theta[0] = state[2]
+    np.cumsum(dth[:-1], axis=0, out=theta[1:])
+    theta[1:] += state[2]
+    dx, dy = step_displacement(theta, dd, dth, "exact")
+    state[0] += dx.sum(axis=0)
+    state[1] += dy.sum(axis=0)
+    state[2] = theta[-1] + dth[-1]
+    state[3] = np.cos(state[2])
+    state[4] = np.sin(state[2])
+
+
+def advance_classical_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
+                            first_partition: int) -> None:
+    """The classical step map: rotate by α = Δθ, then translate D = Δd along the new
+    heading (Chong–Kleeman eq. 1), as :mod:`odomkit.propagate` linearises it."""
+    dd = coef[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :]
+    dth = coef[3] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :]
+    theta_after = state[2] + np.cumsum(dth, axis=0)
+    state[0] += (dd * np.cos(theta_after)).sum(axis=0)
+    state[1] += (dd * np.sin(theta_after)).sum(axis=0)
+    state[2] = theta_after[-1]
+    state[3] = np.cos(state[2])
+    state[4] = np.sin(state[2])
+
+
+def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
+                          first_partition: int) -> None:
+    """Direct heading (compass): the heading of partition i is the nominal heading at its
+    middle plus white error ``sigma·z1`` (not integrated, Kelly section 3.1).
+
+    ``coef`` is ``[dd0, sigma_d, theta_mid_0, dθ0, sigma_heading, 0]`` with theta_mid_0
+    the nominal heading at the middle of the segment's first partition;
+    ``first_partition`` counts from the start of the segment. ``state[2]`` becomes the
+    last *measured* heading (the compass error is not integrated).
+    """
+    p = z.shape[0]
+    dd = coef[0] + coef[1] * z[:, 0, :]
+    theta_mid = coef[2] + coef[3] * (first_partition + np.arange(p))[:, None]
+    heading = theta_mid + coef[4] * z[:, 1, :]
+    length = dd * sinc_half(coef[3])
+    state[0] += (length * np.cos(heading)).sum(axis=0)
+    state[1] += (length * np.sin(heading)).sum(axis=0)
+    # The measured heading at the end of the stretch: nominal end heading plus the last
+    # partition's compass error.
+    state[2] = coef[2] + coef[3] * (first_partition + p - 0.5) + coef[4] * z[-1, 1, :]
+
+
+def _advance_numba_py(state: Any, z: Any, coef: Any, first_partition: int) -> None:
+    n_part, _, n_runs = z.shape
+    dd0, ad, bd, dt0, at, bt = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
+    for p in range(n_part):
+        resync = (first_partition + p) % RESYNC_EVERY == 0
+        for r in range(n_runs):
+            z0 = z[p, 0, r]
+            z1 = z[p, 1, r]
+            dd = dd0 + ad * z0 + bd * z1
+            dth = dt0 + at * z0 + bt * z1
+            theta = state[2, r]
+            if resync:
+                c = math.cos(theta)
+                s = math.sin(theta)
+            else:
+                c = state[3, r]
+                s = state[4, r]
+            u = 0.5 * dth
+            if abs(u) < _POLY_BELOW:
+                u2 = u * u
+                sinc = 1.0 - u2 / 6.0 * (1.0 - u2 / 20.0 * (1.0 - u2 / 42.0 * (
+                    1.0 - u2 / 72.0 * (1.0 - u2 / 110.0))))
+                cu = 1.0 - u2 / 2.0 * (1.0 - u2 / 12.0 * (1.0 - u2 / 30.0 * (
+                    1.0 - u2 / 56.0 * (1.0 - u2 / 90.0 * (1.0 - u2 / 132.0)))))
+                su = u * sinc
+            else:
+                su = math.sin(u)
+                cu = math.cos(u)
+                sinc = su / u
+            # heading at the middle of the arc: (c, s) turned by Δθ/2
+            cm = c * cu - s * su
+            sm = s * cu + c * su
+            length = dd * sinc
+            state[0, r] += length * cm
+            state[1, r] += length * sm
+            state[2, r] = theta + dth
+            state[3, r] = cm * cu - sm * su
+            state[4, r] = sm * cu + cm * su
+
+
+_NUMBA_KERNEL: Callable[..., None] | None = None
+
+
+def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64], int], None]:
+    """The compiled kernel (compiled on first use; raises ImportError without numba)."""
+    global _NUMBA_KERNEL
+    if _NUMBA_KERNEL is None:
+        import numba
+
+        # nogil: blocks run in threads; no fastmath, so the arithmetic (and the numbers)
+        # do not depend on vectorisation.
+        _NUMBA_KERNEL = numba.njit(nogil=True, cache=True)(_advance_numba_py)
+    return _NUMBA_KERNEL
+
+
+def have_numba() -> bool:
+    try:
+        import numba  # noqa: F401
+    except ImportError:
+        return False
+    return True
+

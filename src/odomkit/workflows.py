@@ -1,0 +1,184 @@
+"""Side-effecting workflows behind the CLI: load files, run the core, write outputs.
+
+Each CLI command calls exactly one function here (or one core function), so the
+commands stay thin and everything they do is also available from Python.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from odomkit.errors import InputError
+from odomkit.io.csvlog import parse_column_map, read_csv_log
+from odomkit.io.halmstad import read_khepera, read_snowhite
+from odomkit.io.optiodom import read_run
+from odomkit.io.robotfile import read_robot
+from odomkit.io.trackio import write_track_csv, write_tum
+from odomkit.kinematics import Method
+from odomkit.log import OdometryLog
+from odomkit.robot import DiffDrive, Robot
+from odomkit.track import Track, dead_reckon_log
+
+LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom")
+
+
+def detect_format(path: Path) -> str:
+    """Guess a log format from its file name."""
+    name = path.name.lower()
+    if name.startswith("snowhite"):
+        return "snowhite"
+    if name.startswith("khepera"):
+        return "khepera"
+    if re.search(r"_run-\d+\.csv$", name):
+        return "optiodom"
+    return "csv"
+
+
+@dataclass(frozen=True)
+class LogOptions:
+    """How to read a log (see ``odomkit track --help``)."""
+
+    format: str = "auto"
+    columns: str | None = None
+    cumulative: bool = False
+    wrap_bits: int | None = None
+    period: float | None = None
+    time_scale: float = 1.0
+
+
+def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions()) -> OdometryLog:
+    """Read a log in any supported format."""
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such file", source=str(path))
+    fmt = detect_format(path) if options.format == "auto" else options.format
+    if fmt not in LOG_FORMATS:
+        raise InputError(f"unknown log format {fmt!r}; expected one of {', '.join(LOG_FORMATS)}")
+    if fmt == "khepera":
+        return read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
+    if fmt == "snowhite":
+        return read_snowhite(path, **({"period": options.period} if options.period else {}))
+    if fmt == "optiodom":
+        return read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
+    if not options.columns:
+        raise InputError("a CSV log needs --columns, e.g. t=time,ticks_left=L,ticks_right=R",
+                         source=str(path))
+    return read_csv_log(path, parse_column_map(options.columns), cumulative=options.cumulative,
+                        wrap_bits=options.wrap_bits, time_scale=options.time_scale)
+
+
+@dataclass(frozen=True)
+class TrackRun:
+    """What ``odomkit track`` computed and wrote."""
+
+    track: Track
+    log: OdometryLog
+    outputs: dict[str, str] = field(default_factory=dict)
+
+    def summary(self) -> dict[str, Any]:
+        """The ``--json`` object: final pose and covariance, path length, duration, and
+        the final error against ground truth when the log has it."""
+        final = self.track.poses[-1]
+        out: dict[str, Any] = {
+            "samples": int(self.track.poses.shape[0]),
+            "pose": [float(final[0]), float(final[1]), float(_wrap(final[2]))],
+            "theta_unwrapped": float(final[2]),
+            "cov": None if self.track.cov is None else self.track.cov[-1],
+            "path_length": self.track.path_length,
+            "duration": self.track.duration,
+        }
+        gt = self.log.ground_truth
+        if gt is not None:
+            err = self.track.poses - gt
+            dist = np.hypot(err[:, 0], err[:, 1])
+            out["ground_truth"] = {
+                "final_position_error": float(dist[-1]),
+                "max_position_error": float(dist.max()),
+                "final_heading_error": float(_wrap(err[-1, 2])),
+                "path_length": float(np.sum(np.hypot(*np.diff(gt[:, :2], axis=0).T))),
+            }
+        out["outputs"] = self.outputs
+        return out
+
+
+def _wrap(angle: float) -> float:
+    return float((angle + np.pi) % (2 * np.pi) - np.pi)
+
+
+def run_track(
+    log_path: str | Path,
+    robot_path: str | Path,
+    *,
+    method: Method = "exact",
+    log_options: LogOptions = LogOptions(),
+    decimate: int = 1,
+    pose0: tuple[float, float, float] | None = None,
+    with_covariance: bool = True,
+    out: str | Path | None = None,
+    tum: str | Path | None = None,
+    overwrite: bool = False,
+) -> TrackRun:
+    """Read a robot file and a log, dead-reckon, write the requested outputs."""
+    robot, noise = read_robot(robot_path)
+    for target in (out, tum):
+        if target is not None and Path(target).exists() and not overwrite:
+            raise InputError("exists already; pass --force to replace it", source=str(target))
+    log = load_log(log_path, robot, log_options).decimate(decimate)
+    use_noise = (noise if len(noise) > 1 else noise[0]) if (noise and with_covariance) else None
+    track = dead_reckon_log(log, robot, method, pose0, noise=use_noise)
+    outputs = {}
+    if out is not None:
+        outputs["track_csv"] = str(write_track_csv(out, track, overwrite))
+    if tum is not None:
+        outputs["tum"] = str(write_tum(tum, track, overwrite))
+    return TrackRun(track, log, outputs)
+
+
+def builtin_data_path(name: str) -> Path:
+    """Path of a file shipped in ``odomkit/data``."""
+    return Path(str(resources.files("odomkit.data").joinpath(name)))
+
+
+DEMO_RUNS = ("230620202042_run-01.csv", "230620202042_run-04.csv")
+
+
+def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
+    """Dead-reckon the built-in OptiOdom UMBmark runs (one CW, one CCW) with covariance,
+    compare them with the OptiTrack ground truth and write tracks, a summary and (with
+    matplotlib installed) a figure into ``out_dir``."""
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    robot_file = builtin_data_path("optiodom_diff.toml")
+    summary: dict[str, Any] = {"robot": str(robot_file), "runs": {}}
+    runs = []
+    for name in DEMO_RUNS:
+        stem = name.removesuffix(".csv")
+        result = run_track(builtin_data_path(name), robot_file,
+                           out=out / f"{stem}_track.csv", tum=out / f"{stem}.tum",
+                           overwrite=overwrite)
+        summary["runs"][stem] = result.summary()
+        runs.append((stem, result))
+    try:
+        from odomkit.plot import plot_tracks
+    except ImportError:  # matplotlib is an optional extra
+        summary["figure"] = None
+    else:
+        figure = out / "demo_tracks.png"
+        if figure.exists() and not overwrite:
+            raise InputError("exists already; pass --force to replace it", source=str(figure))
+        plot_tracks([(stem, r.track, r.log.ground_truth) for stem, r in runs], figure)
+        summary["figure"] = str(figure)
+    import json
+
+    from odomkit.cli.output import to_jsonable
+
+    summary_path = out / "summary.json"
+    summary_path.write_text(json.dumps(to_jsonable(summary), indent=2), encoding="utf-8")
+    summary["summary"] = str(summary_path)
+    return summary
