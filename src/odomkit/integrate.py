@@ -13,6 +13,18 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit.errors import ModelError
 from odomkit.kinematics import METHODS, Method, step_displacement
 
+_METHOD_CODE = {"euler": 0, "midpoint": 1, "exact": 2}
+# Below this many steps the numpy path is as fast and needs no compilation.
+_NUMBA_FROM = 20_000
+
+
+def _numba_kernel():  # pragma: no cover - trivial import shim
+    try:
+        from odomkit._integrate_numba import dead_reckon_kernel
+    except ImportError:  # numba is the optional "fast" extra
+        return None
+    return dead_reckon_kernel
+
 
 def _pose0(pose0: ArrayLike) -> NDArray[np.float64]:
     p = np.asarray(pose0, dtype=float).reshape(-1)
@@ -26,6 +38,7 @@ def dead_reckon(
     dtheta: ArrayLike,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
     method: Method = "exact",
+    engine: str = "auto",
 ) -> NDArray[np.float64]:
     """Integrate body steps into a pose track.
 
@@ -39,6 +52,9 @@ def dead_reckon(
         Initial pose [x (m), y (m), θ (rad)].
     method : {"exact", "midpoint", "euler"}
         See :func:`odomkit.kinematics.step_displacement`.
+    engine : {"auto", "numpy", "numba"}
+        ``auto`` uses the numba kernel (``odomkit[fast]``) for long logs when installed.
+        Both give the same poses to about 1e-15 relative.
 
     Returns
     -------
@@ -63,6 +79,15 @@ def dead_reckon(
         raise ModelError(f"dd and dtheta must be 1-D of equal length, got {dd.shape} and {dtheta.shape}")
     p0 = _pose0(pose0)
     poses = np.empty((dd.size + 1, 3))
+    if engine == "numba" or (engine == "auto" and dd.size >= _NUMBA_FROM):
+        kernel = _numba_kernel()
+        if kernel is not None:
+            kernel(dd, dtheta, p0[0], p0[1], p0[2], _METHOD_CODE[method], poses)
+            return poses
+        if engine == "numba":
+            raise ModelError("engine='numba' needs numba: pip install 'odomkit[fast]'")
+    elif engine not in ("auto", "numpy"):
+        raise ModelError(f"unknown engine {engine!r}; expected auto, numpy or numba")
     poses[0] = p0
     np.cumsum(dtheta, out=poses[1:, 2])
     poses[1:, 2] += p0[2]

@@ -42,8 +42,10 @@ def sinc_half(dtheta: ArrayLike) -> NDArray[np.float64]:
     >>> float(sinc_half(0.0)), round(float(sinc_half(np.pi)), 12)
     (1.0, 0.636619772368)
     """
-    # numpy's sinc is sin(πx)/(πx) and handles x = 0 exactly.
-    return np.sinc(np.asarray(dtheta, dtype=float) / (2.0 * np.pi))
+    # sin(u)/u is accurate to rounding for every u != 0 (sin is, and so is the division);
+    # only u = 0 needs its limit. (np.sinc does the same but 4x slower.)
+    u = 0.5 * np.asarray(dtheta, dtype=float)
+    return np.divide(np.sin(u), u, out=np.ones_like(u), where=u != 0.0)
 
 
 def sinc_half_derivative(dtheta: ArrayLike) -> NDArray[np.float64]:

@@ -286,6 +286,17 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
                              source=log.source)
         if len(log) < 2:
             raise InputError("run has fewer than two rows", source=log.source)
+    if source == "endpoints":
+        if len(runs) < 2:
+            raise InputError(f"an endpoint calibration needs at least two runs, got {len(runs)}")
+        turns = [float(log.ground_truth[-1, 2] - log.ground_truth[0, 2]) for log in runs]  # type: ignore[index]
+        loops = [t for t in turns if abs(t) > np.pi]
+        if len(loops) == len(turns) and (all(t > 0 for t in loops) or all(t < 0 for t in loops)):
+            raise InputError(
+                "all runs are closed loops turning the same way; their endpoints cannot separate "
+                "the wheel-diameter and wheel-base errors (Borenstein–Feng section III-A): "
+                "add runs in the other direction"
+            )
 
 
 class _Problem:
@@ -358,7 +369,7 @@ def calibrate_exact(
     robot: DiffDrive | Tricycle,
     source: Source = "endpoints",
     *,
-    heading_weight: float | None = None,
+    heading_weight: float | None = 0.0,
     fix_scale: bool | None = None,
     noise: Any = None,
     every: int = 1,
@@ -376,10 +387,12 @@ def calibrate_exact(
         Nominal parameters; its current corrections are the starting point.
     source : {"endpoints", "trajectory"}
         Compare only each run's final pose, or every row's pose.
-    heading_weight : float, optional
-        Length [m/rad] that turns a heading residual into a position-like one. Default:
+    heading_weight : float or None
+        Length [m/rad] that turns a heading residual into a position-like one; None means
         a quarter of the mean path length of the runs (the side of a square: a heading
-        error δθ at the end counts like a lateral miss of side·δθ). 0 fits positions only.
+        error δθ at the end counts like a lateral miss of side·δθ). The default 0 fits
+        positions only, like UMBmark and E_max,syst; on the OptiOdom squares adding the
+        heading made the calibration worse in and out of sample (docs/readme/calibration.md).
     fix_scale : bool, optional
         Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
         value. Default: automatically, when the residuals' relative sensitivity to a
@@ -411,7 +424,7 @@ def calibrate_exact(
     ...     ch = {"dist_left": np.r_[0, a], "dist_right": np.r_[0, r]}
     ...     return OdometryLog(np.arange(201.0), ch, gt)
     >>> cal = calibrate_exact([run(2, 2.5), run(2.5, 2)], nominal, "trajectory")
-    >>> [round(v, 6) for v in cal.values]
+    >>> [round(float(v), 6) for v in cal.values]
     [1.0, 1.01, 1.0]
     """
     _check_runs(runs, source)
@@ -523,3 +536,24 @@ def jackknife_runs(
         loo = np.array([calibrate_exact([r for j, r in enumerate(runs) if j != i], robot, source,
                                         **kwargs).values for i in range(n)])
     return full, np.sqrt((n - 1) / n * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))
+
+
+def umbmark_from_runs(runs: Sequence[Any], robot: Any, side: float, **kwargs: Any) -> Any:
+    """UMBmark from logged runs, :func:`odomkit.calibrate.realdata.umbmark_from_runs`.
+
+    Also accepts file paths for ``runs`` (read by :func:`odomkit.workflows.load_log`) and a
+    robot-file path for ``robot``, which is how ``odomkit umbmark --runs`` calls it.
+    """
+    from pathlib import Path
+
+    from odomkit.calibrate.realdata import umbmark_from_runs as from_logs
+
+    if isinstance(robot, str | Path):
+        from odomkit.io.robotfile import read_robot
+
+        robot = read_robot(robot)[0]
+    if any(isinstance(r, str | Path) for r in runs):
+        from odomkit.workflows import load_log
+
+        runs = [load_log(r, robot) if isinstance(r, str | Path) else r for r in runs]
+    return from_logs(runs, robot, side, **kwargs)

@@ -155,9 +155,9 @@ def ellipse_points(cov: ArrayLike, center: ArrayLike = (0.0, 0.0), prob: float =
 
     Examples
     --------
-    >>> p = ellipse_points(np.diag([4.0, 1.0]), n=4)
-    >>> np.round(p[0], 3)
-    array([4.895, 0.   ])
+    >>> p = ellipse_points(np.diag([4.0, 1.0]), n=4)   # semi-axes 2·2.448 and 1·2.448
+    >>> sorted(np.round(np.hypot(p[:, 0], p[:, 1]), 3).tolist())
+    [2.448, 2.448, 4.895, 4.895]
     """
     cov = np.asarray(cov, dtype=float)
     if cov.shape != (2, 2):
@@ -181,9 +181,9 @@ class _Likelihood:
         C = q[0] * self.A + q[1] * self.B
         try:
             L = np.linalg.cholesky(C)
+            Cinv = np.linalg.inv(C)
         except np.linalg.LinAlgError:
             return -np.inf, np.zeros(self.e.shape[1])
-        Cinv = np.linalg.inv(C)
         logdet = 2.0 * np.sum(np.log(np.abs(np.diagonal(L, axis1=1, axis2=2))), axis=1)
         extra = 0.0
         if self.mean is None:

@@ -49,6 +49,7 @@ __all__ = [
     "umbmark_chong_kleeman",
     "apply_corrections",
     "e_max_syst",
+    "umbmark_summary",
 ]
 
 
@@ -284,9 +285,9 @@ def umbmark(
     radius = math.inf if s == 0.0 else 0.5 * L / s
     # Eq. (4.22) (R + b/2)/(R − b/2) with R from (4.21), multiplied through by sin(β/2)
     # (= Chong–Kleeman eq. 9): exact at β = 0, no division by R.
-    if L - b * abs(s) <= 0.0:
+    if abs(beta) >= math.pi or L - b * abs(s) <= 0.0:
         raise ModelError(
-            f"β = {beta:.4g} rad per {L:g} m leg means a curve radius below b/2; "
+            f"β = {beta:.4g} rad per {L:g} m leg means a half-turn or a curve radius below b/2; "
             "the errors are too large for UMBmark (check units: metres, and the CW/CCW labels)"
         )
     E_d = (L + b * s) / (L - b * s)
@@ -383,3 +384,31 @@ def apply_corrections(robot: DiffDrive, result: UmbmarkResult) -> DiffDrive:
         c_right=mean * 2.0 * ratio / (ratio + 1.0),  # eq. (4.32)
         c_wheel_base=robot.c_wheel_base * result.E_b,
     )
+
+
+def umbmark_summary(
+    errors_cw: ArrayLike, errors_ccw: ArrayLike, side: float, wheel_base: float
+) -> dict[str, Any]:
+    """Borenstein–Feng's result as a dict, with Chong–Kleeman's variant under
+    ``"chong_kleeman"`` (what ``odomkit umbmark --json`` prints).
+
+    >>> s = umbmark_summary([[-0.1, -0.1], [-0.1, -0.1]], [[-0.1, 0.1], [-0.1, 0.1]], 4, 0.34)
+    >>> round(s["E_b"] - 1, 6), round(s["chong_kleeman"]["c_b"] - 1, 6)  # 2α/π vs α/π
+    (0.008022, 0.003995)
+    """
+    bf = umbmark(errors_cw, errors_ccw, side, wheel_base)
+    ck = umbmark_chong_kleeman(errors_cw, errors_ccw, side, wheel_base)
+    out = bf.to_dict()
+    out["chong_kleeman"] = {
+        "alpha": ck.alpha,
+        "beta": ck.beta,
+        "E_d": ck.E_d,
+        "c_b": ck.E_b,
+        "c_left": ck.c_left,
+        "c_right": ck.c_right,
+        "wheel_base": ck.wheel_base,
+        "note": "c_b = pi/(pi - alpha) (Chong-Kleeman eq. 10) applies half the wheel-base "
+                "correction a 90-degree turn needs; E_b = 90/(90 - alpha) (Borenstein-Feng "
+                "eq. 4.27) is the one that follows from the geometry",
+    }
+    return out

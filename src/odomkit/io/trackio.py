@@ -54,11 +54,12 @@ def write_track_csv(path: str | Path, track: Track, overwrite: bool = False) -> 
 def write_tum(path: str | Path, track: Track, overwrite: bool = False) -> Path:
     """Write a TUM trajectory (``timestamp tx ty tz qx qy qz qw``), readable by evo.
 
-    The planar pose becomes z = 0 and a rotation about z by θ: q = (0, 0, sin θ/2, cos θ/2).
+    The planar pose becomes z = 0 and a rotation about z by θ: q = (0, 0, sin θ/2, cos θ/2)
+    with θ wrapped to [−π, π), so that q_w >= 0 (q and −q are the same rotation).
     """
     path = Path(path)
     _refuse_overwrite(path, overwrite)
-    theta = track.poses[:, 2]
+    theta = (track.poses[:, 2] + np.pi) % (2 * np.pi) - np.pi
     n = theta.size
     table = np.column_stack((track.t, track.poses[:, 0], track.poses[:, 1], np.zeros(n),
                              np.zeros(n), np.zeros(n), np.sin(theta / 2), np.cos(theta / 2)))

@@ -372,8 +372,9 @@ def propagate_direct_heading(
     --------
     >>> c = propagate_direct_heading(np.zeros(100), np.full(100, 0.01), np.zeros(100),
     ...                              np.zeros(100), np.full(101, 1e-4), np.zeros((2, 2)))
-    >>> round(float(c[-1, 1, 1]), 10), float(c[-1, 2, 2])   # 100 · 0.01² · 1e-4
-    (1e-06, 0.0001)
+    >>> # 0.01² · 1e-4 per interior sample; the two end samples enter one step each (¼ + ¼)
+    >>> round(float(c[-1, 1, 1]), 12), float(c[-1, 2, 2])   # 0.01² · 1e-4 · 99.5
+    (9.95e-07, 0.0001)
     """
     check_method(method)
     dd, dtheta, _ = check_steps(dd, dtheta)

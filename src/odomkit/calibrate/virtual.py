@@ -1,0 +1,321 @@
+"""Virtual UMBmark: a simulated differential robot driving the square by its own odometry.
+
+The robot has *true* wheels and wheel base (set by :class:`SystematicErrors`) and
+*believed* ones (a :class:`~odomkit.robot.DiffDrive`, nominal or corrected). Its
+controller commands wheel rotations (encoder ticks) that its odometry, using the believed
+parameters, reads as a straight leg of length ``side`` or a 90° turn on the spot; the true
+pose follows what the true wheels do with those same ticks. The return position error is
+true minus odometry end position (Borenstein–Feng eq. 3.1).
+
+Stopping: within a segment the controller commands the same believed wheel increment
+every step (``step`` metres of wheel travel), so the odometry's progress (distance along
+a leg, heading change in a turn) grows linearly; the segment ends in the step where the
+odometry reaches its target, and that last step is shortened to the exact fraction
+needed, so the stop is not quantised to the step size.
+
+Wheel noise (:class:`~odomkit.noise.WheelNoise`, Chong–Kleeman eq. 4): the ground
+distance a wheel really travels in a step differs from what its ticks imply by white
+noise of variance k²·|d| (slip, contact-point wander). The odometry sees only the ticks.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.calibrate.umbmark import UmbmarkResult, Variant, apply_corrections, umbmark
+from odomkit.errors import ModelError
+from odomkit.kinematics import step_displacement
+from odomkit.noise import WheelNoise
+from odomkit.robot import DiffDrive
+
+__all__ = [
+    "SystematicErrors",
+    "VirtualRuns",
+    "UmbmarkIterations",
+    "true_robot",
+    "square_wheel_steps",
+    "run_virtual_umbmark",
+    "iterate_umbmark",
+]
+
+
+@dataclass(frozen=True)
+class SystematicErrors:
+    """The true systematic errors of a virtual differential robot (Borenstein–Feng II-B).
+
+    All three are relative to the robot's *nominal* parameters (a
+    :class:`~odomkit.robot.DiffDrive` with its ``m_per_tick_*`` and ``wheel_base``,
+    ignoring its correction factors).
+
+    Parameters
+    ----------
+    E_d : float
+        D_R/D_L, the ratio of the actual wheel diameters (eq. 2.3), each measured in units
+        of its nominal diameter: true metres per tick are ``m_per_tick_left·2E_s/(E_d+1)``
+        and ``m_per_tick_right·2E_s·E_d/(E_d+1)``.
+    E_b : float
+        b_actual/b_nominal (eq. 2.4).
+    E_s : float
+        D_avg/D_nominal, the average-diameter scale error (section II-B); it scales both
+        legs and turns (eq. 2.15) and UMBmark cannot see it in the legs.
+
+    >>> left, right = SystematicErrors(E_d=1.002).wheel_scales()  # relative to nominal
+    >>> round(right / left, 12), round((left + right) / 2, 12)       # E_d and E_s
+    (1.002, 1.0)
+    """
+
+    E_d: float = 1.0
+    E_b: float = 1.0
+    E_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("E_d", "E_b", "E_s"):
+            value = getattr(self, name)
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise ModelError(f"SystematicErrors.{name} must be a positive finite number, "
+                                 f"got {value!r}")
+
+    def wheel_scales(self) -> tuple[float, float]:
+        """True/nominal distance per tick of the left and right wheel."""
+        return 2.0 * self.E_s / (self.E_d + 1.0), 2.0 * self.E_s * self.E_d / (self.E_d + 1.0)
+
+
+def true_robot(true_errors: SystematicErrors, robot: DiffDrive) -> DiffDrive:
+    """The true robot as a :class:`~odomkit.robot.DiffDrive` with no corrections.
+
+    >>> round(true_robot(SystematicErrors(E_b=1.01), DiffDrive(0.34)).wheel_base, 12)
+    0.3434
+    """
+    left, right = true_errors.wheel_scales()
+    return DiffDrive(
+        wheel_base=true_errors.E_b * robot.wheel_base,
+        m_per_tick_left=left * robot.m_per_tick_left,
+        m_per_tick_right=right * robot.m_per_tick_right,
+    )
+
+
+class VirtualRuns(NamedTuple):
+    """Result of :func:`run_virtual_umbmark`; unpacks as a tuple.
+
+    errors_cw, errors_ccw : (n, 2) return position errors, true − odometry [m] (eq. 3.1).
+    true_end_cw, true_end_ccw : (n, 3) true end poses [x, y, θ] (θ continuous).
+    odom_end_cw, odom_end_ccw : (n, 3) end poses computed by odometry.
+    """
+
+    errors_cw: NDArray[np.float64]
+    errors_ccw: NDArray[np.float64]
+    true_end_cw: NDArray[np.float64]
+    true_end_ccw: NDArray[np.float64]
+    odom_end_cw: NDArray[np.float64]
+    odom_end_ccw: NDArray[np.float64]
+
+
+def _segment(total: float, step: float) -> NDArray[np.float64]:
+    """Equal increments of ``step`` with the last one cut so that they sum to ``total``."""
+    n = max(1, math.ceil(total / step - 1e-9))
+    inc = np.full(n, step)
+    inc[-1] = total - step * (n - 1)
+    return inc
+
+
+def square_wheel_steps(
+    robot: DiffDrive, side: float, direction: str, step: float = 0.01
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Believed wheel travel per step for one UMBmark square: four legs, four 90° turns.
+
+    Parameters
+    ----------
+    robot : DiffDrive
+        The believed robot; its effective wheel base sets how much wheel travel its
+        odometry reads as 90°.
+    side : float
+        Leg length L [m].
+    direction : {"cw", "ccw"}
+    step : float
+        Believed wheel travel per integration step [m].
+
+    Returns
+    -------
+    d_left, d_right : ndarray, shape (S,)
+        Wheel travel the odometry believes each step [m]; legs first, each followed by a
+        turn on the spot (the fourth turn too, as Borenstein–Feng did).
+
+    >>> dl, dr = square_wheel_steps(DiffDrive(0.4), 1.0, "ccw", step=0.5)
+    >>> round(float((dl + dr).sum() / 2), 12), round(float((dr - dl).sum() / 0.4), 9)
+    (4.0, 6.283185307)
+    """
+    if direction not in ("cw", "ccw"):
+        raise ModelError(f"direction must be 'cw' or 'ccw', got {direction!r}")
+    sign = 1.0 if direction == "ccw" else -1.0
+    leg = _segment(side, step)
+    # A believed 90° turn needs each wheel to travel b_eff·(π/2)/2 (Borenstein–Feng eq. 2.10).
+    turn = _segment(0.25 * math.pi * robot.effective_wheel_base, step)
+    left = np.concatenate([leg, -sign * turn] * 4)
+    right = np.concatenate([leg, sign * turn] * 4)
+    return left, right
+
+
+def _end_poses(d_left: NDArray[np.float64], d_right: NDArray[np.float64],
+               wheel_base: float) -> NDArray[np.float64]:
+    """End poses of dead reckoning from (0, 0, 0); rows are runs, columns steps."""
+    dd = 0.5 * (d_right + d_left)  # Borenstein–Feng eq. (2.2)–(2.4)
+    dtheta = (d_right - d_left) / wheel_base
+    theta_end = np.cumsum(dtheta, axis=-1)
+    theta_start = theta_end - dtheta
+    dx, dy = step_displacement(theta_start, dd, dtheta, "exact")
+    return np.stack([dx.sum(axis=-1), dy.sum(axis=-1), theta_end[..., -1]], axis=-1)
+
+
+def _generator(rng: np.random.Generator | int | None) -> np.random.Generator:
+    return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+
+
+def _drive(true_errors: SystematicErrors, robot: DiffDrive, side: float, direction: str,
+           runs: int, noise: WheelNoise | None, rng: np.random.Generator,
+           step: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    bel_left, bel_right = square_wheel_steps(robot, side, direction, step)
+    truth = true_robot(true_errors, robot)
+    # Same ticks, true metres per tick: ticks = believed distance / believed scale.
+    true_left = np.broadcast_to(bel_left * (truth.m_per_tick_left / robot.scale_left),
+                                (runs, bel_left.size)).copy()
+    true_right = np.broadcast_to(bel_right * (truth.m_per_tick_right / robot.scale_right),
+                                 (runs, bel_right.size)).copy()
+    if noise is not None:
+        # Chong–Kleeman eq. (4): variance k²·|d| per step, independent steps and wheels.
+        true_left += noise.k_left * np.sqrt(np.abs(true_left)) * rng.standard_normal(true_left.shape)
+        true_right += noise.k_right * np.sqrt(np.abs(true_right)) * rng.standard_normal(
+            true_right.shape)
+    true_end = _end_poses(true_left, true_right, truth.wheel_base)
+    odom_end = np.broadcast_to(_end_poses(bel_left, bel_right, robot.effective_wheel_base),
+                               (runs, 3)).copy()
+    return true_end, odom_end
+
+
+def run_virtual_umbmark(
+    true_errors: SystematicErrors,
+    believed_robot: DiffDrive,
+    side: float,
+    runs_per_direction: int,
+    noise: WheelNoise | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    step: float = 0.01,
+) -> VirtualRuns:
+    """Drive the UMBmark square ``runs_per_direction`` times CW and CCW.
+
+    Parameters
+    ----------
+    true_errors : SystematicErrors
+        E_d, E_b, E_s of the real robot relative to ``believed_robot``'s nominal values.
+    believed_robot : DiffDrive
+        What the odometry (and so the controller) uses, corrections included.
+    side : float
+        L [m].
+    runs_per_direction : int
+        n ≥ 1.
+    noise : WheelNoise, optional
+        Per-wheel random error; None for a noise-free robot (all runs identical).
+    rng : numpy.random.Generator or int, optional
+        Source of the noise (a seed is accepted); CW runs draw first, then CCW.
+    step : float
+        Wheel travel per integration step [m]; it matters only with noise (each step
+        gets independent noise), the noise-free result is exact for any step.
+
+    Returns
+    -------
+    VirtualRuns
+        ``(errors_cw, errors_ccw, true_end_cw, true_end_ccw, odom_end_cw, odom_end_ccw)``.
+
+    Examples
+    --------
+    A wheel base 1 % longer than believed: every turn falls short by α = (π/2)(1 − 1/1.01),
+    and the CW run ends where Borenstein–Feng's eq. (4.5)–(4.8) put it before their
+    small-angle approximation:
+
+    >>> runs = run_virtual_umbmark(SystematicErrors(E_b=1.01), DiffDrive(0.34), 4.0, 1)
+    >>> a, L = np.pi / 2 * (1 - 1 / 1.01), 4.0
+    >>> x4 = L * (1 + np.sin(a) - np.cos(2 * a) - np.sin(3 * a))
+    >>> y4 = L * (-np.cos(a) - np.sin(2 * a) + np.cos(3 * a))
+    >>> np.allclose(runs.errors_cw, [[x4, y4]], rtol=0, atol=1e-12)
+    True
+    """
+    if not isinstance(believed_robot, DiffDrive):
+        raise ModelError("believed_robot must be an odomkit.robot.DiffDrive")
+    for name, value in (("side", side), ("step", step)):
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise ModelError(f"{name} must be a positive finite number [m], got {value!r}")
+    if not isinstance(runs_per_direction, int | np.integer) or runs_per_direction < 1:
+        raise ModelError(f"runs_per_direction must be an integer >= 1, got {runs_per_direction!r}")
+    gen = _generator(rng)
+    n = int(runs_per_direction)
+    true_cw, odom_cw = _drive(true_errors, believed_robot, side, "cw", n, noise, gen, step)
+    true_ccw, odom_ccw = _drive(true_errors, believed_robot, side, "ccw", n, noise, gen, step)
+    return VirtualRuns(
+        errors_cw=true_cw[:, :2] - odom_cw[:, :2],  # Borenstein–Feng eq. (3.1)
+        errors_ccw=true_ccw[:, :2] - odom_ccw[:, :2],
+        true_end_cw=true_cw,
+        true_end_ccw=true_ccw,
+        odom_end_cw=odom_cw,
+        odom_end_ccw=odom_ccw,
+    )
+
+
+@dataclass(frozen=True)
+class UmbmarkIterations:
+    """Result of :func:`iterate_umbmark`.
+
+    Attributes
+    ----------
+    robots : tuple of DiffDrive, length k+1
+        ``robots[0]`` the robot as given, ``robots[i]`` after i compensations.
+    results : tuple of UmbmarkResult, length k+1
+        UMBmark of each robot (``results[i]`` was measured with ``robots[i]``).
+    e_max_syst : tuple of float, length k+1
+        E_max,syst of each robot [m].
+    """
+
+    robots: tuple[DiffDrive, ...]
+    results: tuple[UmbmarkResult, ...]
+    e_max_syst: tuple[float, ...]
+
+
+def iterate_umbmark(
+    true_errors: SystematicErrors,
+    believed_robot: DiffDrive,
+    side: float,
+    runs_per_direction: int,
+    iterations: int = 1,
+    noise: WheelNoise | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    variant: Variant = "borenstein-feng",
+    step: float = 0.01,
+) -> UmbmarkIterations:
+    """Run UMBmark, apply its corrections, run again — ``iterations`` times.
+
+    Each pass treats the compensated robot as a new one (Borenstein–Feng section V);
+    corrections compose (:func:`~odomkit.calibrate.umbmark.apply_corrections`).
+
+    >>> it = iterate_umbmark(SystematicErrors(1.002, 1.01), DiffDrive(0.34), 4.0, 1)
+    >>> [round(e, 3) for e in it.e_max_syst]   # [m] before and after one compensation
+    [0.448, 0.005]
+    """
+    if not isinstance(iterations, int | np.integer) or iterations < 0:
+        raise ModelError(f"iterations must be an integer >= 0, got {iterations!r}")
+    gen = _generator(rng)
+    robots = [believed_robot]
+    results: list[UmbmarkResult] = []
+    for i in range(int(iterations) + 1):
+        runs = run_virtual_umbmark(true_errors, robots[i], side, runs_per_direction, noise, gen,
+                                   step=step)
+        results.append(umbmark(runs.errors_cw, runs.errors_ccw, side,
+                               robots[i].effective_wheel_base, variant=variant))
+        if i < iterations:
+            robots.append(apply_corrections(robots[i], results[i]))
+    return UmbmarkIterations(tuple(robots), tuple(results),
+                             tuple(r.e_max_syst for r in results))

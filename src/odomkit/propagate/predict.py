@@ -1,0 +1,352 @@
+"""Error prediction for a planned path of segments: the library call behind
+``odomkit predict``.
+
+The noise model decides the odometry type:
+
+=================================  ===========  ========================================
+noise                              segments     closed form
+=================================  ===========  ========================================
+``WheelNoise``                     Arc, ...     Chong–Kleeman eq. (23), (25)
+``ClassicalNoise``                 Arc, ...     Chong–Kleeman eq. (1)–(3), per piece
+``(SpeedNoise, GyroNoise)``        KellyArc     Kelly eq. (11), (13), (15)
+``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10), (13), (14)
+=================================  ===========  ========================================
+
+Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` and
+``transition`` cut each segment into ``partitions`` exact-arc steps and hand them to the
+step recursion (:mod:`odomkit.propagate.recursion`) or Kelly's transition-matrix
+solution (:mod:`odomkit.propagate.transition`). They converge to ``closed`` as the steps
+shrink, which is how the closed forms are cross-checked.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit.errors import ModelError
+from odomkit.integrate import dead_reckon
+from odomkit.kinematics import diff_body_jacobian, step_displacement
+from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
+from odomkit.propagate.closed import classical_step, wheel_arc_cov
+from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
+
+Engine = Literal["closed", "recursion", "transition"]
+ENGINES: tuple[Engine, ...] = ("closed", "recursion", "transition")
+DEFAULT_PARTITIONS = 1000
+"""Steps per segment for the ``recursion`` and ``transition`` engines."""
+
+Model = Literal["wheel", "classical", "gyro", "compass"]
+
+
+def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
+    """Wrap angles to [−π, π).
+
+    >>> float(wrap_angle(-5.0))
+    1.2831853071795862
+    """
+    theta = np.asarray(theta, dtype=float)
+    return theta - 2.0 * np.pi * np.floor((theta + np.pi) / (2.0 * np.pi))
+
+
+@dataclass(frozen=True)
+class Prediction:
+    """Predicted end pose and its covariance.
+
+    Attributes
+    ----------
+    pose : ndarray, shape (3,)
+        [x (m), y (m), θ (rad)], θ continuous (not wrapped).
+    cov : ndarray, shape (3, 3)
+        Covariance in the order x, y, θ [m², m·rad, rad²]. For compass odometry the θ
+        variance is NaN (see :func:`odomkit.propagate.closed_kelly.compass_arc_cov`).
+    model : str
+        ``wheel``, ``classical``, ``gyro`` or ``compass``.
+    engine : str
+    """
+
+    pose: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    model: str
+    engine: str
+
+    @property
+    def std(self) -> NDArray[np.float64]:
+        """[σx, σy, σθ]; rounding-level negative variances read as 0."""
+        var = np.diag(self.cov)
+        return np.sqrt(np.where(var < 0, 0.0, var))
+
+    @property
+    def corr(self) -> dict[str, float]:
+        """Correlation coefficients ``xy``, ``xtheta``, ``ytheta`` (NaN if a σ is 0)."""
+        std = self.std
+        out = {}
+        for key, (i, j) in {"xy": (0, 1), "xtheta": (0, 2), "ytheta": (1, 2)}.items():
+            den = std[i] * std[j]
+            out[key] = float(self.cov[i, j] / den) if den > 0 else math.nan
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON object of ``odomkit predict --json`` (DESIGN.md): keys ``pose``
+        [x, y, θ wrapped to [−π, π)], ``cov``, ``std``, ``corr`` {xy, xtheta, ytheta}
+        (coefficients; NaN stands for undefined and prints as null)."""
+        pose = self.pose.copy()
+        pose[2] = wrap_angle(pose[2])
+        return {
+            "pose": pose.tolist(),
+            "cov": self.cov.tolist(),
+            "std": self.std.tolist(),
+            "corr": self.corr,
+            "model": self.model,
+            "engine": self.engine,
+        }
+
+
+def check_covariance(cov: ArrayLike, name: str = "initial covariance") -> NDArray[np.float64]:
+    """Validate a 3×3 pose covariance: finite, symmetric, positive semi-definite.
+
+    Raises :class:`~odomkit.errors.ModelError` naming ``name`` otherwise.
+
+    >>> check_covariance(np.diag([1.0, 1.0, 0.1])).shape
+    (3, 3)
+    """
+    try:
+        arr = np.asarray(cov, dtype=float)
+    except (TypeError, ValueError):
+        raise ModelError(f"{name} must be a 3x3 matrix of numbers, got {cov!r}") from None
+    if arr.shape != (3, 3):
+        raise ModelError(f"{name} must be 3x3 (x, y, theta), got shape {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{name} must hold finite numbers")
+    scale = max(float(np.max(np.abs(arr))), np.finfo(float).tiny)
+    if not np.allclose(arr, arr.T, rtol=0.0, atol=1e-12 * scale):
+        raise ModelError(f"{name} must be symmetric, got {arr.tolist()}")
+    if float(np.min(np.linalg.eigvalsh(arr))) < -1e-12 * scale:
+        raise ModelError(f"{name} must be positive semi-definite (no negative variance "
+                         f"along any direction), got {arr.tolist()}")
+    return 0.5 * (arr + arr.T)
+
+
+def _resolve_model(noise: Any) -> tuple[Model, tuple[Any, ...]]:
+    parts = tuple(noise) if isinstance(noise, Sequence) else (noise,)
+    kinds = {type(p) for p in parts}
+    if len(parts) == 1 and isinstance(parts[0], WheelNoise):
+        return "wheel", parts
+    if len(parts) == 1 and isinstance(parts[0], ClassicalNoise):
+        return "classical", parts
+    speed = [p for p in parts if isinstance(p, SpeedNoise)]
+    speed_noise = speed[0] if speed else SpeedNoise(0.0)
+    if len(parts) == len(kinds) and kinds <= {SpeedNoise, GyroNoise} and GyroNoise in kinds:
+        gyro = next(p for p in parts if isinstance(p, GyroNoise))
+        return "gyro", (speed_noise, gyro)
+    if len(parts) == len(kinds) and kinds <= {SpeedNoise, CompassNoise} and CompassNoise in kinds:
+        compass = next(p for p in parts if isinstance(p, CompassNoise))
+        return "compass", (speed_noise, compass)
+    names = ", ".join(type(p).__name__ for p in parts)
+    raise ModelError(
+        f"noise ({names}) is not a prediction model; expected WheelNoise, ClassicalNoise, "
+        "(SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise)"
+    )
+
+
+def _check_segments(segments: Iterable[Segment], model: Model) -> list[Segment]:
+    segs = list(segments)
+    kelly = model in ("gyro", "compass")
+    for k, seg in enumerate(segs):
+        ok = isinstance(seg, KellyArc) if kelly else isinstance(seg, Arc | Straight | Spin)
+        if not ok:
+            want = "KellyArc (speed, yaw rate, duration)" if kelly else "Arc, Straight or Spin"
+            raise ModelError(f"segment {k + 1} is {seg!r}; the {model} model needs {want}")
+    return segs
+
+
+def _body_motion(seg: Segment, wheel_base: float) -> tuple[float, float]:
+    """(arc length [m], heading change [rad]) of one segment."""
+    if isinstance(seg, KellyArc):
+        return seg.speed * seg.duration, seg.yaw_rate * seg.duration
+    left, right = seg.wheel_travel(wheel_base)
+    return 0.5 * (left + right), (right - left) / wheel_base  # Chong–Kleeman eq. (14)
+
+
+def discretise_path(
+    segments: Iterable[Segment],
+    noise: Any,
+    wheel_base: float | None = None,
+    partitions: int = DEFAULT_PARTITIONS,
+    pose0: ArrayLike = (0.0, 0.0, 0.0),
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Cut each segment into ``partitions`` equal exact-arc steps with their input noise.
+
+    Per-wheel noise: each step's wheel travels L/n, R/n have variances k²|L|/n, k²|R|/n
+    (Chong–Kleeman eq. 18), mapped to (Δd, Δθ) by the constant Jacobian of eq. (14).
+    Gyro: var(Δd) = α_ss·|V|·T/n, var(Δθ) = σ_gg·T/n (Kelly Table 1).
+
+    Returns
+    -------
+    poses : ndarray, shape (M + 1, 3)
+    dd, dtheta : ndarray, shape (M,)
+        Step arc length [m] and heading change [rad].
+    cov_input : ndarray, shape (M, 2, 2)
+        Covariance of each step's (Δd, Δθ).
+
+    Examples
+    --------
+    >>> poses, dd, dth, q = discretise_path([Straight(2.0)], WheelNoise(0.1, 0.1), 0.5, 4)
+    >>> dd.tolist(), round(float(q[0, 0, 0]), 15)  # var(Δd) = (k²·0.5 + k²·0.5)/4
+    ([0.5, 0.5, 0.5, 0.5], 0.0025)
+    """
+    model, parts = _resolve_model(noise)
+    segs = _check_segments(segments, model)
+    n = _check_partitions(partitions)
+    if model == "compass":
+        raise ModelError("the compass model has no step recursion here; use engine 'closed'")
+    b = _wheel_base(wheel_base) if model in ("wheel", "classical") else 1.0
+    dd, dth, cov = [], [], []
+    for seg in segs:
+        d, a = _body_motion(seg, b)
+        if model == "wheel":
+            left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
+            wheel_var = np.diag([parts[0].k_left**2 * abs(left), parts[0].k_right**2 * abs(right)])
+            jac = diff_body_jacobian(b)
+            step_cov = jac @ wheel_var @ jac.T / n
+        elif model == "classical":  # per step, whatever its length (Chong–Kleeman eq. 3)
+            step_cov = np.diag([parts[0].sigma_distance**2, parts[0].sigma_angle**2])
+        else:
+            speed, gyro = parts
+            t = seg.duration  # type: ignore[union-attr]
+            step_cov = np.diag([speed.alpha_ss * abs(seg.speed) * t,  # type: ignore[union-attr]
+                                gyro.psd_gyro * t]) / n
+        dd.append(np.full(n, d / n))
+        dth.append(np.full(n, a / n))
+        cov.append(np.broadcast_to(step_cov, (n, 2, 2)))
+    dd_all = np.concatenate(dd) if dd else np.zeros(0)
+    dth_all = np.concatenate(dth) if dth else np.zeros(0)
+    cov_all = np.concatenate(cov) if cov else np.zeros((0, 2, 2))
+    if model != "classical":
+        return dead_reckon(dd_all, dth_all, pose0, "exact"), dd_all, dth_all, cov_all
+    # Chong–Kleeman eq. (1): rotate by α, then translate D along the new heading.
+    poses = np.empty((dd_all.size + 1, 3))
+    poses[0] = np.asarray(pose0, dtype=float)
+    poses[1:, 2] = poses[0, 2] + np.cumsum(dth_all)
+    poses[1:, 0] = poses[0, 0] + np.cumsum(dd_all * np.cos(poses[1:, 2]))
+    poses[1:, 1] = poses[0, 1] + np.cumsum(dd_all * np.sin(poses[1:, 2]))
+    return poses, dd_all, dth_all, cov_all
+
+
+def _check_partitions(partitions: int) -> int:
+    if isinstance(partitions, bool) or not isinstance(partitions, int | np.integer) \
+            or partitions < 1:
+        raise ModelError(f"partitions must be a positive integer, got {partitions!r}")
+    return int(partitions)
+
+
+def _wheel_base(wheel_base: float | None) -> float:
+    if wheel_base is None:
+        raise ModelError("the differential-drive model needs a wheel base (--wheel-base, metres)")
+    if not (isinstance(wheel_base, int | float) and math.isfinite(wheel_base) and wheel_base > 0):
+        raise ModelError(f"wheel base must be a positive number of metres, got {wheel_base!r}")
+    return float(wheel_base)
+
+
+def predict(
+    segments: Iterable[Segment],
+    noise: Any,
+    wheel_base: float | None = None,
+    pose0: ArrayLike = (0.0, 0.0, 0.0),
+    cov0: ArrayLike | None = None,
+    engine: Engine = "closed",
+    partitions: int | None = None,
+) -> Prediction:
+    """Predict the end pose of a path of segments and its covariance.
+
+    Parameters
+    ----------
+    segments : iterable of Segment
+        Arc/Straight/Spin for the differential-drive models, KellyArc for gyro/compass.
+    noise : WheelNoise, ClassicalNoise, or a tuple (SpeedNoise, GyroNoise) or
+        (SpeedNoise, CompassNoise)
+        Selects the model (see the module docstring).
+    wheel_base : float, optional
+        B [m]; required by the differential-drive models.
+    pose0 : array_like, shape (3,)
+        Start pose [m, m, rad].
+    cov0 : array_like, shape (3, 3), optional
+        Start covariance (default zero); must be symmetric PSD.
+    engine : {"closed", "recursion", "transition"}
+    partitions : int, optional
+        Pieces per segment. ``closed``: ignored by the consistent models; for the
+        classical model the number of eq. (1) steps per segment (default 1), which
+        changes its answer. ``recursion``/``transition``: steps per segment (default
+        :data:`DEFAULT_PARTITIONS`; the classical model then takes that many steps).
+        The compass model is ``closed`` only.
+
+    Returns
+    -------
+    Prediction
+
+    Notes
+    -----
+    The classical model moves as its eq. (1) says (rotate by α, then go D along the new
+    heading, with D = (L + R)/2 and α = (R − L)/B per piece), so on a curved segment its
+    mean is a polygon that approaches the arc only as the pieces shrink; on straight
+    lines and spins it is exact.
+
+    Examples
+    --------
+    Chong–Kleeman Table 1 (I): arc L = 3 m, R = 1 m, B = 0.4 m, k = 0.001 m^½.
+
+    >>> p = predict([Arc(3.0, 1.0)], WheelNoise(0.001, 0.001), wheel_base=0.4)
+    >>> [round(v, 6) for v in p.to_dict()["pose"]], [float(f"{s:.5g}") for s in p.std]
+    ([-0.38357, -0.286535, 1.283185], [0.0014376, 0.0024666, 0.005])
+    """
+    if engine not in ENGINES:
+        raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
+    model, parts = _resolve_model(noise)
+    segs = _check_segments(segments, model)
+    p0 = np.asarray(pose0, dtype=float).reshape(-1)
+    if p0.shape != (3,) or not np.all(np.isfinite(p0)):
+        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
+    c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
+    b = _wheel_base(wheel_base) if model in ("wheel", "classical") else 1.0
+
+    if engine != "closed":
+        n = DEFAULT_PARTITIONS if partitions is None else _check_partitions(partitions)
+        poses, dd, dth, cov_in = discretise_path(segs, noise, b, n, p0)
+        method = "classical" if model == "classical" else "exact"
+        if engine == "recursion":
+            from odomkit.propagate.recursion import propagate_recursion
+
+            covs = propagate_recursion(poses[:-1, 2], dd, dth, cov_in, c0, method=method)
+        else:
+            from odomkit.propagate.transition import propagate_transition
+
+            covs = propagate_transition(poses, dd, dth, cov_in, c0, method=method)
+        cov_end = np.asarray(covs[-1], dtype=float)
+        return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model, engine)
+
+    pose, cov = p0.copy(), c0
+    if model == "classical":
+        pieces = 1 if partitions is None else _check_partitions(partitions)
+        for seg in segs:
+            d, a = _body_motion(seg, b)
+            for _ in range(pieces):
+                pose, cov = classical_step(pose, cov, d / pieces, a / pieces, parts[0])
+        return Prediction(pose, cov, model, engine)
+    for seg in segs:
+        if model == "wheel":
+            left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
+            cov = wheel_arc_cov(left, right, b, parts[0], pose[2], cov)
+        elif model == "gyro":
+            cov = gyro_arc_cov(seg, *parts, theta0=pose[2], cov0=cov)  # type: ignore[arg-type]
+        else:
+            cov = compass_arc_cov(seg, *parts, theta0=pose[2], cov0=cov)  # type: ignore[arg-type]
+        d, a = _body_motion(seg, b)
+        dx, dy = step_displacement(pose[2], d, a, "exact")
+        pose = pose + np.array([float(dx), float(dy), a])
+    return Prediction(pose, cov, model, engine)

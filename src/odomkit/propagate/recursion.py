@@ -1,0 +1,284 @@
+"""The step recursion P_{k+1} = F_k P_k F_k^T + G_k Q_k G_k^T (Chong–Kleeman eq. 2).
+
+F_k and G_k are the exact-arc Jacobians of :func:`odomkit.kinematics.step_jacobians`
+(Chong–Kleeman eq. 16–17 in chord form; ``midpoint``, ``euler`` and the classical
+rotate-then-translate map are also available). The recurrence runs in a numba kernel
+(:mod:`odomkit.propagate._numba`) over bounded chunks; without numba a numpy loop runs
+instead, with a warning (about 100× slower).
+
+:func:`track_covariance` is the entry point of ``odomkit track``: a log's body steps and a
+noise model (or a tuple of them) in, the covariance of every pose out.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Callable, Iterator
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit.errors import ModelError
+from odomkit.propagate.inputs import (
+    NoisePlan,
+    any_step_displacement,
+    any_step_jacobians,
+    plan_noise,
+)
+from odomkit.propagate.transition import (
+    check_cov3,
+    check_method,
+    check_steps,
+    direct_heading_chunk,
+    input_contribution,
+    sensitivity_chunk,
+    transition_chunk,
+)
+
+DEFAULT_CHUNK = 1 << 13
+_METHOD_CODES = {"exact": 0, "midpoint": 1, "euler": 2, "classical": 3}
+_kernel_cache: list[Callable[..., None] | None] = []
+
+
+def _load_kernel() -> Callable[..., None] | None:
+    """The numba kernel, or None (with a one-time warning) when numba is missing."""
+    if not _kernel_cache:
+        try:
+            from odomkit.propagate._numba import recursion_kernel
+        except ImportError:  # numba is the optional extra odomkit[fast]
+            warnings.warn("numba is not installed: the covariance recursion runs as a numpy "
+                          "loop, about 100x slower (pip install odomkit[fast])", stacklevel=3)
+            recursion_kernel = None
+        _kernel_cache.append(recursion_kernel)
+    return _kernel_cache[0]
+
+
+def _numpy_chunk(theta, dd, dtheta, cov_input, cov_start, out, method: str) -> None:
+    """Fallback of the kernel: the same recursion with 3×3 numpy products per step."""
+    F, G = any_step_jacobians(theta, dd, dtheta, method)
+    P = cov_start.copy()
+    for k in range(dd.size):
+        P = F[k] @ P @ F[k].T + G[k] @ cov_input[k] @ G[k].T
+        # Symmetrise: round-off in the products makes P_ij and P_ji drift apart, and
+        # an asymmetric P breaks Cholesky/eigh downstream (filterpy does the same).
+        P = 0.5 * (P + P.T)
+        out[k] = P
+
+
+def recursion_chunk(theta, dd, dtheta, cov_input, cov_start, method: str = "exact"):
+    """P after each of n steps, (n, 3, 3), starting from ``cov_start`` (3, 3)."""
+    out = np.empty((dd.size, 3, 3))
+    kernel = _load_kernel()
+    if kernel is None:
+        _numpy_chunk(theta, dd, dtheta, cov_input, cov_start, out, method)
+    else:
+        kernel(np.ascontiguousarray(theta, dtype=float), np.ascontiguousarray(dd, dtype=float),
+               np.ascontiguousarray(dtheta, dtype=float),
+               np.ascontiguousarray(cov_input, dtype=float),
+               np.ascontiguousarray(cov_start, dtype=float), out, _METHOD_CODES[method])
+    return out
+
+
+def propagate_recursion(
+    theta: ArrayLike,
+    dd: ArrayLike,
+    dtheta: ArrayLike,
+    cov_input: ArrayLike,
+    cov0: ArrayLike,
+    method: str = "exact",
+    *,
+    out: NDArray[np.float64] | None = None,
+    chunk_size: int = DEFAULT_CHUNK,
+) -> NDArray[np.float64]:
+    """Covariance of every pose by the step recursion, Chong–Kleeman eq. (2).
+
+    Parameters
+    ----------
+    theta : array_like, shape (M,)
+        Heading at the start of each step [rad].
+    dd, dtheta : array_like, shape (M,)
+        Body motion of each step [m], [rad].
+    cov_input : array_like, shape (M, 2, 2)
+        Covariance of each step's (Δd, Δθ) [m², m·rad; m·rad, rad²].
+    cov0 : array_like, shape (3, 3)
+        Covariance of the first pose.
+    method : {"exact", "midpoint", "euler", "classical"}
+        Step map whose Jacobians F_k, G_k are used.
+    out : ndarray, shape (M + 1, 3, 3), optional
+        Written in place and returned.
+    chunk_size : int
+        Steps per call of the kernel; results do not depend on it.
+
+    Returns
+    -------
+    cov : ndarray, shape (M + 1, 3, 3)
+
+    Examples
+    --------
+    Two straight 1 m steps with var Δθ = 0.01 each (midpoint lever ½ m, then 1.5 m):
+
+    >>> q = np.array([[[0.0, 0.0], [0.0, 0.01]]] * 2)
+    >>> c = propagate_recursion(np.zeros(2), np.ones(2), np.zeros(2), q, np.zeros((3, 3)))
+    >>> round(float(c[2, 1, 1]), 6)   # 0.01·(0.5² + 1.5²)
+    0.025
+    """
+    check_method(method)
+    dd, dtheta, q = check_steps(dd, dtheta, cov_input)
+    theta = np.asarray(theta, dtype=float)
+    if theta.shape != dd.shape:
+        raise ModelError(f"theta must have shape {dd.shape}, got {theta.shape}")
+    if out is None:
+        out = np.empty((dd.size + 1, 3, 3))
+    elif out.shape != (dd.size + 1, 3, 3):
+        raise ModelError(f"out must have shape ({dd.size + 1}, 3, 3), got {out.shape}")
+    out[0] = check_cov3(cov0)
+    n = max(int(chunk_size), 1)
+    for a in range(0, dd.size, n):
+        b = min(a + n, dd.size)
+        out[a + 1:b + 1] = recursion_chunk(theta[a:b], dd[a:b], dtheta[a:b], q[a:b], out[a],
+                                           method)
+    return out
+
+
+def _white_chunk(plan: NoisePlan, engine: str, theta, dd, dtheta, a: int, b: int, P):
+    """White-noise covariance after steps a … b−1 (n, 3, 3), from P at row a."""
+    if plan.direct:
+        return direct_heading_chunk(theta, dd, dtheta, plan.var_dd(a, b),
+                                    plan.var_heading[a:b + 1], P[:2, :2], P[:2, 2],
+                                    plan.method)
+    q = plan.cov_input(a, b)
+    if engine == "recursion":
+        return recursion_chunk(theta, dd, dtheta, q, P, plan.method)
+    # Local origin at the chunk's first pose, built from the same step map as the
+    # recursion so both engines linearise about the same track.
+    dx, dy = any_step_displacement(theta, dd, dtheta, plan.method)
+    xl = np.concatenate([[0.0], np.cumsum(dx)])
+    yl = np.concatenate([[0.0], np.cumsum(dy)])
+    _, G = any_step_jacobians(theta, dd, dtheta, plan.method)
+    return transition_chunk(xl, yl, input_contribution(G, q), P)
+
+
+def _bias_chunk(plan: NoisePlan, theta, dd, dtheta, a: int, b: int, S):
+    """Parameter sensitivity after steps a … b−1 (n, 3, p), from S at row a."""
+    K = plan.param_jacobian(a, b)
+    F, G = any_step_jacobians(theta, dd, dtheta, plan.method)
+    if plan.direct:
+        # Direct heading: a distance-scale error moves the position only, along a_k.
+        C = np.zeros((dd.size, 3, K.shape[-1]))
+        C[:, :2, :] = G[:, :2, 0, None] * K[:, None, 0, :]
+        return sensitivity_chunk(np.zeros((dd.size, 2)), C, S)
+    C = np.einsum("nij,njp->nip", G, K)
+    return sensitivity_chunk(np.stack([F[:, 0, 2], F[:, 1, 2]], axis=1), C, S)
+
+
+def iter_track_covariance(
+    steps: Any,
+    poses: ArrayLike,
+    noise: Any,
+    cov0: ArrayLike,
+    method: str = "exact",
+    engine: str = "recursion",
+    chunk_size: int = DEFAULT_CHUNK,
+) -> Iterator[tuple[int, NDArray[np.float64]]]:
+    """Yield ``(row, cov)`` chunks of :func:`track_covariance`; cov (n, 3, 3) holds rows
+    row … row+n−1. Memory stays O(chunk_size) beyond the inputs, for logs whose full
+    (N, 3, 3) output (72 bytes a row: 720 MB for 10^7 rows) should never exist at once."""
+    check_method(method)
+    if engine not in ("recursion", "transition"):
+        raise ModelError(f"unknown engine {engine!r}; expected 'recursion' or 'transition'")
+    plan = plan_noise(steps, noise, method)
+    dd, dtheta, _ = check_steps(steps.dd, steps.dtheta)
+    poses = np.asarray(poses, dtype=float)
+    if poses.shape != (dd.size + 1, 3):
+        raise ModelError(f"poses must have shape ({dd.size + 1}, 3), got {poses.shape}")
+    P = check_cov3(cov0)
+    if plan.direct:
+        P = np.zeros((3, 3))
+        P[:2, :2] = check_cov3(cov0)[:2, :2]
+        P[2, 2] = plan.var_heading[0]
+    var_params = plan.var_params
+    S = None if var_params is None else np.zeros((3, var_params.size))
+    yield 0, P[None].copy()
+    n = max(int(chunk_size), 1)
+    for a in range(0, dd.size, n):
+        b = min(a + n, dd.size)
+        theta = poses[a:b, 2]
+        white = _white_chunk(plan, engine, theta, dd[a:b], dtheta[a:b], a, b, P)
+        P = white[-1].copy()
+        if S is not None:
+            sens = _bias_chunk(plan, theta, dd[a:b], dtheta[a:b], a, b, S)
+            S = sens[-1]
+            # The bias and the white noise are independent, so their covariances add:
+            # S_k diag(σ²) S_k^T is the exact (linearised) effect of a constant error.
+            white += np.einsum("nip,p,njp->nij", sens, var_params, sens)
+        yield a + 1, white
+
+
+def track_covariance(
+    steps: Any,
+    poses: ArrayLike,
+    noise: Any,
+    cov0: ArrayLike,
+    method: str = "exact",
+    engine: str = "recursion",
+    *,
+    out: NDArray[np.float64] | None = None,
+    chunk_size: int = DEFAULT_CHUNK,
+) -> NDArray[np.float64]:
+    """Covariance of every pose of a dead-reckoned log.
+
+    Parameters
+    ----------
+    steps : odomkit.kinematics.BodySteps
+        M steps: ``dd``, ``dtheta``, ``dt``, ``inputs`` (``d_left``/``d_right``,
+        ``travel``/``steer``, ``heading``) and ``robot``.
+    poses : array_like, shape (M + 1, 3)
+        The track dead-reckoned from ``steps`` (headings at the start of each step are
+        ``poses[:-1, 2]``; for a compass robot the measured heading).
+    noise : noise model or tuple of noise models
+        Any of :mod:`odomkit.noise`; see :func:`odomkit.propagate.inputs.plan_noise` for
+        which combine with which robot.
+    cov0 : array_like, shape (3, 3)
+        Covariance of the first pose (for a compass robot only its position block is
+        used: the heading variance is the compass's).
+    method : {"exact", "midpoint", "euler"}
+        Step map of the track. ClassicalNoise always uses its own rotate-then-translate
+        map (Chong–Kleeman eq. 1).
+    engine : {"recursion", "transition"}
+        Numba step recursion or Kelly's prefix-sum solution; they agree to round-off.
+        Direct-heading odometry has its own (prefix-sum) solution and ignores this.
+    out : ndarray, shape (M + 1, 3, 3), optional
+        Written in place and returned; use :func:`iter_track_covariance` to avoid the
+        full output altogether.
+    chunk_size : int
+        Steps per chunk; results do not depend on it.
+
+    Returns
+    -------
+    cov : ndarray, shape (M + 1, 3, 3)
+
+    Examples
+    --------
+    >>> from odomkit.kinematics import BodySteps, diff_body_steps
+    >>> from odomkit.integrate import dead_reckon
+    >>> from odomkit.noise import WheelNoise
+    >>> from odomkit.robot import DiffDrive
+    >>> dl = dr = np.full(100, 0.01)
+    >>> dd, dth = diff_body_steps(dl, dr, 0.4)
+    >>> steps = BodySteps(dd, dth, np.full(100, 0.1), {"d_left": dl, "d_right": dr},
+    ...                   DiffDrive(0.4))
+    >>> cov = track_covariance(steps, dead_reckon(dd, dth), WheelNoise(0.01, 0.01),
+    ...                        np.zeros((3, 3)))
+    >>> round(float(cov[-1, 0, 0]), 12)   # straight 1 m: (k_L² + k_R²)·D/4
+    5e-05
+    """
+    m = int(np.asarray(steps.dd).size)
+    if out is None:
+        out = np.empty((m + 1, 3, 3))
+    elif out.shape != (m + 1, 3, 3):
+        raise ModelError(f"out must have shape ({m + 1}, 3, 3), got {out.shape}")
+    for row, chunk in iter_track_covariance(steps, poses, noise, cov0, method, engine,
+                                            chunk_size):
+        out[row:row + chunk.shape[0]] = chunk
+    return out

@@ -1,0 +1,53 @@
+"""``odomkit track`` and ``odomkit demo`` end to end, including bad input (exit 2)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from odomkit.workflows import builtin_data_path
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUN = builtin_data_path("230620202042_run-01.csv")
+
+
+def test_track_json_and_outputs(run_cli, tmp_path):
+    out, tum = tmp_path / "t.csv", tmp_path / "t.tum"
+    code, stdout, _ = run_cli("track", RUN, "--robot", ROBOT, "--no-covariance",
+                              "--out", out, "--tum", tum, "--json")
+    assert code == 0
+    summary = json.loads(stdout)
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    assert table.shape[0] == summary["samples"]
+    assert np.isnan(table["cov_xx"]).all()  # empty until a noise model is given
+    assert summary["pose"][0] == pytest.approx(table["x"][-1], abs=1e-9)
+    # TUM quaternion encodes the heading: θ = 2·atan2(qz, qw)
+    tum_rows = np.loadtxt(tum)
+    assert np.all(tum_rows[:, 7] >= 0)  # the hemisphere with q_w >= 0, as evo expects
+    assert np.allclose(2 * np.arctan2(tum_rows[:, 6], tum_rows[:, 7]),
+                       np.angle(np.exp(1j * table["theta"])), atol=1e-8)
+    # a second run must not overwrite without --force
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--out", out, "--no-covariance")
+    assert code == 2 and "exists already" in err
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["track", "missing.csv", "--robot", str(ROBOT)], "missing.csv: no such file"),
+    (["track", str(RUN), "--robot", "nothere.toml"], "nothere.toml: no such robot file"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--method", "rk4"], "unknown integration method"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--initial-pose", "1,2"], "three numbers"),
+])
+def test_bad_input_exits_2_with_one_line(run_cli, args, message):
+    code, _, err = run_cli(*args)
+    assert code == 2
+    assert message in err
+    assert "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_bad_log_file_names_the_line(run_cli, tmp_path):
+    bad = tmp_path / "x_run-01.csv"
+    bad.write_text("0,0,0,0,0,0\n0.05,0,0,0,1\n")
+    code, _, err = run_cli("track", bad, "--robot", ROBOT)
+    assert code == 2 and "line 2: expected 6 columns, found 5" in err
