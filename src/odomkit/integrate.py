@@ -88,13 +88,15 @@ def dead_reckon(
             raise ModelError("engine='numba' needs numba: pip install 'odomkit[fast]'")
     elif engine not in ("auto", "numpy"):
         raise ModelError(f"unknown engine {engine!r}; expected auto, numpy or numba")
+    # Prefix sums that start from the initial value add in the same order as the numba
+    # kernel, so both give the very same headings.
     poses[0] = p0
-    np.cumsum(dtheta, out=poses[1:, 2])
-    poses[1:, 2] += p0[2]
+    poses[1:, 2] = dtheta
+    np.cumsum(poses[:, 2], out=poses[:, 2])
     dx, dy = step_displacement(poses[:-1, 2], dd, dtheta, method)
-    np.cumsum(dx, out=poses[1:, 0])
-    np.cumsum(dy, out=poses[1:, 1])
-    poses[1:, :2] += p0[:2]
+    poses[1:, 0], poses[1:, 1] = dx, dy
+    np.cumsum(poses[:, 0], out=poses[:, 0])
+    np.cumsum(poses[:, 1], out=poses[:, 1])
     return poses
 
 
