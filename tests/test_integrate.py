@@ -123,3 +123,9 @@ def test_numba_kernel_agrees_with_numpy(method):
     # Different summation order and the rotated heading vector: a few ulps per step.
     assert np.allclose(a, b, rtol=0, atol=n * 1e-15)
     assert np.array_equal(a[:, 2], b[:, 2])  # the heading is the same prefix sum
+
+
+def test_nan_step_is_rejected_with_its_index():
+    dd = np.array([0.1, np.nan, 0.1])
+    with pytest.raises(ModelError, match=r"dd\[1\] is nan"):
+        dead_reckon(dd, np.zeros(3))

@@ -77,6 +77,12 @@ def dead_reckon(
     dtheta = np.asarray(dtheta, dtype=float)
     if dd.shape != dtheta.shape or dd.ndim != 1:
         raise ModelError(f"dd and dtheta must be 1-D of equal length, got {dd.shape} and {dtheta.shape}")
+    for name, values in (("dd", dd), ("dtheta", dtheta)):
+        # A sum is NaN or inf if any term is; only then look for the culprit (a sum that
+        # merely overflowed finds none and passes).
+        if not np.isfinite(values.sum()) and not np.all(np.isfinite(values)):
+            bad = int(np.flatnonzero(~np.isfinite(values))[0])
+            raise ModelError(f"{name}[{bad}] is {values[bad]}: steps must be finite numbers")
     p0 = _pose0(pose0)
     poses = np.empty((dd.size + 1, 3))
     if engine == "numba" or (engine == "auto" and dd.size >= _NUMBA_FROM):

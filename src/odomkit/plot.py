@@ -55,7 +55,7 @@ def plot_tracks(
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
     ax.set_title("Dead reckoning with 95 % position ellipses (χ²₂ = 5.99)")
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=8, loc="best")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -130,7 +130,9 @@ class UmbmarkResult:
 
     @property
     def alpha_disagreement(self) -> float:
-        """α_x − α_y [rad]: zero for purely systematic first-order errors."""
+        """α_x − α_y [rad]. Not a noise measure alone: the neglected second-order terms
+        make it ≈ −4β² for a pure Type B error even without noise (α_x ≈ α − 1.5β²,
+        α_y ≈ α + 2.5β²; their mean carries only β²/2)."""
         return self.alpha_x - self.alpha_y
 
     @property

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import TYPE_CHECKING, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +33,9 @@ from odomkit.kinematics import step_displacement
 from odomkit.noise import WheelNoise
 from odomkit.robot import DiffDrive
 
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+
 __all__ = [
     "SystematicErrors",
     "VirtualRuns",
@@ -41,6 +44,7 @@ __all__ = [
     "square_wheel_steps",
     "run_virtual_umbmark",
     "iterate_umbmark",
+    "virtual_umbmark_logs",
 ]
 
 
@@ -160,24 +164,31 @@ def square_wheel_steps(
     return left, right
 
 
-def _end_poses(d_left: NDArray[np.float64], d_right: NDArray[np.float64],
-               wheel_base: float) -> NDArray[np.float64]:
-    """End poses of dead reckoning from (0, 0, 0); rows are runs, columns steps."""
+def _tracks(d_left: NDArray[np.float64], d_right: NDArray[np.float64],
+            wheel_base: float) -> NDArray[np.float64]:
+    """Poses after each step from (0, 0, 0); rows are runs, columns steps -> (..., S, 3)."""
     dd = 0.5 * (d_right + d_left)  # Borenstein–Feng eq. (2.2)–(2.4)
     dtheta = (d_right - d_left) / wheel_base
     theta_end = np.cumsum(dtheta, axis=-1)
-    theta_start = theta_end - dtheta
-    dx, dy = step_displacement(theta_start, dd, dtheta, "exact")
-    return np.stack([dx.sum(axis=-1), dy.sum(axis=-1), theta_end[..., -1]], axis=-1)
+    dx, dy = step_displacement(theta_end - dtheta, dd, dtheta, "exact")
+    return np.stack([np.cumsum(dx, axis=-1), np.cumsum(dy, axis=-1), theta_end], axis=-1)
+
+
+def _end_poses(d_left: NDArray[np.float64], d_right: NDArray[np.float64],
+               wheel_base: float) -> NDArray[np.float64]:
+    """End poses of dead reckoning from (0, 0, 0); rows are runs, columns steps."""
+    return _tracks(d_left, d_right, wheel_base)[..., -1, :]
 
 
 def _generator(rng: np.random.Generator | int | None) -> np.random.Generator:
     return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
 
-def _drive(true_errors: SystematicErrors, robot: DiffDrive, side: float, direction: str,
-           runs: int, noise: WheelNoise | None, rng: np.random.Generator,
-           step: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _true_steps(true_errors: SystematicErrors, robot: DiffDrive, side: float, direction: str,
+                runs: int, noise: WheelNoise | None, rng: np.random.Generator, step: float
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+                           NDArray[np.float64], DiffDrive]:
+    """Believed wheel travel (S,) and true wheel travel (runs, S) of each step."""
     bel_left, bel_right = square_wheel_steps(robot, side, direction, step)
     truth = true_robot(true_errors, robot)
     # Same ticks, true metres per tick: ticks = believed distance / believed scale.
@@ -187,13 +198,33 @@ def _drive(true_errors: SystematicErrors, robot: DiffDrive, side: float, directi
                                  (runs, bel_right.size)).copy()
     if noise is not None:
         # Chong–Kleeman eq. (4): variance k²·|d| per step, independent steps and wheels.
-        true_left += noise.k_left * np.sqrt(np.abs(true_left)) * rng.standard_normal(true_left.shape)
-        true_right += noise.k_right * np.sqrt(np.abs(true_right)) * rng.standard_normal(
-            true_right.shape)
+        for travel, k in ((true_left, noise.k_left), (true_right, noise.k_right)):
+            travel += k * np.sqrt(np.abs(travel)) * rng.standard_normal(travel.shape)
+    return bel_left, bel_right, true_left, true_right, truth
+
+
+def _drive(true_errors: SystematicErrors, robot: DiffDrive, side: float, direction: str,
+           runs: int, noise: WheelNoise | None, rng: np.random.Generator,
+           step: float) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    bel_left, bel_right, true_left, true_right, truth = _true_steps(
+        true_errors, robot, side, direction, runs, noise, rng, step)
     true_end = _end_poses(true_left, true_right, truth.wheel_base)
     odom_end = np.broadcast_to(_end_poses(bel_left, bel_right, robot.effective_wheel_base),
                                (runs, 3)).copy()
     return true_end, odom_end
+
+
+def _validate(true_errors: SystematicErrors, believed_robot: DiffDrive, side: float,
+              runs_per_direction: int, step: float) -> None:
+    if not isinstance(true_errors, SystematicErrors):
+        raise ModelError("true_errors must be an odomkit.calibrate.virtual.SystematicErrors")
+    if not isinstance(believed_robot, DiffDrive):
+        raise ModelError("believed_robot must be an odomkit.robot.DiffDrive")
+    for name, value in (("side", side), ("step", step)):
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise ModelError(f"{name} must be a positive finite number [m], got {value!r}")
+    if not isinstance(runs_per_direction, int | np.integer) or runs_per_direction < 1:
+        raise ModelError(f"runs_per_direction must be an integer >= 1, got {runs_per_direction!r}")
 
 
 def run_virtual_umbmark(
@@ -244,13 +275,7 @@ def run_virtual_umbmark(
     >>> np.allclose(runs.errors_cw, [[x4, y4]], rtol=0, atol=1e-12)
     True
     """
-    if not isinstance(believed_robot, DiffDrive):
-        raise ModelError("believed_robot must be an odomkit.robot.DiffDrive")
-    for name, value in (("side", side), ("step", step)):
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise ModelError(f"{name} must be a positive finite number [m], got {value!r}")
-    if not isinstance(runs_per_direction, int | np.integer) or runs_per_direction < 1:
-        raise ModelError(f"runs_per_direction must be an integer >= 1, got {runs_per_direction!r}")
+    _validate(true_errors, believed_robot, side, runs_per_direction, step)
     gen = _generator(rng)
     n = int(runs_per_direction)
     true_cw, odom_cw = _drive(true_errors, believed_robot, side, "cw", n, noise, gen, step)
@@ -319,3 +344,53 @@ def iterate_umbmark(
             robots.append(apply_corrections(robots[i], results[i]))
     return UmbmarkIterations(tuple(robots), tuple(results),
                              tuple(r.e_max_syst for r in results))
+
+
+def virtual_umbmark_logs(
+    true_errors: SystematicErrors,
+    believed_robot: DiffDrive,
+    side: float,
+    runs_per_direction: int,
+    noise: WheelNoise | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    step: float = 0.01,
+    speed: float = 0.2,
+) -> list[OdometryLog]:
+    """The virtual UMBmark runs as logs with ground truth (CW runs first, then CCW).
+
+    Each log has one row per integration step plus the start row: channels
+    ``ticks_left``, ``ticks_right`` (increments, *not* rounded to integers: what the
+    believed robot's ``m_per_tick_*`` and ``c_*`` turn into its believed wheel travel),
+    ``ground_truth`` the true pose after each step, time at ``speed`` m/s of wheel travel
+    (Borenstein–Feng drove at 0.2 m/s), and ``meta`` {"direction", "side"}. With the same
+    ``rng`` state the runs are the same as :func:`run_virtual_umbmark`'s.
+
+    >>> logs = virtual_umbmark_logs(SystematicErrors(E_b=1.01), DiffDrive(0.34), 4.0, 1)
+    >>> [log.meta["direction"] for log in logs], logs[0].ground_truth.shape
+    (['cw', 'ccw'], (1709, 3))
+    """
+    from odomkit.log import OdometryLog
+
+    if not (isinstance(speed, int | float) and math.isfinite(speed) and speed > 0):
+        raise ModelError(f"speed must be a positive finite number [m/s], got {speed!r}")
+    _validate(true_errors, believed_robot, side, runs_per_direction, step)
+    gen = _generator(rng)
+    logs: list[OdometryLog] = []
+    for direction in ("cw", "ccw"):
+        bel_left, bel_right, true_left, true_right, truth = _true_steps(
+            true_errors, believed_robot, side, direction, int(runs_per_direction), noise, gen,
+            step)
+        gt = _tracks(true_left, true_right, truth.wheel_base)
+        t = np.concatenate([[0.0], np.cumsum(np.maximum(np.abs(bel_left), np.abs(bel_right)))])
+        ticks_left = np.concatenate([[0.0], bel_left / believed_robot.scale_left])
+        ticks_right = np.concatenate([[0.0], bel_right / believed_robot.scale_right])
+        for i in range(gt.shape[0]):
+            logs.append(OdometryLog(
+                t / speed,
+                {"ticks_left": ticks_left.copy(), "ticks_right": ticks_right.copy()},
+                np.vstack([np.zeros((1, 3)), gt[i]]),
+                source=f"<virtual UMBmark {direction} run {i + 1}>",
+                meta={"direction": direction, "side": float(side)},
+            ))
+    return logs

@@ -16,7 +16,7 @@ from __future__ import annotations
 import csv
 import math
 from pathlib import Path
-from typing import Any
+from typing import Annotated, Any
 
 import numpy as np
 import typer
@@ -122,7 +122,10 @@ def _print_text(out: dict[str, Any]) -> None:
     sem = out["sem"]
     print(f"SEM CW, CCW          : {sem['cw'] * mm:.2f} mm, {sem['ccw'] * mm:.2f} mm")
     advised = out["second_compensation_advised"]
-    print(f"second compensation  : {'advised' if advised else 'not needed'} (3·SEM rule)")
+    verdict = {True: "advised", False: "not needed", None: "unknown (< 2 runs)"}[advised]
+    print(f"(further) compensation: {verdict} (3·SEM rule)")
+    if "e_max_syst_after" in out:
+        print(f"E_max,syst corrected : {out['e_max_syst_after'] * mm:9.2f} mm (same runs)")
     ck = out.get("chong_kleeman")
     if ck:
         print(f"Chong–Kleeman c_b    : {ck['c_b']:.6f} (half the needed correction; "
@@ -131,26 +134,31 @@ def _print_text(out: dict[str, Any]) -> None:
 
 @app.command("umbmark")
 def umbmark_command(
-    errors_csv: list[Path] = typer.Argument(  # noqa: B008
-        None, help="CSV with columns direction,x,y (cw/ccw, return errors in metres)."),
-    side: float = typer.Option(..., "--side", help="Side L of the square [m]."),
-    wheel_base: float | None = typer.Option(
-        None, "--wheel-base", help="Wheel base the odometry used [m] (default: from --robot)."),
-    runs: list[Path] = typer.Option(  # noqa: B008
-        None, "--runs", help="Logs with ground truth (calibrate from logs)."),
-    robot: Path | None = typer.Option(None, "--robot", help="Robot file (TOML)."),
-    json_out: bool = typer.Option(False, "--json", help="Print one JSON object."),
+    errors_csv: Annotated[list[Path] | None, typer.Argument(
+        help="CSV with columns direction,x,y (cw/ccw, return errors in metres).")] = None,
+    side: Annotated[float, typer.Option(
+        "--side", help="Side L of the square in metres (required).",
+        show_default=False)] = math.nan,
+    wheel_base: Annotated[float | None, typer.Option(
+        "--wheel-base",
+        help="Wheel base the odometry used, metres (default: from --robot).")] = None,
+    runs: Annotated[list[Path] | None, typer.Option(
+        "--runs", help="Logs with ground truth (calibrate from logs).")] = None,
+    robot: Annotated[Path | None, typer.Option("--robot", help="Robot file (TOML).")] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
     positional = list(errors_csv or [])
+    if not (math.isfinite(side) and side > 0):
+        raise InputError(f"--side must be a positive length in metres, got {side!r} "
+                         "(it is required)")
     if runs:
         # `--runs a.csv b.csv` leaves b.csv as a positional argument: they are all runs.
         out = _from_runs(list(runs) + positional, robot, side)
     else:
         if len(positional) != 1:
-            raise InputError("give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
-        if not (math.isfinite(side) and side > 0):
-            raise InputError(f"--side must be a positive length in metres, got {side!r}")
+            raise InputError(
+                "give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
         if wheel_base is None:
             if robot is None:
                 raise InputError("--wheel-base (or --robot ROBOT.toml) is required")
@@ -163,7 +171,8 @@ def umbmark_command(
                                  source=str(robot))
             wheel_base = parsed.effective_wheel_base
         if not (math.isfinite(wheel_base) and wheel_base > 0):
-            raise InputError(f"--wheel-base must be a positive length in metres, got {wheel_base!r}")
+            raise InputError(
+                f"--wheel-base must be a positive length in metres, got {wheel_base!r}")
         from odomkit.calibrate.umbmark import umbmark_summary
 
         errors_cw, errors_ccw = read_errors_csv(positional[0])
