@@ -12,9 +12,8 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from odomkit.errors import InputError
+from odomkit.evaluate import evaluate_track, wrap
 from odomkit.io.csvlog import parse_column_map, read_csv_log
 from odomkit.io.halmstad import read_khepera, read_snowhite
 from odomkit.io.optiodom import read_run
@@ -87,28 +86,17 @@ class TrackRun:
         final = self.track.poses[-1]
         out: dict[str, Any] = {
             "samples": int(self.track.poses.shape[0]),
-            "pose": [float(final[0]), float(final[1]), float(_wrap(final[2]))],
+            "pose": [float(final[0]), float(final[1]), float(wrap(final[2]))],
             "theta_unwrapped": float(final[2]),
             "cov": None if self.track.cov is None else self.track.cov[-1],
             "path_length": self.track.path_length,
             "duration": self.track.duration,
         }
-        gt = self.log.ground_truth
-        if gt is not None:
-            err = self.track.poses - gt
-            dist = np.hypot(err[:, 0], err[:, 1])
-            out["ground_truth"] = {
-                "final_position_error": float(dist[-1]),
-                "max_position_error": float(dist.max()),
-                "final_heading_error": float(_wrap(err[-1, 2])),
-                "path_length": float(np.sum(np.hypot(*np.diff(gt[:, :2], axis=0).T))),
-            }
+        if self.log.ground_truth is not None:
+            out["ground_truth"] = evaluate_track(self.track.poses, self.log.ground_truth,
+                                                 self.track.cov).to_dict()
         out["outputs"] = self.outputs
         return out
-
-
-def _wrap(angle: float) -> float:
-    return float((angle + np.pi) % (2 * np.pi) - np.pi)
 
 
 def run_track(

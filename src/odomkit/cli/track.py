@@ -85,7 +85,7 @@ def demo(
         print(f"{stem}: path {run['path_length']:.3f} m, final position error vs OptiTrack "
               f"{g.get('final_position_error', float('nan')):.4f} m")
     print(f"outputs in {Path(out).resolve()}:")
-    for stem, run in summary["runs"].items():
+    for run in summary["runs"].values():
         for path in run["outputs"].values():
             print(f"  {path}")
     if summary.get("figure"):

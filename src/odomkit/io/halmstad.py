@@ -32,7 +32,7 @@ def read_khepera(path: str | Path, period: float = 1.0, wrap_bits: int | None = 
     left, right = data[:, 0], data[:, 1]
     if wrap_bits is not None:
         left, right = unwrap_counter(left, wrap_bits), unwrap_counter(right, wrap_bits)
-    t = np.arange(data.shape[0]) * float(period)
+    t = np.arange(data.shape[0], dtype=float) * float(period)
     channels = {"ticks_left": cumulative_to_increments(left),
                 "ticks_right": cumulative_to_increments(right)}
     return OdometryLog(t, channels, None, str(path), {"format": "khepera"})
@@ -45,7 +45,7 @@ def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> Odometry
     [0, 2π)) is unwrapped so that it is continuous like odomkit's θ.
     """
     data = read_numeric(path, 5)
-    t = np.arange(data.shape[0]) * float(period)
+    t = np.arange(data.shape[0], dtype=float) * float(period)
     channels = {"speed": data[:, 0] / 1000.0, "steer": data[:, 1].copy()}
     truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, np.unwrap(data[:, 4])))
     return OdometryLog(t, channels, truth, str(path), {"format": "snowhite"})
