@@ -46,7 +46,7 @@ def metres_per_tick(wheel_diameter: float, encoder_resolution: float, gear_ratio
     [ticks per motor revolution].
 
     >>> round(metres_per_tick(0.084, 64, 43.7), 10)   # OptiOdom differential robot
-    9.43557e-05
+    9.43556e-05
     """
     _require_positive("metres_per_tick", wheel_diameter=wheel_diameter,
                       encoder_resolution=encoder_resolution, gear_ratio=gear_ratio)
