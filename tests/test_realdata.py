@@ -77,3 +77,21 @@ def test_optiodom_umbmark_squares_against_optitrack(data_dir, experiment):
     # Systematic (wheel-base type) errors turn the two directions the opposite way:
     # the UMBmark signature Borenstein–Feng exploit (Type A error, section 4).
     assert np.sign(np.mean(errors["cw"])) == -np.sign(np.mean(errors["ccw"]))
+
+
+def test_khepera_sampling_period_study(data_dir):
+    """Reading the encoders every n-th sample (the exercise's question 3): the exact arc
+    keeps the decimated track on the full-rate one, Euler drifts off linearly in n."""
+    log = read_khepera(data_dir / "halmstad-khepera-snowhite" / "khepera_circle.txt")
+    robot = DiffDrive.from_wheels(0.053, 0.0153, encoder_resolution=600)
+    full = dead_reckon_log(log, robot, "exact", pose0=(0, 0, np.pi / 2)).poses[-1]
+    miss = {}
+    for method in ("exact", "euler"):
+        for n in (5, 10):
+            end = dead_reckon_log(log.decimate(n), robot, method, pose0=(0, 0, np.pi / 2)).poses[-1]
+            miss[method, n] = np.hypot(*(end[:2] - full[:2]))
+    # The arc is exact only for constant curvature; a merged real step is not quite, so
+    # the exact track moves too, but by an order of magnitude less than Euler's.
+    assert miss["exact", 10] < 0.1 * miss["euler", 10]
+    # Euler's global error is first order in the step: doubling n roughly doubles it.
+    assert 1.6 < miss["euler", 10] / miss["euler", 5] < 2.4
