@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Annotated, Any
 
 import typer
 
@@ -85,36 +85,39 @@ def _print_table(result: Prediction) -> None:
     Console().print(table)
 
 
+Opt = typer.Option
+
+
 @app.command("predict")
 def predict_command(
-    segment: list[str] = typer.Option(..., "--segment", help=(
+    segment: Annotated[list[str], Opt("--segment", help=(
         "Path segment, repeatable. diff: arc:L,R (wheel travels, m) | straight:D | "
-        "spin:DTHETA (rad); gyro/compass: arc:V,OMEGA,T | straight:V,T.")),
-    model: str = typer.Option("diff", "--model", help="diff | gyro | compass"),
-    noise: str = typer.Option("wheel", "--noise",
-                              help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)"),
-    wheel_base: float | None = typer.Option(None, "--wheel-base", help="Wheel base B [m]."),
-    k_left: float | None = typer.Option(None, "--k-left", help="Left wheel noise k_L [m^1/2]."),
-    k_right: float | None = typer.Option(None, "--k-right", help="Right wheel k_R [m^1/2]."),
-    sigma_distance: float | None = typer.Option(
-        None, "--sigma-distance", help="Classical model: σ of each step's distance [m]."),
-    sigma_angle: float | None = typer.Option(
-        None, "--sigma-angle", help="Classical model: σ of each step's rotation [rad]."),
-    speed_noise: float | None = typer.Option(
-        None, "--speed-noise", help="Kelly α_ss [m] (distance variance per metre)."),
-    gyro_noise: float | None = typer.Option(
-        None, "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s]."),
-    heading_noise: float | None = typer.Option(
-        None, "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s]."),
-    initial_pose: str = typer.Option("0,0,0", "--initial-pose", help="x,y,θ [m, m, rad]."),
-    initial_cov: str | None = typer.Option(
-        None, "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal)."),
-    initial_cov_matrix: str | None = typer.Option(
-        None, "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i'."),
-    engine: str = typer.Option("closed", "--engine", help="closed | recursion | transition"),
-    partitions: int | None = typer.Option(
-        None, "--partitions", help="Steps per segment (recursion engines; classical pieces)."),
-    json_out: bool = typer.Option(False, "--json", help="Print one JSON object."),
+        "spin:DTHETA (rad); gyro/compass: arc:V,OMEGA,T | straight:V,T."))],
+    model: Annotated[str, Opt("--model", help="diff | gyro | compass")] = "diff",
+    noise: Annotated[str, Opt(
+        "--noise", help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)")] = "wheel",
+    wheel_base: Annotated[float | None, Opt("--wheel-base", help="Wheel base B (m).")] = None,
+    k_left: Annotated[float | None, Opt("--k-left", help="Left wheel k_L (m^1/2).")] = None,
+    k_right: Annotated[float | None, Opt("--k-right", help="Right wheel k_R (m^1/2).")] = None,
+    sigma_distance: Annotated[float | None, Opt(
+        "--sigma-distance", help="Classical model: σ of each step's distance (m).")] = None,
+    sigma_angle: Annotated[float | None, Opt(
+        "--sigma-angle", help="Classical model: σ of each step's rotation (rad).")] = None,
+    speed_noise: Annotated[float | None, Opt(
+        "--speed-noise", help="Kelly α_ss (m) (distance variance per metre).")] = None,
+    gyro_noise: Annotated[float | None, Opt(
+        "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density (rad²/s).")] = None,
+    heading_noise: Annotated[float | None, Opt(
+        "--heading-noise", help="Kelly σ_θθ, compass noise density (rad²·s).")] = None,
+    initial_pose: Annotated[str, Opt("--initial-pose", help="x,y,θ (m, m, rad).")] = "0,0,0",
+    initial_cov: Annotated[str | None, Opt(
+        "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal).")] = None,
+    initial_cov_matrix: Annotated[str | None, Opt(
+        "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i'.")] = None,
+    engine: Annotated[str, Opt("--engine", help="closed | recursion | transition")] = "closed",
+    partitions: Annotated[int | None, Opt(
+        "--partitions", help="Steps per segment (recursion engines; classical pieces).")] = None,
+    json_out: Annotated[bool, Opt("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Predict the end pose and its covariance for a path of segments (closed form)."""
     if model not in _MODEL_FLAGS:

@@ -22,9 +22,27 @@ Those integrals are evaluated by two branches (see :data:`SERIES_BELOW`): trigon
 closed forms for |a| >= 1, a Taylor series in a (exact polynomial integration, entire
 functions, so it converges for any a) below. The closed forms divide differences of O(1)
 terms by up to a², losing ~1/a⁴ ulps as a -> 0; the series loses accuracy only through
-alternation, ~e^|a| ulps. At |a| = 1 both are at rounding level (tested to 1e-14
-relative across the threshold). Straight lines (a = 0) and spins (D = 0) are therefore
-the same formulas, never a special case.
+alternation, ~e^|a| ulps. At |a| = 1 both are within ~10 ulps (tested: the branches
+agree to 4e-15 relative for 0.9 <= |a| <= 1.1, and both match quadrature to 1e-12).
+Straight lines (a = 0), spins (D = 0), zero-length and reversing segments (signed D and
+a, |L|, |R| in the noise) are therefore the same formulas, never a special case.
+
+The result equals Chong–Kleeman eq. (25) wherever that is defined (tested), and its
+limits are their eq. (26)–(28). Misprints in Chong–Kleeman found on the way (each
+checked numerically in tests/propagate/test_closed.py):
+
+* eq. (26), Cov₂₂: last term printed ``D²/(3B²)·sin²θ_k``; it is ``cos²θ_k`` (rotating
+  eq. 27, which is right, by θ_k), the known trap.
+* eq. (28): the text substitutes ``L -> (B/2)(θ_k − θ₀)``, ``R -> (B/2)(θ₀ − θ_k)``, which
+  by eq. (14) turns the wrong way; the printed results hold for L = −(B/2)Δθ,
+  R = +(B/2)Δθ.
+* eq. (17): the four position entries print ``r_k cos θ_k`` / ``r_k sin θ_k`` where
+  eq. (22) (right, by finite differences) has ``r/B``; and ∂y/∂R prints ``−BL_k`` for
+  ``+BL_k``.
+* eq. (21): the product over i = m…n involves θ_{m−1}, not θ_m (eq. 23 uses θ₀ for
+  i = 1…k, consistently with θ_{m−1}); eq. (23)–(24) omit the factor ∇_u f between the
+  product and diag(k²|L_i|, k²|R_i|) (3×3 times 2×2 as printed).
+* eq. (4): "k_L² and k_R² are constants with unit m^½": k has unit m^½, k² is in m.
 """
 
 from __future__ import annotations
@@ -178,7 +196,8 @@ def arc_added_cov_local(
                                                 for v in (length, dtheta, q_ss, q_st, q_tt)))
     i = dict(zip(INTEGRALS, arc_integrals(a), strict=True))
     cov = np.empty(d.shape + (3, 3))
-    # Entries of ∫ A Q Aᵀ with A's second column D·(p, q, 1/D)... written out:
+    # A = [[c, D·p], [s, D·q], [0, 1]] (p, q as in arc_integrals), so each entry is
+    # q_ss·∫(col 1 products) + q_st·D·∫(cross products) + q_tt·D²·∫(col 2 products).
     cov[..., 0, 0] = qss * i["cc"] + 2.0 * qst * d * i["cp"] + qtt * d * d * i["pp"]
     cov[..., 1, 1] = qss * i["ss"] + 2.0 * qst * d * i["sq"] + qtt * d * d * i["qq"]
     cov[..., 0, 1] = qss * i["cs"] + qst * d * (i["cq"] + i["sp"]) + qtt * d * d * i["pq"]

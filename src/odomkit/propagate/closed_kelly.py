@@ -25,9 +25,9 @@ from odomkit.noise import CompassNoise, GyroNoise, SpeedNoise
 from odomkit.path import KellyArc
 from odomkit.propagate.closed import (
     INTEGRALS,
-    chain_cov,
     arc_added_cov_local,
     arc_integrals,
+    chain_cov,
     rotate_cov,
 )
 

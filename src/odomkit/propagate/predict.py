@@ -76,6 +76,12 @@ class Prediction:
     model: str
     engine: str
 
+    def __post_init__(self) -> None:
+        for name in ("pose", "cov"):  # frozen means the numbers too
+            arr = np.array(getattr(self, name), dtype=float)
+            arr.setflags(write=False)
+            object.__setattr__(self, name, arr)
+
     @property
     def std(self) -> NDArray[np.float64]:
         """[σx, σy, σθ]; rounding-level negative variances read as 0."""
@@ -343,9 +349,9 @@ def predict(
             left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
             cov = wheel_arc_cov(left, right, b, parts[0], pose[2], cov)
         elif model == "gyro":
-            cov = gyro_arc_cov(seg, *parts, theta0=pose[2], cov0=cov)  # type: ignore[arg-type]
+            cov = gyro_arc_cov(seg, parts[0], parts[1], pose[2], cov)  # type: ignore[arg-type]
         else:
-            cov = compass_arc_cov(seg, *parts, theta0=pose[2], cov0=cov)  # type: ignore[arg-type]
+            cov = compass_arc_cov(seg, parts[0], parts[1], pose[2], cov)  # type: ignore[arg-type]
         d, a = _body_motion(seg, b)
         dx, dy = step_displacement(pose[2], d, a, "exact")
         pose = pose + np.array([float(dx), float(dy), a])
