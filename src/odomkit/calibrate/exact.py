@@ -16,10 +16,11 @@ Why the overall scale is unobservable from closed-path endpoints: multiplying bo
 scales *and* the wheel base by the same factor s leaves every Δθ unchanged and multiplies
 every Δd by s, so the whole odometry track is scaled by s about the start pose. The end
 of a closed square lies near the start, so the end pose hardly moves. :func:`calibrate_exact`
-measures this (the scale direction's sensitivity relative to the largest one) and, when
-it is below ``SCALE_OBSERVABLE_BELOW``, keeps the mean wheel scale fixed, the constraint
-UMBmark uses implicitly (Borenstein–Feng eq. 4.28: the average diameter D_a is unchanged).
-The wheel base then absorbs any E_s: headings come out right, distances stay scaled.
+measures this (how far the compared poses lie from the start relative to the distance
+travelled to reach them) and, when it is below ``SCALE_OBSERVABLE_BELOW``, keeps the mean
+wheel scale fixed, the constraint UMBmark uses implicitly (Borenstein–Feng eq. 4.28: the
+average diameter D_a is unchanged). The wheel base then absorbs any E_s: headings come out
+right, distances stay scaled.
 
 Standard errors are ``σ̂² (JᵀJ)⁻¹`` with ``σ̂² = |r|²/(m − p)``, J the (analytic)
 Jacobian of the weighted residuals at the solution. This assumes the residuals are
@@ -319,6 +320,7 @@ class _Problem:
         self.whiten = whiten
         self.offset = np.zeros(3)
         self.T = np.eye(3)
+        self._cache: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def full(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.offset + self.T @ q
@@ -341,27 +343,42 @@ class _Problem:
             jac[:, 2] *= self.w
         return res.reshape(-1), jac.reshape(-1, jac.shape[-1])
 
+    def scale_sensitivity(self, p: NDArray[np.float64]) -> float:
+        """Relative observability of the overall scale, in [0, 1].
+
+        Scaling every length by s moves each compared position by (s − 1)·(pos − start),
+        while the other errors move it by up to (s − 1)·(distance travelled so far). The
+        ratio sqrt(Σ|pos − start|²)/sqrt(Σ travelled²) over the compared rows is therefore
+        the scale's sensitivity relative to a typical parameter's: about 0.002 for the end of
+        a closed square, 1 on a straight line, about 0.3 for a whole square track.
+        """
+        num = den = 0.0
+        for i, pose0 in enumerate(self.pose0):
+            dd, dth = self.model.steps(p, i)[:2]
+            poses, _ = integrate_with_sensitivity(dd, dth, np.zeros((dd.size, 0)),
+                                                  np.zeros((dd.size, 0)), pose0, self.method)
+            travelled = np.r_[0.0, np.cumsum(np.abs(dd))]
+            rows = self.truth[i][0]
+            num += float(np.sum((poses[rows, :2] - pose0[:2]) ** 2))
+            den += float(np.sum(travelled[rows] ** 2))
+        return float(np.sqrt(num / den)) if den > 0 else 0.0
+
+    def _all(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        # least_squares asks for residuals and Jacobian at the same point: integrate once.
+        if self._cache is None or not np.array_equal(self._cache[0], p):
+            parts = [self._run(p, i) for i in range(len(self.pose0))]
+            self._cache = (p.copy(), np.concatenate([r for r, _ in parts]),
+                           np.concatenate([j for _, j in parts]))
+        return self._cache[1], self._cache[2]
+
     def residuals(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        p = self.full(q)
-        return np.concatenate([self._run(p, i)[0] for i in range(len(self.pose0))])
+        return self._all(self.full(q))[0]
 
     def jacobian_full(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.concatenate([self._run(p, i)[1] for i in range(len(self.pose0))])
+        return self._all(p)[1]
 
     def jacobian(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
         return self.jacobian_full(self.full(q)) @ self.T
-
-
-def scale_sensitivity(jac: NDArray[np.float64], p: NDArray[np.float64], scale_index: Sequence[int]) -> float:
-    """How much the residuals react to a uniform scaling, relative to the most sensitive
-    parameter direction: ``|J u| / (σ_max(J) |u|)`` with u = p on ``scale_index`` (the
-    generator of "scale all lengths by s"), zero elsewhere. 0 = unobservable."""
-    u = np.zeros_like(p)
-    u[list(scale_index)] = p[list(scale_index)]
-    smax = np.linalg.norm(jac, 2)
-    if smax == 0:
-        return 0.0
-    return float(np.linalg.norm(jac @ u) / (smax * np.linalg.norm(u)))
 
 
 def calibrate_exact(
@@ -395,8 +412,8 @@ def calibrate_exact(
         heading made the calibration worse in and out of sample (docs/readme/calibration.md).
     fix_scale : bool, optional
         Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
-        value. Default: automatically, when the residuals' relative sensitivity to a
-        uniform scaling is below ``SCALE_OBSERVABLE_BELOW`` (closed paths, endpoints).
+        value. Default: automatically, when the compared poses lie closer to the start than
+        ``SCALE_OBSERVABLE_BELOW`` times the distance travelled (closed paths, endpoints).
     noise : WheelNoise, optional
         Diff endpoints only: whiten each run's end residual by the end-pose covariance that
         this per-wheel noise predicts (Chong–Kleeman eq. 23), making the fit a generalised
@@ -441,8 +458,8 @@ def calibrate_exact(
         whiten = _whitening(model, runs, source, noise, method)
     prob = _Problem(model, runs, source, heading_weight, every, whiten, method)
     p0 = model.p0.copy()
-    scale_index = (0, 1, 2) if isinstance(model, _DiffModel) else (0, 2)
-    sens = scale_sensitivity(prob.jacobian_full(p0), p0, scale_index)
+    scale_index = [0, 1, 2] if isinstance(model, _DiffModel) else [0, 2]
+    sens = prob.scale_sensitivity(p0)
     notes: list[str] = []
     if fix_scale is None:
         fix_scale = sens < SCALE_OBSERVABLE_BELOW
@@ -454,7 +471,7 @@ def calibrate_exact(
             )
     if fix_scale:
         prob.offset, prob.T = model.fixed_scale_map(p0)
-        q0 = np.linalg.lstsq(prob.T, p0 - prob.offset, rcond=None)[0]
+        q0 = np.asarray(np.linalg.lstsq(prob.T, p0 - prob.offset, rcond=None)[0], dtype=np.float64)
     else:
         q0 = p0.copy()
     n_res = prob.residuals(q0).size
@@ -464,7 +481,7 @@ def calibrate_exact(
             "(UMBmark endpoints need runs in both directions)"
         )
     sol = least_squares(prob.residuals, q0, jac=prob.jacobian, method="lm", x_scale="jac",
-                        xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=200)
+                        xtol=1e-13, ftol=1e-13, gtol=1e-13, max_nfev=200)
     if not sol.success:
         notes.append(f"least_squares: {sol.message}")
     J = sol.jac
@@ -478,7 +495,7 @@ def calibrate_exact(
     corr[~np.isfinite(corr)] = 0.0
     np.fill_diagonal(corr, np.where(std > 0, 1.0, 0.0))
     p = prob.full(sol.x)
-    if np.any(p[[i for i in scale_index]] <= 0):
+    if np.any(p[scale_index] <= 0):
         raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; "
                          "check the channel assignment (left/right) and the robot file")
     return ExactCalibration(
@@ -503,7 +520,7 @@ def _whitening(model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog], 
                                  initial_pose(runs[i], None), method)
         C = noise.k_left**2 * A + noise.k_right**2 * B
         try:
-            out.append(np.linalg.cholesky(C))
+            out.append(np.asarray(np.linalg.cholesky(C), dtype=np.float64))
         except np.linalg.LinAlgError:
             raise ModelError(f"predicted end-pose covariance of run {runs[i].source} is singular; "
                              "both k_left and k_right must be > 0 for weighting") from None

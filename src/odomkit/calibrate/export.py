@@ -147,6 +147,9 @@ def calibrate_files(
     if method == "umbmark":
         if side is None:
             raise InputError("--method umbmark needs --side (the square side in metres)")
+        if not isinstance(robot, DiffDrive):
+            raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
+                             source=str(robot_path))
         um = umbmark_from_runs(runs, robot, side)
         summary = um.to_dict()
         new_robot: Any = um.robot

@@ -18,7 +18,7 @@ import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -95,12 +95,17 @@ def return_errors_from_runs(
     ((0, 2), [[0.01, -0.02]])
     """
     robots = _robots(runs, robot, allow_mixed)
-    cw, ccw = [], []
+    cw: list[NDArray[np.float64]] = []
+    ccw: list[NDArray[np.float64]] = []
     for log, rob in zip(runs, robots, strict=True):
         direction = run_direction(log)
         assert log.ground_truth is not None
         end = dead_reckon_log(log, rob).poses[-1]
         err = log.ground_truth[-1, :2] - end[:2]  # Borenstein–Feng eq. (3.1)
+        # Into the start frame (start at the origin heading +x), where UMBmark's eq. 4.17–4.24
+        # hold; a no-op for OptiOdom, whose ground truth starts at (0, 0, 0).
+        c, s = np.cos(log.ground_truth[0, 2]), np.sin(log.ground_truth[0, 2])
+        err = np.array([c * err[0] + s * err[1], -s * err[0] + c * err[1]])
         (ccw if direction == "ccw" else cw).append(err)
     return np.array(cw).reshape(-1, 2), np.array(ccw).reshape(-1, 2)
 
@@ -244,8 +249,9 @@ def square_table(data_dir: str | Path, **exact_kwargs: Any) -> list[SquareRow]:
         um = umbmark_from_runs(ex.runs, nominal, ex.metadata.side).robot
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            exact = calibrate_exact(ex.runs, nominal, "endpoints", **exact_kwargs).robot
-            traj[ex.metadata.experiment] = calibrate_exact(ex.runs, nominal, "trajectory").robot
+            exact = cast(DiffDrive, calibrate_exact(ex.runs, nominal, "endpoints", **exact_kwargs).robot)
+            traj[ex.metadata.experiment] = cast(
+                DiffDrive, calibrate_exact(ex.runs, nominal, "trajectory").robot)
         cal[ex.metadata.experiment] = (um, exact)
     rows = []
     for ex in exps:

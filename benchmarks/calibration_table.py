@@ -1,0 +1,38 @@
+"""The OptiOdom UMBmark acceptance table: E_max,syst before and after UMBmark and after the
+exact (endpoint least-squares) calibration, in sample and out of sample.
+
+    .venv/bin/python benchmarks/calibration_table.py [DATA_DIR]
+
+DATA_DIR defaults to $ODOMKIT_DATA or ../shared/data beside the repository. Prints the
+markdown table of docs/readme/calibration.md and, as the ratio line, the mean
+out-of-sample E_max,syst of the exact calibration over that of UMBmark (below 1 = better).
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from odomkit.calibrate.realdata import square_table, square_table_markdown
+
+
+def main() -> None:
+    default = os.environ.get("ODOMKIT_DATA") or str(Path(__file__).resolve().parents[2] / "shared" / "data")
+    data_dir = Path(sys.argv[1] if len(sys.argv) > 1 else default)
+    start = time.perf_counter()
+    rows = square_table(data_dir)
+    seconds = time.perf_counter() - start
+    print(square_table_markdown(rows))
+    for side in sorted({r.side for r in rows}):
+        sel = [r for r in rows if r.side == side]
+        ratio = np.mean([r.out_exact for r in sel]) / np.mean([r.out_umbmark for r in sel])
+        print(f"side {side:g} m: out-of-sample E_max,syst exact/UMBmark = {ratio:.3f}")
+    print(f"({len(rows)} experiments in {seconds:.1f} s)")
+
+
+if __name__ == "__main__":
+    main()

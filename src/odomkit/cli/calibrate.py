@@ -1,0 +1,118 @@
+"""``odomkit calibrate`` and ``odomkit calibrate-noise``.
+
+::
+
+    odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
+        [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
+        [--ros-yaml params.yaml --wheel-radius R] [--force] [--json]
+    odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
+        [--known-mean] [--level 0.95] [--json]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.cli import app
+from odomkit.cli.output import print_json
+from odomkit.errors import InputError
+
+_FORMAT_HELP = "Log format: auto, csv, khepera, snowhite, optiodom."
+
+
+def _log_options(fmt: str, columns: str | None) -> Any:
+    from odomkit.workflows import LogOptions
+
+    return LogOptions(format=fmt, columns=columns)
+
+
+@app.command("calibrate")
+def calibrate_command(
+    runs: Annotated[list[Path], typer.Argument(help="Logs with ground truth (e.g. OptiOdom run files).")],
+    robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML) the odometry used.")],
+    method: Annotated[str, typer.Option("--method", help="exact | umbmark")] = "exact",
+    source: Annotated[str, typer.Option(
+        "--from", help="exact: fit the run 'endpoints' or the whole 'trajectory'.")] = "endpoints",
+    side: Annotated[float | None, typer.Option(
+        "--side", help="Square side [m]: required by umbmark; with exact, E_max,syst is reported.")] = None,
+    heading_weight: Annotated[float, typer.Option(
+        "--heading-weight", help="exact: metres per radian of heading residual (0 = positions only).")] = 0.0,
+    out_robot: Annotated[Path | None, typer.Option(
+        "--out-robot", help="Write the corrected robot file.")] = None,
+    ros_yaml: Annotated[Path | None, typer.Option(
+        "--ros-yaml", help="Write ROS 2 diff_drive_controller parameters (YAML).")] = None,
+    wheel_radius: Annotated[float | None, typer.Option(
+        "--wheel-radius", help="Nominal wheel radius [m] for --ros-yaml.")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
+    fmt: Annotated[str, typer.Option("--format", help=_FORMAT_HELP)] = "auto",
+    columns: Annotated[str | None, typer.Option("--columns", help="CSV column mapping.")] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
+    from odomkit.calibrate.export import calibrate_files
+
+    extra = {"heading_weight": heading_weight} if method == "exact" else {}
+    out = calibrate_files(runs, robot, method=method, source=source, side=side,
+                          out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
+                          overwrite=force, log_options=_log_options(fmt, columns), **extra)
+    if json_out:
+        print_json(out)
+        return
+    _print_text(out)
+
+
+def _print_text(out: dict[str, Any]) -> None:
+    if out["method"] == "exact":
+        print(f"exact calibration from {out['source']} of {out['n_runs']} run(s)")
+        for name, value in out["parameters"].items():
+            print(f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.6f}")
+        if "E_d" in out:
+            print(f"  E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  E_s = {out['E_s']:.6f}  "
+                  f"wheel base {out['wheel_base']:.6f} m")
+        for note in out["notes"]:
+            print(f"  note: {note}")
+    else:
+        print(f"UMBmark: E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  "
+              f"c_left = {out['c_left']:.6f}  c_right = {out['c_right']:.6f}")
+    if "e_max_syst_before" in out:
+        print(f"E_max,syst on these runs: {1e3 * out['e_max_syst_before']:.2f} mm before, "
+              f"{1e3 * out['e_max_syst_after']:.2f} mm after")
+    for kind, path in out["outputs"].items():
+        print(f"wrote {kind}: {path}")
+
+
+@app.command("calibrate-noise")
+def calibrate_noise_command(
+    runs: Annotated[list[Path], typer.Argument(help="Repeated runs of one path, with ground truth.")],
+    robot: Annotated[Path, typer.Option("--robot", help="Calibrated robot file (TOML).")],
+    components: Annotated[str, typer.Option(
+        "--components", help="End-pose components in the likelihood, e.g. x,theta.")] = "x,y,theta",
+    known_mean: Annotated[bool, typer.Option(
+        "--known-mean", help="Assume zero mean end error instead of estimating it.")] = False,
+    level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
+    fmt: Annotated[str, typer.Option("--format", help=_FORMAT_HELP)] = "auto",
+    columns: Annotated[str | None, typer.Option("--columns", help="CSV column mapping.")] = None,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Maximum-likelihood k_L, k_R (per-wheel noise, m^½) with profile-likelihood intervals."""
+    from odomkit.calibrate.export import noise_files
+
+    comps = tuple(c.strip() for c in components.split(",") if c.strip())
+    if not 0 < level < 1:
+        raise InputError(f"--level must be in (0, 1), got {level}")
+    kwargs: dict[str, Any] = {"components": comps, "level": level}
+    if known_mean:
+        kwargs["mean"] = [0.0] * len(comps)
+    out = noise_files(runs, robot, log_options=_log_options(fmt, columns), **kwargs)
+    if json_out:
+        print_json(out)
+        return
+    pct = f"{100 * out['level']:g} %"
+    print(f"k_left  = {out['k_left']:.6g} m^1/2  ({pct} profile-likelihood interval "
+          f"{out['ci_left'][0]:.6g} .. {out['ci_left'][1]:.6g})")
+    print(f"k_right = {out['k_right']:.6g} m^1/2  ({pct} interval "
+          f"{out['ci_right'][0]:.6g} .. {out['ci_right'][1]:.6g})")
+    print(f"from {out['n_runs']} runs, components {', '.join(out['components'])}")
