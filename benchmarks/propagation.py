@@ -57,9 +57,12 @@ def reference_loop(steps: BodySteps, poses: np.ndarray, n: int) -> np.ndarray:
 
 
 def run_engine(steps: BodySteps, poses: np.ndarray, engine: str) -> np.ndarray:
+    """Consume the chunks of one engine ("recursion", "recursion-parallel", "transition")."""
     last = None
+    parallel = engine.endswith("-parallel")
     for _, chunk in iter_track_covariance(steps, poses, NOISE, np.zeros((3, 3)),
-                                          engine=engine):
+                                          engine=engine.removesuffix("-parallel"),
+                                          parallel=parallel):
         last = chunk[-1]
     assert last is not None
     return last
@@ -84,11 +87,11 @@ def main() -> None:
     # Warm-up: numba compilation (cached on disk after the first run) is not the engine.
     small = BodySteps(steps.dd[:1000], steps.dtheta[:1000], steps.dt[:1000],
                       {k: v[:1000] for k, v in steps.inputs.items()}, steps.robot)
-    for engine in ("recursion", "transition"):
+    for engine in ("recursion", "recursion-parallel", "transition"):
         run_engine(small, poses[:1001], engine)
         chunk = next(c for r, c in iter_track_covariance(
-            steps, poses, NOISE, np.zeros((3, 3)), engine=engine, chunk_size=args.reference)
-            if r > 0)
+            steps, poses, NOISE, np.zeros((3, 3)), engine=engine.removesuffix("-parallel"),
+            chunk_size=args.reference) if r > 0)
         rel = np.max(np.abs(chunk - ref)) / np.max(np.abs(ref))
         t0 = time.perf_counter()
         final = run_engine(steps, poses, engine)
@@ -97,8 +100,9 @@ def main() -> None:
         run_engine(steps, poses, engine)
         _, peak = tracemalloc.get_traced_memory()
         tracemalloc.stop()
-        print(f"{engine:>10}: {args.samples:,} covariances in {seconds:.2f} s = "
-              f"{args.samples / seconds:,.0f} samples/s, ratio {t_ref * args.samples / seconds:,.0f}"
+        ratio = t_ref * args.samples / seconds
+        print(f"{engine:>18}: {args.samples:,} covariances in {seconds:.2f} s = "
+              f"{args.samples / seconds:,.0f} samples/s, ratio {ratio:,.0f}"
               f" x the loop, peak extra memory {peak / 2**20:.0f} MiB, "
               f"max rel diff vs loop on prefix {rel:.1e}, "
               f"final sigma_x {np.sqrt(final[0, 0]):.3f} m")

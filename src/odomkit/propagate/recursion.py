@@ -12,6 +12,7 @@ noise model (or a tuple of them) in, the covariance of every pose out.
 
 from __future__ import annotations
 
+import importlib
 import warnings
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -20,38 +21,38 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.propagate.inputs import (
-    NoisePlan,
-    any_step_displacement,
-    any_step_jacobians,
-    plan_noise,
-)
+from odomkit.propagate.inputs import NoisePlan, any_step_jacobians, plan_noise, step_terms
 from odomkit.propagate.transition import (
     check_cov3,
+    check_cov_input,
     check_method,
     check_steps,
     direct_heading_chunk,
-    input_contribution,
+    input_terms,
     sensitivity_chunk,
+    sensitivity_terms,
     transition_chunk,
 )
 
 DEFAULT_CHUNK = 1 << 13
 _METHOD_CODES = {"exact": 0, "midpoint": 1, "euler": 2, "classical": 3}
-_kernel_cache: list[Callable[..., None] | None] = []
+_kernel_cache: list[Any] = []
 
 
-def _load_kernel() -> Callable[..., None] | None:
+def _load_kernel(parallel: bool = False) -> Callable[..., None] | None:
     """The numba kernel, or None (with a one-time warning) when numba is missing."""
     if not _kernel_cache:
         try:
-            from odomkit.propagate._numba import recursion_kernel
+            kernels = importlib.import_module("odomkit.propagate._numba")
         except ImportError:  # numba is the optional extra odomkit[fast]
             warnings.warn("numba is not installed: the covariance recursion runs as a numpy "
                           "loop, about 100x slower (pip install odomkit[fast])", stacklevel=3)
-            recursion_kernel = None
-        _kernel_cache.append(recursion_kernel)
-    return _kernel_cache[0]
+            kernels = None
+        _kernel_cache.append(kernels)
+    module = _kernel_cache[0]
+    if module is None:
+        return None
+    return module.recursion_kernel_parallel if parallel else module.recursion_kernel
 
 
 def _numpy_chunk(theta, dd, dtheta, cov_input, cov_start, out, method: str) -> None:
@@ -66,10 +67,11 @@ def _numpy_chunk(theta, dd, dtheta, cov_input, cov_start, out, method: str) -> N
         out[k] = P
 
 
-def recursion_chunk(theta, dd, dtheta, cov_input, cov_start, method: str = "exact"):
+def recursion_chunk(theta, dd, dtheta, cov_input, cov_start, method: str = "exact",
+                    parallel: bool = False):
     """P after each of n steps, (n, 3, 3), starting from ``cov_start`` (3, 3)."""
     out = np.empty((dd.size, 3, 3))
-    kernel = _load_kernel()
+    kernel = _load_kernel(parallel)
     if kernel is None:
         _numpy_chunk(theta, dd, dtheta, cov_input, cov_start, out, method)
     else:
@@ -90,6 +92,7 @@ def propagate_recursion(
     *,
     out: NDArray[np.float64] | None = None,
     chunk_size: int = DEFAULT_CHUNK,
+    parallel: bool = False,
 ) -> NDArray[np.float64]:
     """Covariance of every pose by the step recursion, Chong–Kleeman eq. (2).
 
@@ -109,6 +112,10 @@ def propagate_recursion(
         Written in place and returned.
     chunk_size : int
         Steps per call of the kernel; results do not depend on it.
+    parallel : bool
+        Spread the per-step sines and cosines over numba's threads (NUMBA_NUM_THREADS).
+        Same numbers; faster on idle cores, slower when other processes keep the cores
+        busy (each chunk then waits for a scheduler slice).
 
     Returns
     -------
@@ -124,52 +131,53 @@ def propagate_recursion(
     0.025
     """
     check_method(method)
-    dd, dtheta, q = check_steps(dd, dtheta, cov_input)
-    theta = np.asarray(theta, dtype=float)
-    if theta.shape != dd.shape:
-        raise ModelError(f"theta must have shape {dd.shape}, got {theta.shape}")
+    dd_, dth_ = check_steps(dd, dtheta)
+    q = check_cov_input(cov_input, dd_.size)
+    th_ = np.asarray(theta, dtype=float)
+    if th_.shape != dd_.shape:
+        raise ModelError(f"theta must have shape {dd_.shape}, got {th_.shape}")
     if out is None:
-        out = np.empty((dd.size + 1, 3, 3))
-    elif out.shape != (dd.size + 1, 3, 3):
-        raise ModelError(f"out must have shape ({dd.size + 1}, 3, 3), got {out.shape}")
+        out = np.empty((dd_.size + 1, 3, 3))
+    elif out.shape != (dd_.size + 1, 3, 3):
+        raise ModelError(f"out must have shape ({dd_.size + 1}, 3, 3), got {out.shape}")
     out[0] = check_cov3(cov0)
     n = max(int(chunk_size), 1)
-    for a in range(0, dd.size, n):
-        b = min(a + n, dd.size)
-        out[a + 1:b + 1] = recursion_chunk(theta[a:b], dd[a:b], dtheta[a:b], q[a:b], out[a],
-                                           method)
+    for a in range(0, dd_.size, n):
+        b = min(a + n, dd_.size)
+        out[a + 1:b + 1] = recursion_chunk(th_[a:b], dd_[a:b], dth_[a:b], q[a:b], out[a],
+                                           method, parallel)
     return out
 
 
-def _white_chunk(plan: NoisePlan, engine: str, theta, dd, dtheta, a: int, b: int, P):
+def _white_chunk(plan: NoisePlan, engine: str, theta, dd, dtheta, a: int, b: int, P,
+                 parallel: bool = False):
     """White-noise covariance after steps a … b−1 (n, 3, 3), from P at row a."""
     if plan.direct:
+        assert plan.var_heading is not None
         return direct_heading_chunk(theta, dd, dtheta, plan.var_dd(a, b),
                                     plan.var_heading[a:b + 1], P[:2, :2], P[:2, 2],
                                     plan.method)
     q = plan.cov_input(a, b)
     if engine == "recursion":
-        return recursion_chunk(theta, dd, dtheta, q, P, plan.method)
+        return recursion_chunk(theta, dd, dtheta, q, P, plan.method, parallel)
     # Local origin at the chunk's first pose, built from the same step map as the
     # recursion so both engines linearise about the same track.
-    dx, dy = any_step_displacement(theta, dd, dtheta, plan.method)
-    xl = np.concatenate([[0.0], np.cumsum(dx)])
-    yl = np.concatenate([[0.0], np.cumsum(dy)])
-    _, G = any_step_jacobians(theta, dd, dtheta, plan.method)
-    return transition_chunk(xl, yl, input_contribution(G, q), P)
+    terms = step_terms(theta, dd, dtheta, plan.method)
+    xl = np.concatenate([[0.0], np.cumsum(terms[0])])
+    yl = np.concatenate([[0.0], np.cumsum(terms[1])])
+    return transition_chunk(xl, yl, input_terms(terms, q), P)
 
 
 def _bias_chunk(plan: NoisePlan, theta, dd, dtheta, a: int, b: int, S):
     """Parameter sensitivity after steps a … b−1 (n, 3, p), from S at row a."""
     K = plan.param_jacobian(a, b)
-    F, G = any_step_jacobians(theta, dd, dtheta, plan.method)
+    u, C = sensitivity_terms(step_terms(theta, dd, dtheta, plan.method), K)
     if plan.direct:
-        # Direct heading: a distance-scale error moves the position only, along a_k.
-        C = np.zeros((dd.size, 3, K.shape[-1]))
-        C[:, :2, :] = G[:, :2, 0, None] * K[:, None, 0, :]
-        return sensitivity_chunk(np.zeros((dd.size, 2)), C, S)
-    C = np.einsum("nij,njp->nip", G, K)
-    return sensitivity_chunk(np.stack([F[:, 0, 2], F[:, 1, 2]], axis=1), C, S)
+        # Direct heading: the heading is measured, so a distance-scale error (K's Δθ
+        # row is zero) moves the position only, along ∂Δp/∂Δd; no θ error exists to
+        # be carried by the shear, so u = 0 (Kelly section 3.1: Φ = I).
+        u = np.zeros_like(u)
+    return sensitivity_chunk(u, C, S)
 
 
 def iter_track_covariance(
@@ -180,6 +188,7 @@ def iter_track_covariance(
     method: str = "exact",
     engine: str = "recursion",
     chunk_size: int = DEFAULT_CHUNK,
+    parallel: bool = False,
 ) -> Iterator[tuple[int, NDArray[np.float64]]]:
     """Yield ``(row, cov)`` chunks of :func:`track_covariance`; cov (n, 3, 3) holds rows
     row … row+n−1. Memory stays O(chunk_size) beyond the inputs, for logs whose full
@@ -188,12 +197,12 @@ def iter_track_covariance(
     if engine not in ("recursion", "transition"):
         raise ModelError(f"unknown engine {engine!r}; expected 'recursion' or 'transition'")
     plan = plan_noise(steps, noise, method)
-    dd, dtheta, _ = check_steps(steps.dd, steps.dtheta)
+    dd, dtheta = check_steps(steps.dd, steps.dtheta)
     poses = np.asarray(poses, dtype=float)
     if poses.shape != (dd.size + 1, 3):
         raise ModelError(f"poses must have shape ({dd.size + 1}, 3), got {poses.shape}")
     P = check_cov3(cov0)
-    if plan.direct:
+    if plan.var_heading is not None:
         P = np.zeros((3, 3))
         P[:2, :2] = check_cov3(cov0)[:2, :2]
         P[2, 2] = plan.var_heading[0]
@@ -204,9 +213,9 @@ def iter_track_covariance(
     for a in range(0, dd.size, n):
         b = min(a + n, dd.size)
         theta = poses[a:b, 2]
-        white = _white_chunk(plan, engine, theta, dd[a:b], dtheta[a:b], a, b, P)
+        white = _white_chunk(plan, engine, theta, dd[a:b], dtheta[a:b], a, b, P, parallel)
         P = white[-1].copy()
-        if S is not None:
+        if S is not None and var_params is not None:
             sens = _bias_chunk(plan, theta, dd[a:b], dtheta[a:b], a, b, S)
             S = sens[-1]
             # The bias and the white noise are independent, so their covariances add:
@@ -225,6 +234,7 @@ def track_covariance(
     *,
     out: NDArray[np.float64] | None = None,
     chunk_size: int = DEFAULT_CHUNK,
+    parallel: bool = False,
 ) -> NDArray[np.float64]:
     """Covariance of every pose of a dead-reckoned log.
 
@@ -253,6 +263,8 @@ def track_covariance(
         full output altogether.
     chunk_size : int
         Steps per chunk; results do not depend on it.
+    parallel : bool
+        Recursion engine only: see :func:`propagate_recursion`.
 
     Returns
     -------
@@ -279,6 +291,6 @@ def track_covariance(
     elif out.shape != (m + 1, 3, 3):
         raise ModelError(f"out must have shape ({m + 1}, 3, 3), got {out.shape}")
     for row, chunk in iter_track_covariance(steps, poses, noise, cov0, method, engine,
-                                            chunk_size):
+                                            chunk_size, parallel):
         out[row:row + chunk.shape[0]] = chunk
     return out

@@ -32,7 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.propagate.inputs import ENGINE_METHODS, any_step_displacement, any_step_jacobians
+from odomkit.propagate.inputs import ENGINE_METHODS, step_terms
 
 DEFAULT_CHUNK = 1 << 15
 
@@ -53,18 +53,24 @@ def check_cov3(cov0: ArrayLike, name: str = "cov0") -> NDArray[np.float64]:
     return 0.5 * (c + c.T)
 
 
-def check_steps(dd: ArrayLike, dtheta: ArrayLike, cov_input: ArrayLike | None = None):
-    """dd, dtheta (M,) and cov_input (M, 2, 2) as float arrays of matching length."""
+def check_steps(
+    dd: ArrayLike, dtheta: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """dd, dtheta as float arrays (M,) of matching length, or ModelError."""
     dd = np.asarray(dd, dtype=float)
     dtheta = np.asarray(dtheta, dtype=float)
     if dd.ndim != 1 or dd.shape != dtheta.shape:
-        raise ModelError(f"dd and dtheta must be 1-D of equal length, got {dd.shape}, {dtheta.shape}")
-    if cov_input is None:
-        return dd, dtheta, None
+        raise ModelError("dd and dtheta must be 1-D of equal length, "
+                         f"got {dd.shape}, {dtheta.shape}")
+    return dd, dtheta
+
+
+def check_cov_input(cov_input: ArrayLike, m: int) -> NDArray[np.float64]:
+    """cov_input as a float array (m, 2, 2), or ModelError."""
     q = np.asarray(cov_input, dtype=float)
-    if q.shape != (dd.size, 2, 2):
-        raise ModelError(f"cov_input must have shape ({dd.size}, 2, 2), got {q.shape}")
-    return dd, dtheta, q
+    if q.shape != (m, 2, 2):
+        raise ModelError(f"cov_input must have shape ({m}, 2, 2), got {q.shape}")
+    return q
 
 
 def transition_matrix(poses: ArrayLike, k: ArrayLike, j: ArrayLike) -> NDArray[np.float64]:
@@ -95,19 +101,21 @@ def transition_matrix(poses: ArrayLike, k: ArrayLike, j: ArrayLike) -> NDArray[n
     return phi
 
 
-def input_contribution(G: NDArray[np.float64], Q: NDArray[np.float64]) -> NDArray[np.float64]:
-    """B = G Q G^T per step, (n, 3, 3), for G of the form [[g00, g01], [g10, g11], [0, 1]]."""
-    g0, g1 = G[:, 0, :], G[:, 1, :]
-    gq0 = np.einsum("ni,nij->nj", g0, Q)
-    gq1 = np.einsum("ni,nij->nj", g1, Q)
-    B = np.empty((G.shape[0], 3, 3))
-    B[:, 0, 0] = np.einsum("ni,ni->n", gq0, g0)
-    B[:, 0, 1] = B[:, 1, 0] = np.einsum("ni,ni->n", gq0, g1)
-    B[:, 1, 1] = np.einsum("ni,ni->n", gq1, g1)
-    B[:, 0, 2] = B[:, 2, 0] = gq0[:, 1]
-    B[:, 1, 2] = B[:, 2, 1] = gq1[:, 1]
-    B[:, 2, 2] = Q[:, 1, 1]
-    return B
+def input_terms(
+    terms: tuple[NDArray[np.float64], ...], cov_input: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], ...]:
+    """Entries (b00, b01, b11, b02, b12, b22) of B = G Q G^T per step, each (n,).
+
+    ``terms`` is :func:`odomkit.propagate.inputs.step_terms`; G = [[g00, g01],
+    [g10, g11], [0, 1]] (Chong–Kleeman eq. 17 in chord form), Q = cov_input (n, 2, 2).
+    """
+    _, _, g00, g01, g10, g11 = terms
+    q00, q11 = cov_input[:, 0, 0], cov_input[:, 1, 1]
+    q01 = 0.5 * (cov_input[:, 0, 1] + cov_input[:, 1, 0])
+    r00, r01 = g00 * q00 + g01 * q01, g00 * q01 + g01 * q11  # rows of G Q
+    r10, r11 = g10 * q00 + g11 * q01, g10 * q01 + g11 * q11
+    return (r00 * g00 + r01 * g01, r00 * g10 + r01 * g11, r10 * g10 + r11 * g11,
+            r01, r11, q11)
 
 
 def _shear(P: NDArray[np.float64], X: NDArray[np.float64], Y: NDArray[np.float64]):
@@ -127,30 +135,31 @@ def _shear(P: NDArray[np.float64], X: NDArray[np.float64], Y: NDArray[np.float64
 def transition_chunk(
     x_local: NDArray[np.float64],
     y_local: NDArray[np.float64],
-    B: NDArray[np.float64],
+    B: tuple[NDArray[np.float64], ...],
     cov_start: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """Kelly eq. (11) over one chunk of n steps, by prefix sums.
 
     x_local, y_local : (n + 1,) positions relative to the chunk's first pose (so
-    x_local[0] = y_local[0] = 0); B : (n, 3, 3) input contributions of the n steps;
-    cov_start : P at the first pose. Returns P after each step, (n, 3, 3).
+    x_local[0] = y_local[0] = 0); B : the entries of the n steps' G Q G^T
+    (:func:`input_terms`); cov_start : P at the first pose. Returns P after each
+    step, (n, 3, 3).
     """
     X, Y = x_local[1:], y_local[1:]  # x_k for the output rows, and x_{j+1} of step j
     cs = np.cumsum
-    b00, b01, b11 = B[:, 0, 0], B[:, 0, 1], B[:, 1, 1]
-    b02, b12, b22 = B[:, 0, 2], B[:, 1, 2], B[:, 2, 2]
+    b00, b01, b11, b02, b12, b22 = B
     s22 = cs(b22)
     sx22, sy22 = cs(X * b22), cs(Y * b22)
     # Σ_j Φ(k,j+1) B_j Φ(k,j+1)^T entry by entry (Kelly eq. 11 expanded, module doc).
-    xth = cs(b02) - (Y * s22 - sy22)
-    yth = cs(b12) + (X * s22 - sx22)
-    xx = cs(b00) - 2.0 * (Y * cs(b02) - cs(Y * b02)) + (Y * Y * s22 - 2.0 * Y * sy22
-                                                          + cs(Y * Y * b22))
-    yy = cs(b11) + 2.0 * (X * cs(b12) - cs(X * b12)) + (X * X * s22 - 2.0 * X * sx22
-                                                          + cs(X * X * b22))
-    xy = (cs(b01) + (X * cs(b02) - cs(X * b02)) - (Y * cs(b12) - cs(Y * b12))
-          - (X * Y * s22 - X * sy22 - Y * sx22 + cs(X * Y * b22)))
+    s02, s12 = cs(b02), cs(b12)
+    xth = s02 - (Y * s22 - sy22)
+    yth = s12 + (X * s22 - sx22)
+    xx = cs(b00) - 2.0 * (Y * s02 - cs(Y * b02)) + (Y * (Y * s22 - 2.0 * sy22)
+                                                    + cs(Y * Y * b22))
+    yy = cs(b11) + 2.0 * (X * s12 - cs(X * b12)) + (X * (X * s22 - 2.0 * sx22)
+                                                    + cs(X * X * b22))
+    xy = (cs(b01) + (X * s02 - cs(X * b02)) - (Y * s12 - cs(Y * b12))
+          - (X * (Y * s22 - sy22) - Y * sx22 + cs(X * Y * b22)))
     out = _shear(cov_start, X, Y)  # Φ(k, k0) P_k0 Φ(k, k0)^T
     out[:, 0, 0] += xx
     out[:, 1, 1] += yy
@@ -176,19 +185,20 @@ def iter_transition(
     """Yield ``(row, cov)`` chunks of :func:`propagate_transition`: cov (n, 3, 3) holds
     rows row … row+n−1 (row 0, the initial covariance, comes first, alone)."""
     check_method(method)
-    dd, dtheta, q = check_steps(dd, dtheta, cov_input)
-    poses = np.asarray(poses, dtype=float)
-    if poses.shape != (dd.size + 1, 3):
-        raise ModelError(f"poses must have shape ({dd.size + 1}, 3), got {poses.shape}")
+    dd_, dth_ = check_steps(dd, dtheta)
+    q = check_cov_input(cov_input, dd_.size)
+    poses_ = np.asarray(poses, dtype=float)
+    if poses_.shape != (dd_.size + 1, 3):
+        raise ModelError(f"poses must have shape ({dd_.size + 1}, 3), got {poses_.shape}")
     P = check_cov3(cov0)
     yield 0, P[None].copy()
-    for a in range(0, dd.size, max(int(chunk_size), 1)):
-        b = min(a + max(int(chunk_size), 1), dd.size)
-        _, G = any_step_jacobians(poses[a:b, 2], dd[a:b], dtheta[a:b], method)
+    for a in range(0, dd_.size, max(int(chunk_size), 1)):
+        b = min(a + max(int(chunk_size), 1), dd_.size)
+        terms = step_terms(poses_[a:b, 2], dd_[a:b], dth_[a:b], method)
         # Local origin: subtracting the chunk's first position keeps the moments small.
-        xl = poses[a:b + 1, 0] - poses[a, 0]
-        yl = poses[a:b + 1, 1] - poses[a, 1]
-        out = transition_chunk(xl, yl, input_contribution(G, q[a:b]), P)
+        xl = poses_[a:b + 1, 0] - poses_[a, 0]
+        yl = poses_[a:b + 1, 1] - poses_[a, 1]
+        out = transition_chunk(xl, yl, input_terms(terms, q[a:b]), P)
         P = out[-1]
         yield a + 1, out
 
@@ -296,15 +306,25 @@ def parameter_sensitivity(
     0.01
     """
     check_method(method)
-    dd, dtheta, _ = check_steps(dd, dtheta)
-    theta = np.asarray(theta, dtype=float)
+    dd_, dth_ = check_steps(dd, dtheta)
+    th_ = np.asarray(theta, dtype=float)
     K = np.asarray(jac_params, dtype=float)
-    F, G = any_step_jacobians(theta, dd, dtheta, method)
-    C = np.einsum("nij,njp->nip", G, K)
-    u = np.stack([F[:, 0, 2], F[:, 1, 2]], axis=1)
-    S = np.zeros((dd.size + 1, 3, K.shape[-1]))
+    u, C = sensitivity_terms(step_terms(th_, dd_, dth_, method), K)
+    S = np.zeros((dd_.size + 1, 3, K.shape[-1]))
     S[1:] = sensitivity_chunk(u, C, S[0])
     return S
+
+
+def sensitivity_terms(
+    terms: tuple[NDArray[np.float64], ...], K: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """u = (−Δy, Δx) (n, 2) and C = G K (n, 3, p) for :func:`sensitivity_chunk`."""
+    dx, dy, g00, g01, g10, g11 = terms
+    C = np.empty((dx.size, 3, K.shape[-1]))
+    C[:, 0, :] = g00[:, None] * K[:, 0, :] + g01[:, None] * K[:, 1, :]
+    C[:, 1, :] = g10[:, None] * K[:, 0, :] + g11[:, None] * K[:, 1, :]
+    C[:, 2, :] = K[:, 1, :]
+    return np.stack([-dy, dx], axis=1), C
 
 
 def direct_heading_chunk(
@@ -314,10 +334,10 @@ def direct_heading_chunk(
 ) -> NDArray[np.float64]:
     """Direct-heading covariance after each of n steps; var_heading has n + 1 entries
     (rows k0 … k0+n); cov_xy (2, 2) and cross (2,) = Cov(pos, heading error) at row k0."""
-    F, G = any_step_jacobians(theta, dd, dtheta, method)
-    a = G[:, :2, 0]                      # ∂Δp/∂Δd
-    c = G[:, :2, 1]                      # ∂Δp/∂h_{k+1} = ∂Δp/∂Δθ   (Δθ = h_{k+1} − h_k)
-    b = F[:, :2, 2] - c                  # ∂Δp/∂h_k   = ∂Δp/∂θ − ∂Δp/∂Δθ
+    dx, dy, g00, g01, g10, g11 = step_terms(theta, dd, dtheta, method)
+    a = np.stack([g00, g10], axis=1)     # ∂Δp/∂Δd
+    c = np.stack([g01, g11], axis=1)     # ∂Δp/∂h_{k+1} = ∂Δp/∂Δθ   (Δθ = h_{k+1} − h_k)
+    b = np.stack([-dy, dx], axis=1) - c  # ∂Δp/∂h_k   = ∂Δp/∂θ − ∂Δp/∂Δθ
     h0, h1 = var_heading[:-1], var_heading[1:]
     # Cov(p_k, δh_k): the previous step's c times var h_k (a fresh compass sample
     # correlates only with the step that ended at it).
@@ -377,20 +397,20 @@ def propagate_direct_heading(
     (9.95e-07, 0.0001)
     """
     check_method(method)
-    dd, dtheta, _ = check_steps(dd, dtheta)
-    theta = np.asarray(theta, dtype=float)
-    var_dd = np.asarray(var_dd, dtype=float)
+    dd_, dth_ = check_steps(dd, dtheta)
+    th_ = np.asarray(theta, dtype=float)
+    var_dd_ = np.asarray(var_dd, dtype=float)
     var_h = np.asarray(var_heading, dtype=float)
-    if var_h.shape != (dd.size + 1,) or var_dd.shape != dd.shape:
+    if var_h.shape != (dd_.size + 1,) or var_dd_.shape != dd_.shape:
         raise ModelError("var_heading must have M + 1 entries and var_dd M entries")
-    out = np.empty((dd.size + 1, 3, 3))
+    out = np.empty((dd_.size + 1, 3, 3))
     out[0] = 0.0
     out[0, :2, :2] = np.asarray(cov_xy0, dtype=float).reshape(2, 2)
     out[0, 2, 2] = var_h[0]
     n = max(int(chunk_size), 1)
-    for a in range(0, dd.size, n):
-        b = min(a + n, dd.size)
+    for a in range(0, dd_.size, n):
+        b = min(a + n, dd_.size)
         out[a + 1:b + 1] = direct_heading_chunk(
-            theta[a:b], dd[a:b], dtheta[a:b], var_dd[a:b], var_h[a:b + 1],
+            th_[a:b], dd_[a:b], dth_[a:b], var_dd_[a:b], var_h[a:b + 1],
             out[a, :2, :2], out[a, :2, 2], method)
     return out
