@@ -15,7 +15,7 @@ $(STAMP): $(BIN)/python pyproject.toml
 	touch $(STAMP)
 
 demo: $(STAMP)
-	$(BIN)/odomkit demo --out demo-output
+	$(BIN)/odomkit demo --out demo-output --force
 
 test: $(STAMP)
 	$(BIN)/python -m pytest src tests

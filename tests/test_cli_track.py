@@ -51,3 +51,21 @@ def test_bad_log_file_names_the_line(run_cli, tmp_path):
     bad.write_text("0,0,0,0,0,0\n0.05,0,0,0,1\n")
     code, _, err = run_cli("track", bad, "--robot", ROBOT)
     assert code == 2 and "line 2: expected 6 columns, found 5" in err
+
+
+@pytest.mark.slow
+def test_demo_runs_on_builtin_data_and_calibration_helps(run_cli, tmp_path):
+    code, stdout, err = run_cli("demo", "--out", tmp_path)
+    assert code == 0, err
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert len(summary["runs"]) == 6
+    cal = summary["calibration"]
+    # Ground truth (OptiTrack) judges the calibration: systematic error drops 5x at least.
+    assert cal["exact"]["e_max_syst_after"] < cal["e_max_syst_before"] / 5
+    assert cal["umbmark"]["e_max_syst_after"] < cal["e_max_syst_before"] / 5
+    for stem in summary["runs"]:
+        assert (tmp_path / f"{stem}_track.csv").is_file() and (tmp_path / f"{stem}.tum").is_file()
+    assert "calibrated_robot.toml" in stdout
+    # a second run without --force refuses to overwrite
+    code, _, err = run_cli("demo", "--out", tmp_path)
+    assert code == 2 and "exists already" in err
