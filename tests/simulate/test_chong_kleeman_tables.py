@@ -26,7 +26,6 @@ import pytest
 
 from odomkit.noise import WheelNoise
 from odomkit.path import Arc
-from odomkit.robot import DiffDrive
 from odomkit.simulate import simulate_runs
 from odomkit.simulate.stats import compare
 
@@ -68,7 +67,7 @@ def runs_k1000():
     out = {}
     for table, case in SETTINGS:
         kl, kr = K_NOISE[case]
-        mc = simulate_runs(DiffDrive(B), WheelNoise(kl, kr), [Arc(*PATHS[table])], runs=N,
+        mc = simulate_runs([Arc(*PATHS[table])], WheelNoise(kl, kr), B, runs=N,
                            partitions=1000, seed=SEEDS[(table, case)])
         out[(table, case)] = mc.final
     return out
@@ -116,8 +115,9 @@ def test_simulation_matches_paper_simulation(setting, runs_k1000, theory):
     # stds and correlations: two simulations of the same experiment agree
     assert np.all(np.abs(z[3:]) <= Z_MAX), z
     # Means: the paper's simulated θ means sit above the nominal heading in all six
-    # settings, by up to 7.5 standard errors of the difference (Table 2, I), although θ_end = θ0 + (R − L)/b is *linear* in the wheel
-    # noise, so its exact mean is the nominal heading: a bias of the paper's simulator.
+    # settings, by up to 7.5 standard errors of the difference (Table 2, I), although
+    # θ_end = θ0 + (R − L)/b is *linear* in the wheel noise, so its exact mean is the
+    # nominal heading: a bias of the paper's simulator.
     # Our mean θ must be unbiased instead; its x, y means agree with the paper's to
     # within the paper's own claim (differences an order of magnitude below σ).
     assert abs(z_theory_mean_theta(runs_k1000[setting], pose, cov)) <= Z_MAX
@@ -157,7 +157,7 @@ def test_full_paper_experiment_10k_partitions(theory):
     for setting in SETTINGS:
         table, case = setting
         pose, cov = theory([PATHS[table]], B, *K_NOISE[case], steps=1000)
-        mc = simulate_runs(DiffDrive(B), WheelNoise(*K_NOISE[case]), [Arc(*PATHS[table])],
+        mc = simulate_runs([Arc(*PATHS[table])], WheelNoise(*K_NOISE[case]), B,
                            runs=N, partitions=10_000, seed=SEEDS[setting] + 1000)
         z = _z_vs(mc.final, pose, cov, np.array(PAPER[setting][1]) / _PCT, True)
         assert np.all(np.abs(z[3:]) <= Z_MAX), (setting, z)

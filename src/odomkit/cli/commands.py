@@ -1,5 +1,9 @@
 """Import every command module so that it registers itself on the app."""
 
-from odomkit.cli import predict  # noqa: F401
-from odomkit.cli import track  # noqa: F401
-from odomkit.cli import umbmark  # noqa: F401
+from odomkit.cli import (
+    calibrate,  # noqa: F401
+    predict,  # noqa: F401
+    simulate,  # noqa: F401
+    track,  # noqa: F401
+    umbmark,  # noqa: F401
+)

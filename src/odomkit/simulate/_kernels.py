@@ -10,30 +10,22 @@ which covers all incremental models (wheel noise, speed + gyro, classical); see
 
     x' = x + Δd·sinc(Δθ/2)·cos(θ + Δθ/2),  y' = y + Δd·sinc(Δθ/2)·sin(θ + Δθ/2),  θ' = θ + Δθ
 
-The numba kernel avoids two of three transcendental calls per step: it carries the unit
-heading vector (cos θ, sin θ) and turns it twice by Δθ/2, with sin and cos of the small
-half angle from their Taylor series (exact to rounding for |Δθ/2| < 0.25, see
-:data:`_POLY_BELOW`). Rounding in the rotations would slowly denormalise the vector, so it
-is recomputed from the separately summed θ every :data:`RESYNC_EVERY` partitions (counted
-from the start of the path, so the numbers never depend on how partitions are chunked).
-:func:`advance_numpy` is the plain vectorised reference with the same arithmetic meaning.
+The numba kernel (:mod:`odomkit.simulate._numba`) avoids two of three transcendental
+calls per step by turning a unit heading vector with series sin/cos of the half angle;
+rounding would slowly denormalise the vector, so it is recomputed from the separately
+summed θ every 64 partitions, counted from the start of the path, so the numbers never
+depend on how partitions are chunked. :func:`advance_numpy` is the plain vectorised
+reference with the same arithmetic meaning (equal to rounding, not bit for bit).
 """
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.kinematics import sinc_half, step_displacement
-
-RESYNC_EVERY = 64
-# Taylor series of sin u/u to u^10 and cos u to u^12: the first omitted terms are
-# u^12/13! < 1e-17 and u^14/14! < 1e-19 for |u| < 0.25, below double rounding.
-_POLY_BELOW = 0.25
 
 State = NDArray[np.float64]  # shape (5, B): x, y, θ, cos θ, sin θ
 
@@ -104,58 +96,17 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     state[2] = coef[2] + coef[3] * (first_partition + p - 0.5) + coef[4] * z[-1, 1, :]
 
 
-def _advance_numba_py(state: Any, z: Any, coef: Any, first_partition: int) -> None:
-    n_part, _, n_runs = z.shape
-    dd0, ad, bd, dt0, at, bt = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
-    for p in range(n_part):
-        resync = (first_partition + p) % RESYNC_EVERY == 0
-        for r in range(n_runs):
-            z0 = z[p, 0, r]
-            z1 = z[p, 1, r]
-            dd = dd0 + ad * z0 + bd * z1
-            dth = dt0 + at * z0 + bt * z1
-            theta = state[2, r]
-            if resync:
-                c = math.cos(theta)
-                s = math.sin(theta)
-            else:
-                c = state[3, r]
-                s = state[4, r]
-            u = 0.5 * dth
-            if abs(u) < _POLY_BELOW:
-                u2 = u * u
-                sinc = 1.0 - u2 / 6.0 * (1.0 - u2 / 20.0 * (1.0 - u2 / 42.0 * (
-                    1.0 - u2 / 72.0 * (1.0 - u2 / 110.0))))
-                cu = 1.0 - u2 / 2.0 * (1.0 - u2 / 12.0 * (1.0 - u2 / 30.0 * (
-                    1.0 - u2 / 56.0 * (1.0 - u2 / 90.0 * (1.0 - u2 / 132.0)))))
-                su = u * sinc
-            else:
-                su = math.sin(u)
-                cu = math.cos(u)
-                sinc = su / u
-            # heading at the middle of the arc: (c, s) turned by Δθ/2
-            cm = c * cu - s * su
-            sm = s * cu + c * su
-            length = dd * sinc
-            state[0, r] += length * cm
-            state[1, r] += length * sm
-            state[2, r] = theta + dth
-            state[3, r] = cm * cu - sm * su
-            state[4, r] = sm * cu + cm * su
-
-
 _NUMBA_KERNEL: Callable[..., None] | None = None
 
 
 def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64], int], None]:
-    """The compiled kernel (compiled on first use; raises ImportError without numba)."""
+    """The compiled kernel of :mod:`odomkit.simulate._numba` (imported, and compiled or
+    loaded from numba's cache, on first use; raises ImportError without numba)."""
     global _NUMBA_KERNEL
     if _NUMBA_KERNEL is None:
-        import numba
+        from odomkit.simulate._numba import advance_state
 
-        # nogil: blocks run in threads; no fastmath, so the arithmetic (and the numbers)
-        # do not depend on vectorisation.
-        _NUMBA_KERNEL = numba.njit(nogil=True, cache=True)(_advance_numba_py)
+        _NUMBA_KERNEL = advance_state
     return _NUMBA_KERNEL
 
 

@@ -11,6 +11,8 @@ from typing import Any
 
 from odomkit.errors import ModelError
 
+CONNECT_TIMEOUT = "10s"
+
 
 def get_client(scheduler: Any) -> tuple[Any, bool]:
     """A ``dask.distributed.Client`` for an address or an existing client, and whether we
@@ -25,7 +27,7 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
         raise ModelError(f"scheduler must be an address such as tcp://host:8786 or a Client, "
                          f"got {scheduler!r}")
     try:
-        return Client(scheduler, timeout="10s"), True
+        return Client(scheduler, timeout=CONNECT_TIMEOUT), True
     except (OSError, TimeoutError) as exc:
         raise ModelError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
 

@@ -1,7 +1,7 @@
 """Monte Carlo engine: many noisy runs of a planned segment path.
 
 Each segment is cut into K partitions; every partition gets fresh, independent noise from
-the robot's noise model, and the pose is integrated with the exact arc (see
+the noise model, and the pose is integrated with the exact arc (see
 :mod:`odomkit.simulate._kernels`). This is the experiment of Chong–Kleeman section 6.1
 (Tables 1–2: 10 000 runs, 10 000 partitions, wheel base 0.4 m).
 
@@ -27,68 +27,14 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
-from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Robot
+from odomkit.path import Segment
 from odomkit.simulate import _kernels
+from odomkit.simulate.plan import Plan, SystematicErrors, make_plan
 
 BLOCK_RUNS = 256
 PARTITION_CHUNK = 512
 Engine = Literal["auto", "numba", "numpy"]
 Progress = Callable[[int], None]
-
-
-@dataclass(frozen=True)
-class SystematicErrors:
-    """Systematic odometry errors of a differential drive, Borenstein–Feng section II-A.
-
-    The robot is *commanded* (its odometry believes it drives) the nominal wheel travels
-    of the path; the simulation returns where it *actually* goes:
-
-    - ``E_d = D_R / D_L`` (eq. 2.3), the ratio of the actual wheel diameters;
-    - ``E_b = b_actual / b_nominal`` (eq. 2.4), the wheel-base error;
-    - ``E_s = D_a / D_n``, the scaling error: actual average diameter
-      ``D_a = (D_L + D_R)/2`` over the nominal diameter (section II-A and VI).
-
-    With ``D_L = 2·D_a/(E_d + 1)`` (eq. 4.29) and ``D_R = 2·D_a/(1/E_d + 1)`` (eq. 4.30),
-    a wheel that the odometry says moved ``d`` really moved ``d·D/D_n``, i.e.
-    ``d_L,true = E_s·2/(E_d + 1)·d_L`` and ``d_R,true = E_s·2·E_d/(E_d + 1)·d_R``, and the
-    robot turns by ``(d_R,true − d_L,true)/(E_b·b)``. All three equal 1 for a perfect robot.
-
-    >>> SystematicErrors(E_d=1.0, E_b=1.0, E_s=1.0).wheel_scales()
-    (1.0, 1.0)
-    """
-
-    E_d: float = 1.0
-    E_b: float = 1.0
-    E_s: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("E_d", "E_b", "E_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ModelError(f"SystematicErrors.{name} must be a positive finite number, "
-                                 f"got {value!r}")
-
-    def wheel_scales(self) -> tuple[float, float]:
-        """(true/nominal travel of the left wheel, of the right wheel), eq. (4.29)–(4.30)."""
-        return (self.E_s * 2.0 / (self.E_d + 1.0), self.E_s * 2.0 * self.E_d / (self.E_d + 1.0))
-
-
-@dataclass(frozen=True)
-class Plan:
-    """What one run does, in kernel terms (picklable, sent to Dask workers).
-
-    ``coefs[j]`` maps two standard normals to the body motion of one partition of segment
-    j (see :mod:`odomkit.simulate._kernels`); ``kind`` is ``"increment"`` (exact arc),
-    ``"classical"`` (rotate, then translate) or ``"compass"``.
-    """
-
-    kind: str
-    coefs: NDArray[np.float64]  # (S, 6)
-    partitions: int
-    pose0: NDArray[np.float64]  # (3,)
-    factor0: NDArray[np.float64]  # (3, 3): initial pose = pose0 + factor0 @ z
 
 
 @dataclass(frozen=True)
@@ -118,120 +64,6 @@ class MonteCarloRuns:
     engine: str
 
 
-def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
-    """A with A·Aᵀ = cov0, from the eigen-decomposition so a singular PSD cov0 works."""
-    if cov0 is None:
-        return np.zeros((3, 3))
-    cov = np.asarray(cov0, dtype=float)
-    if cov.shape == (3,):
-        cov = np.diag(cov)
-    if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-        raise ModelError(f"initial covariance must be 3 variances or a 3x3 matrix, got {cov0!r}")
-    if not np.allclose(cov, cov.T, rtol=1e-9, atol=1e-15):
-        raise ModelError("initial covariance must be symmetric")
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    # eigenvalues a few ulps below zero are rounding of a PSD matrix, not negative variance
-    tol = 1e-12 * max(1.0, float(np.max(np.abs(w))))
-    if np.min(w) < -tol:
-        raise ModelError(f"initial covariance must be positive semi-definite; eigenvalues {w}")
-    return np.asarray(v * np.sqrt(np.clip(w, 0.0, None)))
-
-
-def _noise_parts(noise: Any) -> list[Any]:
-    parts = list(noise) if isinstance(noise, list | tuple) else [noise]
-    return [n for n in parts if n is not None]
-
-
-def _diff_coefs(robot: DiffDrive, noise: Any, path: Sequence[Segment], k: int,
-                systematic: SystematicErrors | None) -> NDArray[np.float64]:
-    parts = _noise_parts(noise)
-    if len(parts) != 1 or not isinstance(parts[0], WheelNoise | ClassicalNoise):
-        raise ModelError("the diff model needs one noise model: WheelNoise or ClassicalNoise")
-    model = parts[0]
-    sys_err = systematic or SystematicErrors()
-    scale_left, scale_right = sys_err.wheel_scales()
-    b = robot.effective_wheel_base * sys_err.E_b
-    coefs = np.empty((len(path), 6))
-    for j, seg in enumerate(path):
-        if not isinstance(seg, Arc | Straight | Spin):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
-                             "expected arc:L,R, straight:D or spin:DTHETA")
-        # commanded travels use the nominal wheel base (a spin is commanded with it)
-        left, right = seg.wheel_travel(robot.effective_wheel_base)
-        left, right = scale_left * left / k, scale_right * right / k
-        if isinstance(model, WheelNoise):
-            # Chong–Kleeman eq. (4): each partition's wheel travel has variance k²·|d|
-            sigma_l = model.k_left * math.sqrt(abs(left))
-            sigma_r = model.k_right * math.sqrt(abs(right))
-            # Δd = (d_L + d_R)/2, Δθ = (d_R − d_L)/b, Borenstein–Feng (2.2)–(2.4)
-            coefs[j] = (0.5 * (left + right), 0.5 * sigma_l, 0.5 * sigma_r,
-                        (right - left) / b, -sigma_l / b, sigma_r / b)
-        else:
-            # Chong–Kleeman eq. (1)–(3): fixed σ per step, whatever the step's length
-            coefs[j] = (0.5 * (left + right), model.sigma_distance, 0.0,
-                        (right - left) / b, 0.0, model.sigma_angle)
-    return coefs
-
-
-def _kelly_coefs(robot: GyroOdometry | CompassOdometry, noise: Any,
-                 path: Sequence[Segment], k: int, theta0: float) -> NDArray[np.float64]:
-    parts = _noise_parts(noise)
-    heading_type = GyroNoise if isinstance(robot, GyroOdometry) else CompassNoise
-    speed = [n for n in parts if isinstance(n, SpeedNoise)]
-    heading = [n for n in parts if isinstance(n, heading_type)]
-    if len(speed) + len(heading) != len(parts) or len(speed) > 1 or len(heading) > 1:
-        raise ModelError(f"the {type(robot).__name__} model takes SpeedNoise and "
-                         f"{heading_type.__name__}; got {parts!r}")
-    alpha_ss = speed[0].alpha_ss if speed else 0.0
-    coefs = np.empty((len(path), 6))
-    theta_start = theta0
-    for j, seg in enumerate(path):
-        if not isinstance(seg, KellyArc):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
-                             "expected arc:V,OMEGA,T or straight:V,T")
-        dt = seg.duration / k
-        dd0, dth0 = seg.speed * dt, seg.yaw_rate * dt
-        # Kelly Table 1: σ_vv = α_ss·|V|, so a partition's distance has variance α_ss·|Δs|
-        sigma_d = math.sqrt(alpha_ss * abs(dd0))
-        if isinstance(robot, GyroOdometry):
-            # Kelly Table 1: σ_ωω = σ_gg, the integrated heading gains variance σ_gg·Δt
-            psd = heading[0].psd_gyro if heading else 0.0
-            coefs[j] = (dd0, sigma_d, 0.0, dth0, 0.0, math.sqrt(psd * dt))
-        else:
-            # white compass error of density σ_θθ sampled every Δt: variance σ_θθ/Δt
-            psd = heading[0].psd_compass if heading else 0.0
-            sigma_h = math.sqrt(psd / dt) if dt > 0 else 0.0
-            coefs[j] = (dd0, sigma_d, theta_start + 0.5 * dth0, dth0, sigma_h, 0.0)
-        theta_start += seg.yaw_rate * seg.duration
-    return coefs
-
-
-def make_plan(robot: Robot, noise: Any, path: Sequence[Segment], partitions: int,
-              pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
-              systematic: SystematicErrors | None = None) -> Plan:
-    """Translate robot, noise and path into per-segment kernel coefficients."""
-    if not isinstance(partitions, int | np.integer) or partitions < 1:
-        raise ModelError(f"partitions must be a positive integer, got {partitions!r}")
-    if len(path) == 0:
-        raise ModelError("the path needs at least one segment")
-    p0 = np.asarray(pose0, dtype=float).reshape(-1)
-    if p0.shape != (3,) or not np.all(np.isfinite(p0)):
-        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
-    k = int(partitions)
-    if isinstance(robot, DiffDrive):
-        coefs = _diff_coefs(robot, noise, path, k, systematic)
-        kind = "classical" if isinstance(_noise_parts(noise)[0], ClassicalNoise) else "increment"
-    elif isinstance(robot, GyroOdometry | CompassOdometry):
-        if systematic is not None:
-            raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
-        coefs = _kelly_coefs(robot, noise, path, k, float(p0[2]))
-        kind = "increment" if isinstance(robot, GyroOdometry) else "compass"
-    else:
-        raise ModelError(f"simulate supports the diff, gyro and compass models, "
-                         f"not {type(robot).__name__}")
-    return Plan(kind, coefs, k, p0, _cov_factor(cov0))
-
-
 def _pick_engine(engine: Engine) -> str:
     if engine == "auto":
         return "numba" if _kernels.have_numba() else "numpy"
@@ -259,6 +91,7 @@ def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
     state = _kernels.new_state(poses)
     n_seg = plan.coefs.shape[0]
     ends = np.empty((n_runs, n_seg, 3)) if want_ends else None
+    advance: Callable[[_kernels.State, NDArray[np.float64], NDArray[np.float64], int], None]
     if plan.kind == "compass":
         advance = _kernels.advance_compass_numpy
     elif plan.kind == "classical":
@@ -291,6 +124,8 @@ def make_tasks(runs: int, chunk_runs: int | None) -> list[list[tuple[int, int]]]
     """Group the blocks (index, size) into tasks of about ``chunk_runs`` runs."""
     if not isinstance(runs, int | np.integer) or runs < 1:
         raise ModelError(f"runs must be a positive integer, got {runs!r}")
+    if chunk_runs is not None and (not isinstance(chunk_runs, int | np.integer) or chunk_runs < 1):
+        raise ModelError(f"chunk_runs must be a positive integer, got {chunk_runs!r}")
     per_task = max(1, math.ceil((chunk_runs or BLOCK_RUNS) / BLOCK_RUNS))
     blocks = list(enumerate(_block_sizes(int(runs))))
     return [blocks[i: i + per_task] for i in range(0, len(blocks), per_task)]
@@ -305,12 +140,12 @@ def _resolve_seed(seed: int | None) -> int:
 
 
 def simulate_runs(
-    robot: Robot,
-    noise: Any,
     path: Sequence[Segment],
-    runs: int,
-    partitions: int = 1000,
+    noise: Any,
+    wheel_base: float | None = None,
     *,
+    runs: int = 10_000,
+    partitions: int = 1000,
     seed: int | None = None,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
     cov0: ArrayLike | None = None,
@@ -326,19 +161,19 @@ def simulate_runs(
 
     Parameters
     ----------
-    robot : DiffDrive, GyroOdometry or CompassOdometry
-        For DiffDrive the effective wheel base is used.
-    noise : noise model or tuple of them
-        DiffDrive: :class:`~odomkit.noise.WheelNoise` (variance k²·|d| per partition and
-        wheel) or :class:`~odomkit.noise.ClassicalNoise` (fixed σ of D and α per
-        partition, each partition a rotation α then a translation D, Chong–Kleeman eq. 1,
-        so K = 1 is one step per segment). Gyro:
-        SpeedNoise and/or GyroNoise. Compass: SpeedNoise and/or CompassNoise (the heading
-        of each partition is the nominal one plus white error of variance
-        ``psd_compass/Δt``, not integrated; the final θ is the last such measurement, so
-        its variance grows with K and the initial θ variance has no effect).
     path : sequence of Segment
-        Arc/Straight/Spin (diff) or KellyArc (gyro, compass).
+        Arc/Straight/Spin (differential drive) or KellyArc (gyro, compass).
+    noise : noise model or tuple of them
+        Selects the model, as in :func:`odomkit.propagate.predict.predict`:
+        :class:`~odomkit.noise.WheelNoise` (variance k²·|d| per partition and wheel);
+        :class:`~odomkit.noise.ClassicalNoise` (fixed σ of D and α per partition, each
+        partition a rotation α then a translation D, Chong–Kleeman eq. 1, so K = 1 is one
+        step per segment); (SpeedNoise, GyroNoise); (SpeedNoise, CompassNoise): the
+        heading of each partition is the nominal one plus white error of variance
+        ``psd_compass/Δt``, not integrated; the final θ is the last such reading, so its
+        variance grows with K and the initial θ variance has no effect.
+    wheel_base : float, optional
+        Nominal wheel base B [m] of a differential drive (required for those models).
     runs, partitions : int
         Number N of runs; number K of partitions of *each* segment.
     seed : int, optional
@@ -369,18 +204,19 @@ def simulate_runs(
     --------
     Without noise every run ends on the nominal pose (Chong–Kleeman Table 1 path):
 
-    >>> from odomkit.robot import DiffDrive
     >>> from odomkit.noise import WheelNoise
     >>> from odomkit.path import Arc
-    >>> mc = simulate_runs(DiffDrive(0.4), WheelNoise(0.0, 0.0), [Arc(3, 1)], runs=3,
-    ...                    partitions=100, seed=1)
+    >>> mc = simulate_runs([Arc(3, 1)], WheelNoise(0.0, 0.0), 0.4, runs=3, partitions=100,
+    ...                    seed=1)
     >>> np.round(mc.final[0], 6).tolist()
     [-0.38357, -0.286535, -5.0]
     """
     start = time.perf_counter()
-    plan = make_plan(robot, noise, path, partitions, pose0, cov0, systematic)
+    plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic)
     seed_used = _resolve_seed(seed)
     engine_used = _pick_engine(engine)
+    if plan.kind != "increment":
+        engine_used = "numpy"  # the classical and compass kernels exist in numpy only
     tasks = make_tasks(runs, chunk_runs)
     if scheduler is not None:
         from odomkit.simulate.distributed import run_tasks_dask

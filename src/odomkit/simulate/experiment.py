@@ -10,25 +10,28 @@ from numpy.typing import ArrayLike
 
 from odomkit.errors import ModelError
 from odomkit.path import Segment
-from odomkit.robot import Robot
-from odomkit.simulate.engine import Engine, Progress, SystematicErrors, simulate_runs
+from odomkit.simulate.engine import Engine, Progress, simulate_runs
+from odomkit.simulate.plan import SystematicErrors, resolve_model
 from odomkit.simulate.stats import _corr, compare, wrap_angle
 
 
-def _predicted(robot: Robot, noise: Any, path: Sequence[Segment], pose0: ArrayLike,
-               cov0: ArrayLike | None) -> tuple[np.ndarray, np.ndarray]:
-    """(pose, cov) from :func:`odomkit.propagate.predict.predict`."""
-    try:
-        from odomkit.propagate.predict import predict
-    except ImportError as exc:
-        raise ModelError("no covariance prediction available (odomkit.propagate.predict); "
-                         "pass theory=(pose, cov)") from exc
-    out = predict(robot, noise, path, pose0=pose0, cov0=cov0)
-    return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float)
+def _predicted(path: Sequence[Segment], noise: Any, wheel_base: float | None,
+               pose0: ArrayLike, cov0: ArrayLike | None, partitions: int,
+               ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
+    """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`."""
+    from odomkit.propagate.predict import predict
+
+    # The classical model's answer depends on the number of steps: predict the same
+    # K steps per segment that are simulated. The consistent models ignore it.
+    model, _ = resolve_model(noise)
+    pieces = partitions if model == "classical" else None
+    out = predict(path, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0, engine="closed",
+                  partitions=pieces)
+    return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float), out.to_dict()
 
 
 def theory_summary(pose: ArrayLike, cov: ArrayLike) -> dict[str, Any]:
-    """The ``predict`` output shape: pose (θ wrapped), cov, std, corr."""
+    """The ``predict --json`` shape: pose (θ wrapped), cov, std, corr."""
     pose = np.asarray(pose, dtype=float).copy()
     cov = np.asarray(cov, dtype=float)
     pose[2] = wrap_angle(pose[2])
@@ -36,13 +39,20 @@ def theory_summary(pose: ArrayLike, cov: ArrayLike) -> dict[str, Any]:
             "corr": _corr(cov)}
 
 
+def _cov_matrix(cov0: ArrayLike | None) -> np.ndarray | None:
+    if cov0 is None:
+        return None
+    cov = np.asarray(cov0, dtype=float)
+    return np.diag(cov) if cov.shape == (3,) else cov
+
+
 def monte_carlo(
-    robot: Robot,
-    noise: Any,
     path: Sequence[Segment],
+    noise: Any,
+    wheel_base: float | None = None,
+    *,
     runs: int = 10_000,
     partitions: int = 1000,
-    *,
     seed: int | None = 0,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
     cov0: ArrayLike | None = None,
@@ -60,8 +70,8 @@ def monte_carlo(
     Parameters are those of :func:`odomkit.simulate.simulate_runs`, plus:
 
     theory : (pose, cov), optional
-        Predicted final pose (3,) and covariance (3, 3); by default
-        :func:`odomkit.propagate.predict.predict` of the same robot, noise and path.
+        Predicted final pose (3,) and covariance (3, 3); by default the closed form of
+        :func:`odomkit.propagate.predict.predict` for the same path, noise and start.
         The predicted mean is the nominal (noise-free) end pose.
     alpha : float
         Level of each consistency check (see :mod:`odomkit.simulate.stats`).
@@ -69,13 +79,14 @@ def monte_carlo(
     Returns
     -------
     dict
-        ``theory`` {pose, cov, std, corr}, ``simulation`` {mean, cov, std, corr, se},
-        ``z``, ``checks``, ``verdict``, ``consistent``, ``runs``, ``partitions``,
-        ``seed``, ``seconds``, ``engine``.
+        ``theory`` {pose (θ wrapped to [−π, π)), cov, std, corr}, ``simulation`` {mean
+        (θ in the theory's wrapped frame), mean_error, cov, std, corr, se}, ``z``,
+        ``checks``, ``verdict``, ``consistent``, ``linear_model_ok`` (see
+        :func:`odomkit.simulate.compare`), ``runs``, ``partitions``, ``seed``, ``seconds``,
+        ``engine``.
 
     Examples
     --------
-    >>> from odomkit.robot import DiffDrive
     >>> from odomkit.noise import WheelNoise
     >>> from odomkit.path import Straight
 
@@ -84,23 +95,29 @@ def monte_carlo(
 
     >>> k2, b = 1e-6, 0.4
     >>> cov = [[k2 / 2, 0, 0], [0, 2 * k2 / (3 * b**2), k2 / b**2], [0, k2 / b**2, 2 * k2 / b**2]]
-    >>> r = monte_carlo(DiffDrive(b), WheelNoise(1e-3, 1e-3), [Straight(1.0)], runs=2000,
-    ...                 partitions=50, seed=3, theory=([1.0, 0.0, 0.0], cov))
+    >>> r = monte_carlo([Straight(1.0)], WheelNoise(1e-3, 1e-3), b, runs=2000, partitions=50,
+    ...                 seed=3, theory=([1.0, 0.0, 0.0], cov))
     >>> r["verdict"]
     'consistent'
     """
+    cov0 = _cov_matrix(cov0)
     if theory is None:
-        pose_p, cov_p = _predicted(robot, noise, path, pose0, cov0)
+        pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions)
     else:
         pose_p, cov_p = _theory_arrays(theory)
-    mc = simulate_runs(robot, noise, path, runs, partitions, seed=seed, pose0=pose0, cov0=cov0,
-                       systematic=systematic, workers=workers, chunk_runs=chunk_runs,
-                       scheduler=scheduler, engine=engine, progress=progress)
+        summary = theory_summary(pose_p, cov_p)
+    mc = simulate_runs(path, noise, wheel_base, runs=runs, partitions=partitions, seed=seed,
+                       pose0=pose0, cov0=cov0, systematic=systematic, workers=workers,
+                       chunk_runs=chunk_runs, scheduler=scheduler, engine=engine,
+                       progress=progress)
     result = compare(mc.final, pose_p, cov_p, alpha)
-    result["theory"] = theory_summary(pose_p, cov_p)
-    result.update(runs=mc.runs, partitions=mc.partitions, seed=mc.seed, seconds=mc.seconds,
-                  engine=mc.engine)
-    return result
+    # report the simulated mean θ in the theory's wrapped frame, so the two read alike
+    result["simulation"]["mean"][2] = summary["pose"][2] + result["simulation"]["mean_error"][2]
+    head = {"theory": summary, "simulation": result.pop("simulation"), "z": result.pop("z"),
+            "verdict": result.pop("verdict")}
+    tail = {"runs": mc.runs, "partitions": mc.partitions, "seed": mc.seed,
+            "seconds": mc.seconds, "engine": mc.engine}
+    return {**head, **result, **tail}
 
 
 def _theory_arrays(theory: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -120,8 +137,8 @@ def simulate_sweep(settings: Sequence[Mapping[str, Any]], *, scheduler: Any = No
     Parameters
     ----------
     settings : sequence of mappings
-        Each overrides keyword arguments of :func:`monte_carlo` (``robot``, ``noise``,
-        ``path``, ``runs``, ...); ``common`` supplies the rest.
+        Each overrides arguments of :func:`monte_carlo` (``path``, ``noise``,
+        ``wheel_base``, ``runs``, ...); ``common`` supplies the rest.
     scheduler : str or Client, optional
         One Dask client is opened for the whole sweep and every setting's blocks run on it.
 
@@ -133,14 +150,14 @@ def simulate_sweep(settings: Sequence[Mapping[str, Any]], *, scheduler: Any = No
 
     Examples
     --------
-    >>> from odomkit.robot import DiffDrive
+    Two noise levels on Chong–Kleeman's Table 1 path:
+
     >>> from odomkit.noise import WheelNoise
     >>> from odomkit.path import Arc
-    >>> zero = ([-0.38357, -0.286535, -5.0], np.zeros((3, 3)))
-    >>> out = simulate_sweep([{"noise": WheelNoise(0, 0)}], robot=DiffDrive(0.4),
-    ...                      path=[Arc(3, 1)], runs=8, partitions=10, theory=zero)
-    >>> [round(float(v), 4) for v in out[0]["simulation"]["mean"]]
-    [-0.3836, -0.2865, -5.0]
+    >>> grid = [{"noise": WheelNoise(k, k)} for k in (0.001, 0.003)]
+    >>> out = simulate_sweep(grid, path=[Arc(3, 1)], wheel_base=0.4, runs=2000, partitions=100)
+    >>> [r["verdict"] for r in out]
+    ['consistent', 'consistent']
     """
     client, owned = None, False
     if scheduler is not None:
@@ -156,5 +173,5 @@ def simulate_sweep(settings: Sequence[Mapping[str, Any]], *, scheduler: Any = No
             results.append(result)
         return results
     finally:
-        if owned:
+        if owned and client is not None:
             client.close()
