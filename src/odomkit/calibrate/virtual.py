@@ -31,7 +31,7 @@ from odomkit.calibrate.umbmark import UmbmarkResult, Variant, apply_corrections,
 from odomkit.errors import ModelError
 from odomkit.kinematics import step_displacement
 from odomkit.noise import WheelNoise
-from odomkit.robot import DiffDrive
+from odomkit.robot import DiffDrive, SystematicErrors, true_robot
 
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
@@ -46,61 +46,6 @@ __all__ = [
     "iterate_umbmark",
     "virtual_umbmark_logs",
 ]
-
-
-@dataclass(frozen=True)
-class SystematicErrors:
-    """The true systematic errors of a virtual differential robot (Borenstein–Feng II-B).
-
-    All three are relative to the robot's *nominal* parameters (a
-    :class:`~odomkit.robot.DiffDrive` with its ``m_per_tick_*`` and ``wheel_base``,
-    ignoring its correction factors).
-
-    Parameters
-    ----------
-    E_d : float
-        D_R/D_L, the ratio of the actual wheel diameters (eq. 2.3), each measured in units
-        of its nominal diameter: true metres per tick are ``m_per_tick_left·2E_s/(E_d+1)``
-        and ``m_per_tick_right·2E_s·E_d/(E_d+1)``.
-    E_b : float
-        b_actual/b_nominal (eq. 2.4).
-    E_s : float
-        D_avg/D_nominal, the average-diameter scale error (section II-B); it scales both
-        legs and turns (eq. 2.15) and UMBmark cannot see it in the legs.
-
-    >>> left, right = SystematicErrors(E_d=1.002).wheel_scales()  # relative to nominal
-    >>> round(right / left, 12), round((left + right) / 2, 12)       # E_d and E_s
-    (1.002, 1.0)
-    """
-
-    E_d: float = 1.0
-    E_b: float = 1.0
-    E_s: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("E_d", "E_b", "E_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ModelError(f"SystematicErrors.{name} must be a positive finite number, "
-                                 f"got {value!r}")
-
-    def wheel_scales(self) -> tuple[float, float]:
-        """True/nominal distance per tick of the left and right wheel."""
-        return 2.0 * self.E_s / (self.E_d + 1.0), 2.0 * self.E_s * self.E_d / (self.E_d + 1.0)
-
-
-def true_robot(true_errors: SystematicErrors, robot: DiffDrive) -> DiffDrive:
-    """The true robot as a :class:`~odomkit.robot.DiffDrive` with no corrections.
-
-    >>> round(true_robot(SystematicErrors(E_b=1.01), DiffDrive(0.34)).wheel_base, 12)
-    0.3434
-    """
-    left, right = true_errors.wheel_scales()
-    return DiffDrive(
-        wheel_base=true_errors.E_b * robot.wheel_base,
-        m_per_tick_left=left * robot.m_per_tick_left,
-        m_per_tick_right=right * robot.m_per_tick_right,
-    )
 
 
 class VirtualRuns(NamedTuple):

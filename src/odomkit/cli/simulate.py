@@ -17,16 +17,30 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Annotated, Any
 
-import typer
-
 from odomkit.cli import app
+from odomkit.cli.options import (
+    GyroNoiseOption,
+    HeadingNoiseOption,
+    InitialCovMatrixOption,
+    InitialCovOption,
+    InitialPoseOption,
+    JsonOption,
+    KLeftOption,
+    KRightOption,
+    ModelOption,
+    NoiseOption,
+    Opt,
+    SegmentOption,
+    SigmaAngleOption,
+    SigmaDistanceOption,
+    SpeedNoiseOption,
+    WheelBaseOption,
+    parse_numbers,
+    path_problem,
+)
 from odomkit.cli.output import print_json
-from odomkit.cli.predict import _MODEL_FLAGS, _matrix, _noise, _numbers
 from odomkit.errors import ModelError
-from odomkit.path import parse_segment
 from odomkit.simulate import SystematicErrors, monte_carlo
-
-Opt = typer.Option
 
 
 @contextmanager
@@ -86,30 +100,20 @@ def _print_table(r: dict[str, Any]) -> None:
 
 @app.command("simulate")
 def simulate_command(
-    segment: Annotated[list[str], Opt("--segment", help=(
-        "Path segment, repeatable. diff: arc:L,R (wheel travels, m) | straight:D | "
-        "spin:DTHETA (rad); gyro/compass: arc:V,OMEGA,T | straight:V,T."))],
-    model: Annotated[str, Opt("--model", help="diff | gyro | compass")] = "diff",
-    noise: Annotated[str, Opt(
-        "--noise", help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)")] = "wheel",
-    wheel_base: Annotated[float | None, Opt("--wheel-base", help="Wheel base B [m].")] = None,
-    k_left: Annotated[float | None, Opt("--k-left", help="Left wheel k_L [m^1/2].")] = None,
-    k_right: Annotated[float | None, Opt("--k-right", help="Right wheel k_R [m^1/2].")] = None,
-    sigma_distance: Annotated[float | None, Opt(
-        "--sigma-distance", help="Classical model: σ of each step's distance [m].")] = None,
-    sigma_angle: Annotated[float | None, Opt(
-        "--sigma-angle", help="Classical model: σ of each step's rotation [rad].")] = None,
-    speed_noise: Annotated[float | None, Opt(
-        "--speed-noise", help="Kelly α_ss [m] (distance variance per metre).")] = None,
-    gyro_noise: Annotated[float | None, Opt(
-        "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s].")] = None,
-    heading_noise: Annotated[float | None, Opt(
-        "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s].")] = None,
-    initial_pose: Annotated[str, Opt("--initial-pose", help="x,y,θ [m, m, rad].")] = "0,0,0",
-    initial_cov: Annotated[str | None, Opt(
-        "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal).")] = None,
-    initial_cov_matrix: Annotated[str | None, Opt(
-        "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i'.")] = None,
+    segment: SegmentOption,
+    model: ModelOption = "diff",
+    noise: NoiseOption = "wheel",
+    wheel_base: WheelBaseOption = None,
+    k_left: KLeftOption = None,
+    k_right: KRightOption = None,
+    sigma_distance: SigmaDistanceOption = None,
+    sigma_angle: SigmaAngleOption = None,
+    speed_noise: SpeedNoiseOption = None,
+    gyro_noise: GyroNoiseOption = None,
+    heading_noise: HeadingNoiseOption = None,
+    initial_pose: InitialPoseOption = "0,0,0",
+    initial_cov: InitialCovOption = None,
+    initial_cov_matrix: InitialCovMatrixOption = None,
     runs: Annotated[int, Opt("--runs", help="Number of Monte Carlo runs N.")] = 10_000,
     partitions: Annotated[int, Opt(
         "--partitions", help="Partitions K of each segment (fresh noise in each).")] = 1000,
@@ -123,44 +127,30 @@ def simulate_command(
     systematic: Annotated[str | None, Opt(
         "--systematic", help="Diff model: true E_d,E_b,E_s (Borenstein–Feng) of the robot.")] = None,
     alpha: Annotated[float, Opt("--alpha", help="Level of each consistency check.")] = 0.01,
-    json_out: Annotated[bool, Opt("--json", help="Print one JSON object.")] = False,
+    json_out: JsonOption = False,
 ) -> None:
     """Simulate noisy runs of a path and compare them with the predicted covariance."""
-    if model not in _MODEL_FLAGS:
-        raise ModelError(f"--model must be one of {', '.join(_MODEL_FLAGS)}, got {model!r}")
-    given = {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
-             "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
-             "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
-             "--heading-noise": heading_noise}
-    stray = [flag for flag, v in given.items() if v is not None and flag not in _MODEL_FLAGS[model]]
-    if stray:
-        raise ModelError(f"{', '.join(stray)} does not apply to --model {model}")
-    if model == "diff" and wheel_base is None:
-        raise ModelError("--model diff needs --wheel-base (metres)")
-    if initial_cov is not None and initial_cov_matrix is not None:
-        raise ModelError("give --initial-cov or --initial-cov-matrix, not both")
-    cov0: Any = None
-    if initial_cov is not None:
-        var = _numbers(initial_cov, "--initial-cov", 3)
-        if min(var) < 0:
-            raise ModelError(f"--initial-cov holds variances, which must be >= 0; got {var}")
-        cov0 = [[var[0], 0.0, 0.0], [0.0, var[1], 0.0], [0.0, 0.0, var[2]]]
-    elif initial_cov_matrix is not None:
-        cov0 = _matrix(initial_cov_matrix)
+    problem = path_problem(
+        model, noise, segment,
+        {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
+         "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
+         "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
+         "--heading-noise": heading_noise},
+        initial_pose, initial_cov, initial_cov_matrix)
     sys_err = None
     if systematic is not None:
-        e_d, e_b, e_s = _numbers(systematic, "--systematic", 3)
+        e_d, e_b, e_s = parse_numbers(systematic, "--systematic", 3)
         sys_err = SystematicErrors(E_d=e_d, E_b=e_b, E_s=e_s)
     if not (0 < alpha < 1):
         raise ModelError(f"--alpha must be between 0 and 1, got {alpha!r}")
     show_bar = not json_out and sys.stdout.isatty() and runs * partitions >= 10**7
     with _progress(runs, show_bar) as progress:
         result = monte_carlo(
-            [parse_segment(s, model) for s in segment],
-            _noise(model, noise, given),
-            wheel_base,
+            problem.segments,
+            problem.noise,
+            problem.wheel_base,
             runs=runs, partitions=partitions, seed=seed,
-            pose0=_numbers(initial_pose, "--initial-pose", 3), cov0=cov0,
+            pose0=problem.pose0, cov0=problem.cov0,
             systematic=sys_err, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress,
         )

@@ -17,44 +17,7 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit.errors import ModelError
 from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-
-
-@dataclass(frozen=True)
-class SystematicErrors:
-    """Systematic odometry errors of a differential drive, Borenstein–Feng section II-A.
-
-    The robot is *commanded* (its odometry believes it drives) the nominal wheel travels
-    of the path; the simulation returns where it *actually* goes:
-
-    - ``E_d = D_R / D_L`` (eq. 2.3), the ratio of the actual wheel diameters;
-    - ``E_b = b_actual / b_nominal`` (eq. 2.4), the wheel-base error;
-    - ``E_s = D_a / D_n``, the scaling error: actual average diameter
-      ``D_a = (D_L + D_R)/2`` over the nominal diameter (section II-A and VI).
-
-    With ``D_L = 2·D_a/(E_d + 1)`` (eq. 4.29) and ``D_R = 2·D_a/(1/E_d + 1)`` (eq. 4.30),
-    a wheel that the odometry says moved ``d`` really moved ``d·D/D_n``, i.e.
-    ``d_L,true = E_s·2/(E_d + 1)·d_L`` and ``d_R,true = E_s·2·E_d/(E_d + 1)·d_R``, and the
-    robot turns by ``(d_R,true − d_L,true)/(E_b·b)``. All three equal 1 for a perfect robot.
-    Wheel noise (variance k²·|d|) is drawn on the true travels.
-
-    >>> [round(c, 6) for c in SystematicErrors(E_d=1.01).wheel_scales()]
-    [0.995025, 1.004975]
-    """
-
-    E_d: float = 1.0
-    E_b: float = 1.0
-    E_s: float = 1.0
-
-    def __post_init__(self) -> None:
-        for name in ("E_d", "E_b", "E_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ModelError(f"SystematicErrors.{name} must be a positive finite number, "
-                                 f"got {value!r}")
-
-    def wheel_scales(self) -> tuple[float, float]:
-        """(true/nominal travel of the left wheel, of the right wheel), eq. (4.29)–(4.30)."""
-        return (self.E_s * 2.0 / (self.E_d + 1.0), self.E_s * 2.0 * self.E_d / (self.E_d + 1.0))
+from odomkit.robot import SystematicErrors
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,142 @@
+"""Options shared by ``odomkit predict`` and ``odomkit simulate``: the robot/noise model,
+the path of segments and the initial state, parsed the same way for both."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.errors import ModelError
+from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+from odomkit.path import Segment, parse_segment
+
+Opt = typer.Option
+
+MODEL_FLAGS = {
+    "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle"},
+    "gyro": {"--speed-noise", "--gyro-noise"},
+    "compass": {"--speed-noise", "--heading-noise"},
+}
+
+SegmentOption = Annotated[list[str], Opt("--segment", help=(
+    "Path segment, repeatable. diff: arc:L,R (wheel travels, m) | straight:D | "
+    "spin:DTHETA (rad); gyro/compass: arc:V,OMEGA,T | straight:V,T."))]
+ModelOption = Annotated[str, Opt("--model", help="diff | gyro | compass")]
+NoiseOption = Annotated[str, Opt("--noise", help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)")]
+WheelBaseOption = Annotated[float | None, Opt("--wheel-base", help="Wheel base B [m].")]
+KLeftOption = Annotated[float | None, Opt("--k-left", help="Left wheel k_L [m^1/2].")]
+KRightOption = Annotated[float | None, Opt("--k-right", help="Right wheel k_R [m^1/2].")]
+SigmaDistanceOption = Annotated[float | None, Opt(
+    "--sigma-distance", help="Classical model: σ of each step's distance [m].")]
+SigmaAngleOption = Annotated[float | None, Opt(
+    "--sigma-angle", help="Classical model: σ of each step's rotation [rad].")]
+SpeedNoiseOption = Annotated[float | None, Opt(
+    "--speed-noise", help="Kelly α_ss [m] (distance variance per metre).")]
+GyroNoiseOption = Annotated[float | None, Opt(
+    "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s].")]
+HeadingNoiseOption = Annotated[float | None, Opt(
+    "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s].")]
+InitialPoseOption = Annotated[str, Opt("--initial-pose", help="x,y,θ [m, m, rad].")]
+InitialCovOption = Annotated[str | None, Opt(
+    "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal).")]
+InitialCovMatrixOption = Annotated[str | None, Opt(
+    "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i'.")]
+JsonOption = Annotated[bool, Opt("--json", help="Print one JSON object.")]
+
+
+def parse_numbers(text: str, flag: str, count: int | None = None) -> list[float]:
+    """``"1,2,3"`` -> [1.0, 2.0, 3.0]; a clear error naming ``flag`` otherwise."""
+    try:
+        values = [float(v) for v in text.replace(" ", "").split(",")]
+    except ValueError:
+        values = []
+    if not values or not all(math.isfinite(v) for v in values) or (
+        count is not None and len(values) != count
+    ):
+        want = f"{count} comma-separated numbers" if count else "comma-separated numbers"
+        raise ModelError(f"{flag} expects {want}, got {text!r}")
+    return values
+
+
+def parse_matrix(text: str) -> list[list[float]]:
+    """``"a,b,c;d,e,f;g,h,i"`` -> a 3×3 nested list."""
+    matrix = [parse_numbers(r, "--initial-cov-matrix") for r in text.split(";")]
+    if len(matrix) != 3 or any(len(r) != 3 for r in matrix):
+        raise ModelError(f"--initial-cov-matrix expects 3 rows of 3 numbers 'a,b,c;d,e,f;g,h,i', "
+                         f"got {text!r}")
+    return matrix
+
+
+def _non_negative(flag: str, value: float | None, unit: str) -> float:
+    if value is None:
+        raise ModelError(f"{flag} is required for this model ({unit})")
+    if not (math.isfinite(value) and value >= 0):
+        raise ModelError(f"{flag} must be a non-negative number ({unit}), got {value!r}")
+    return value
+
+
+def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> Any:
+    """The noise model(s) the flags describe (see :func:`odomkit.propagate.predict.predict`)."""
+    if model == "diff" and noise == "wheel":
+        return WheelNoise(_non_negative("--k-left", given["--k-left"], "m^1/2"),
+                          _non_negative("--k-right", given["--k-right"], "m^1/2"))
+    if model == "diff" and noise == "classical":
+        return ClassicalNoise(_non_negative("--sigma-distance", given["--sigma-distance"], "m"),
+                              _non_negative("--sigma-angle", given["--sigma-angle"], "rad"))
+    if model == "diff":
+        raise ModelError(f"--noise must be 'wheel' or 'classical', got {noise!r}")
+    speed = SpeedNoise(_non_negative("--speed-noise", given["--speed-noise"] or 0.0, "m"))
+    if model == "gyro":
+        return speed, GyroNoise(_non_negative("--gyro-noise", given["--gyro-noise"], "rad^2/s"))
+    return speed, CompassNoise(_non_negative("--heading-noise", given["--heading-noise"],
+                                             "rad^2*s"))
+
+
+@dataclass(frozen=True)
+class PathProblem:
+    """A parsed path problem: what ``predict`` and ``simulate`` both take."""
+
+    segments: list[Segment]
+    noise: Any
+    wheel_base: float | None
+    pose0: list[float]
+    cov0: list[list[float]] | None
+
+
+def path_problem(
+    model: str, noise: str, segments: list[str], given: dict[str, float | None],
+    initial_pose: str, initial_cov: str | None, initial_cov_matrix: str | None,
+) -> PathProblem:
+    """Check and parse the shared options.
+
+    ``given`` maps each model flag (``--wheel-base``, ``--k-left``, ...) to its value or
+    None; a flag that does not belong to ``model`` is an error, not silently ignored.
+    """
+    if model not in MODEL_FLAGS:
+        raise ModelError(f"--model must be one of {', '.join(MODEL_FLAGS)}, got {model!r}")
+    stray = [flag for flag, v in given.items() if v is not None and flag not in MODEL_FLAGS[model]]
+    if stray:
+        raise ModelError(f"{', '.join(stray)} does not apply to --model {model}")
+    wheel_base = given.get("--wheel-base")
+    if model == "diff" and wheel_base is None:
+        raise ModelError("--model diff needs --wheel-base (metres)")
+    if initial_cov is not None and initial_cov_matrix is not None:
+        raise ModelError("give --initial-cov or --initial-cov-matrix, not both")
+    cov0 = None
+    if initial_cov is not None:
+        var = parse_numbers(initial_cov, "--initial-cov", 3)
+        if min(var) < 0:
+            raise ModelError(f"--initial-cov holds variances, which must be >= 0; got {var}")
+        cov0 = [[var[0], 0.0, 0.0], [0.0, var[1], 0.0], [0.0, 0.0, var[2]]]
+    elif initial_cov_matrix is not None:
+        cov0 = parse_matrix(initial_cov_matrix)
+    return PathProblem(
+        segments=[parse_segment(s, model) for s in segments],
+        noise=noise_from_flags(model, noise, given),
+        wheel_base=wheel_base,
+        pose0=parse_numbers(initial_pose, "--initial-pose", 3),
+        cov0=cov0,
+    )
