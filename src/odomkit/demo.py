@@ -86,12 +86,10 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     prediction = predict(square, noise[0], wheel_base=robot.effective_wheel_base)
     summary["prediction_one_square"] = prediction.to_dict()
 
-    try:
-        from odomkit.plot import plot_tracks
-    except ImportError:  # matplotlib is the optional "plot" extra
-        summary["figure"] = None
-    else:
-        summary["figure"] = str(plot_tracks(tracks, out / "demo_tracks.png"))
+    from odomkit.plot import have_matplotlib, plot_tracks
+
+    # matplotlib is the optional "plot" extra
+    summary["figure"] = str(plot_tracks(tracks, out / "demo_tracks.png")) if have_matplotlib() else None
     summary_path = out / "summary.json"
     summary_path.write_text(json.dumps(to_jsonable(summary), indent=2), encoding="utf-8")
     summary["summary"] = str(summary_path)

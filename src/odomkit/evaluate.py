@@ -123,3 +123,32 @@ def evaluate_track(poses: ArrayLike, truth: ArrayLike, cov: ArrayLike | None = N
         nees_position_mean=nees_mean,
         inside_95_fraction=inside,
     )
+
+
+def ellipse_points(cov: ArrayLike, center: ArrayLike = (0.0, 0.0), prob: float = 0.95,
+                   n: int = 100) -> NDArray[np.float64]:
+    """Boundary of the 2-D Gaussian region holding probability ``prob``.
+
+    The radius in Mahalanobis units is sqrt(χ²₂(prob)) = sqrt(−2 ln(1 − prob)): 2.448 for
+    95 % (5.991), not the 1-D 1.96 (see papers/README: a 1σ ellipse holds 39.3 %).
+
+    Returns
+    -------
+    ndarray, shape (n, 2)
+
+    Examples
+    --------
+    >>> p = ellipse_points(np.diag([4.0, 1.0]), n=4)   # semi-axes 2·2.448 and 1·2.448
+    >>> sorted(np.round(np.hypot(p[:, 0], p[:, 1]), 3).tolist())
+    [2.448, 2.448, 4.895, 4.895]
+    """
+    cov = np.asarray(cov, dtype=float)
+    if cov.shape != (2, 2):
+        raise ModelError(f"ellipse needs a 2x2 covariance, got shape {cov.shape}")
+    if not 0 < prob < 1:
+        raise ModelError(f"prob must be in (0, 1), got {prob}")
+    radius = np.sqrt(-2.0 * np.log1p(-prob))  # χ²₂ quantile, closed form
+    vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    circle = np.stack([np.cos(t), np.sin(t)], axis=1)
+    return np.asarray(center, dtype=float) + radius * (circle * np.sqrt(np.clip(vals, 0, None))) @ vecs.T

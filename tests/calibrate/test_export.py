@@ -148,3 +148,21 @@ def test_umbmark_command_reads_runs_through_this_module(tmp_path, data_dir, run_
     ref = umbmark_from_runs(ex.runs, meta.robot(), meta.side)
     assert res["e_max_syst"] == pytest.approx(ref.e_max_syst_before, rel=1e-12)
     assert res["e_max_syst_after"] == pytest.approx(ref.e_max_syst_after, rel=1e-12)
+
+
+def test_calibrate_noise_plot_is_written_and_never_overwritten(run_cli, tmp_path):
+    """The --plot figure of fitted vs empirical 95 % ellipses (matplotlib extra)."""
+    import pytest
+
+    pytest.importorskip("matplotlib")
+    from odomkit.workflows import builtin_data_path
+
+    runs = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in (1, 2, 3)]
+    out = tmp_path / "noise.png"
+    code, stdout, err = run_cli("calibrate-noise", *runs, "--robot",
+                                builtin_data_path("optiodom_diff.toml"), "--plot", out)
+    assert code == 0, err
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    code, _, err = run_cli("calibrate-noise", *runs, "--robot",
+                           builtin_data_path("optiodom_diff.toml"), "--plot", out)
+    assert code == 2 and "exists already" in err

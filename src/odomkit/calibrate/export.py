@@ -181,15 +181,27 @@ def calibrate_files(
 
 def noise_files(
     run_paths: Sequence[str | Path], robot_path: str | Path, *, log_options: Any = None,
-    **kwargs: Any,
+    plot: str | Path | None = None, overwrite: bool = False, **kwargs: Any,
 ) -> dict[str, Any]:
     """Read repeated runs and a robot file and fit k_L, k_R
-    (:func:`odomkit.calibrate.noise_fit.fit_wheel_noise_from_runs`); JSON-ready dict."""
+    (:func:`odomkit.calibrate.noise_fit.fit_wheel_noise_from_runs`); JSON-ready dict.
+    With ``plot``, also draw the runs' errors with the fitted and empirical 95 % ellipses
+    (needs matplotlib)."""
     from odomkit.calibrate.noise_fit import fit_wheel_noise_from_runs
     from odomkit.io.robotfile import read_robot
     from odomkit.workflows import LogOptions, load_log
 
     robot, _ = read_robot(robot_path)
     opts = log_options or LogOptions()
+    if plot is not None and Path(plot).exists() and not overwrite:
+        raise InputError("exists already; pass --force to replace it", source=str(plot))
     runs = [load_log(p, robot, opts) for p in run_paths]
-    return fit_wheel_noise_from_runs(runs, robot, **kwargs).to_dict()
+    fit = fit_wheel_noise_from_runs(runs, robot, **kwargs)
+    out = fit.to_dict()
+    if plot is not None:
+        from odomkit.plot import have_matplotlib, plot_noise_fit
+
+        if not have_matplotlib():
+            raise InputError("--plot needs matplotlib: pip install 'odomkit[plot]'")
+        out["plot"] = str(plot_noise_fit(fit, plot))
+    return out

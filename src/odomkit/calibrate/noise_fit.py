@@ -37,6 +37,7 @@ from scipy.optimize import brentq, minimize, minimize_scalar
 from scipy.special import ndtri
 
 from odomkit.errors import InputError, ModelError
+from odomkit.evaluate import ellipse_points
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import Method, diff_body_jacobian, diff_body_steps, step_jacobians
 
@@ -115,6 +116,8 @@ class WheelNoiseFit:
     loglik : float
         Maximised (restricted) log-likelihood.
     n_runs : int
+    errors : ndarray, shape (n, d), optional
+        The end errors the fit used (for plotting them against the ellipses).
     """
 
     k_left: float
@@ -128,6 +131,7 @@ class WheelNoiseFit:
     components: tuple[str, ...]
     loglik: float
     n_runs: int
+    errors: NDArray[np.float64] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -146,35 +150,6 @@ class WheelNoiseFit:
         idx = [self.components.index(a) for a in axes]
         cov = self.cov_empirical if empirical else self.cov_fitted
         return ellipse_points(cov[np.ix_(idx, idx)], self.mean[idx], prob, n)
-
-
-def ellipse_points(cov: ArrayLike, center: ArrayLike = (0.0, 0.0), prob: float = 0.95,
-                   n: int = 100) -> NDArray[np.float64]:
-    """Boundary of the 2-D Gaussian region holding probability ``prob``.
-
-    The radius in Mahalanobis units is sqrt(χ²₂(prob)) = sqrt(−2 ln(1 − prob)): 2.448 for
-    95 % (5.991), not the 1-D 1.96 (see papers/README: a 1σ ellipse holds 39.3 %).
-
-    Returns
-    -------
-    ndarray, shape (n, 2)
-
-    Examples
-    --------
-    >>> p = ellipse_points(np.diag([4.0, 1.0]), n=4)   # semi-axes 2·2.448 and 1·2.448
-    >>> sorted(np.round(np.hypot(p[:, 0], p[:, 1]), 3).tolist())
-    [2.448, 2.448, 4.895, 4.895]
-    """
-    cov = np.asarray(cov, dtype=float)
-    if cov.shape != (2, 2):
-        raise ModelError(f"ellipse needs a 2x2 covariance, got shape {cov.shape}")
-    if not 0 < prob < 1:
-        raise ModelError(f"prob must be in (0, 1), got {prob}")
-    radius = np.sqrt(-2.0 * np.log1p(-prob))  # χ²₂ quantile, closed form
-    vals, vecs = np.linalg.eigh(0.5 * (cov + cov.T))
-    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
-    circle = np.stack([np.cos(t), np.sin(t)], axis=1)
-    return np.asarray(center, dtype=float) + radius * (circle * np.sqrt(np.clip(vals, 0, None))) @ vecs.T
 
 
 class _Likelihood:
@@ -334,7 +309,7 @@ def fit_wheel_noise(
         k_left=float(np.sqrt(q_hat[0])), k_right=float(np.sqrt(q_hat[1])),
         ci_left=interval(0), ci_right=interval(1), level=level, mean=np.asarray(mu_hat),
         cov_fitted=q_hat[0] * A.mean(axis=0) + q_hat[1] * B.mean(axis=0), cov_empirical=cov_emp,
-        components=tuple(components), loglik=ll_max, n_runs=n,
+        components=tuple(components), loglik=ll_max, n_runs=n, errors=e,
     )
 
 

@@ -93,6 +93,9 @@ def calibrate_noise_command(
     known_mean: Annotated[bool, typer.Option(
         "--known-mean", help="Assume zero mean end error instead of estimating it.")] = False,
     level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw the errors with fitted and empirical 95 % ellipses (PNG).")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     fmt: Annotated[str, typer.Option("--format", help=_FORMAT_HELP)] = "auto",
     columns: Annotated[str | None, typer.Option("--columns", help="CSV column mapping.")] = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
@@ -106,7 +109,8 @@ def calibrate_noise_command(
     kwargs: dict[str, Any] = {"components": comps, "level": level}
     if known_mean:
         kwargs["mean"] = [0.0] * len(comps)
-    out = noise_files(runs, robot, log_options=_log_options(fmt, columns), **kwargs)
+    out = noise_files(runs, robot, log_options=_log_options(fmt, columns), plot=plot,
+                      overwrite=force, **kwargs)
     if json_out:
         print_json(out)
         return
@@ -116,3 +120,5 @@ def calibrate_noise_command(
     print(f"k_right = {out['k_right']:.6g} m^1/2  ({pct} interval "
           f"{out['ci_right'][0]:.6g} .. {out['ci_right'][1]:.6g})")
     print(f"from {out['n_runs']} runs, components {', '.join(out['components'])}")
+    if "plot" in out:
+        print(f"wrote plot: {out['plot']}")
