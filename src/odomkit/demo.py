@@ -21,6 +21,7 @@ from odomkit.io.robotfile import read_robot
 from odomkit.io.trackio import write_track_csv, write_tum
 from odomkit.path import Spin, Straight
 from odomkit.propagate.predict import predict
+from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
 from odomkit.workflows import builtin_data_path
 
@@ -42,8 +43,11 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     out.mkdir(parents=True, exist_ok=True)
     robot_file = builtin_data_path("optiodom_diff.toml")
     robot, noise = read_robot(robot_file)
+    assert isinstance(robot, DiffDrive)  # the shipped robot file is a differential drive
     experiment = read_experiment(builtin_data_path("230620202042_metadata.csv").parent)
     runs = experiment.runs
+    truths = [r.ground_truth for r in runs]
+    assert all(t is not None for t in truths)  # OptiOdom runs carry OptiTrack poses
     stems = [Path(r.source).stem for r in runs]
     targets = [out / f"{s}_track.csv" for s in stems] + [out / f"{s}.tum" for s in stems]
     targets += [out / n for n in ("calibrated_robot.toml", "diff_drive_controller.yaml",
@@ -52,33 +56,35 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
 
     summary: dict[str, Any] = {"robot": str(robot_file), "runs": {}}
     tracks = []
-    for stem, direction, run in zip(stems, experiment.directions, runs, strict=True):
+    for stem, direction, run, truth in zip(stems, experiment.directions, runs, truths, strict=True):
         track = dead_reckon_log(run, robot, "exact", noise=noise[0])
         write_track_csv(out / f"{stem}_track.csv", track, overwrite=True)
         write_tum(out / f"{stem}.tum", track, overwrite=True)
         summary["runs"][stem] = {"direction": direction, "path_length": track.path_length,
-                                 **evaluate_track(track.poses, run.ground_truth, track.cov).to_dict()}
-        tracks.append((stem, track, run.ground_truth))
+                                 **evaluate_track(track.poses, truth, track.cov).to_dict()}
+        tracks.append((stem, track, truth))
 
     side = float(experiment.metadata.side or 0.75)
     um = umbmark_from_runs(runs, robot, side)
     exact = calibrate_exact(runs, robot, "endpoints")
+    calibrated = exact.robot
+    assert isinstance(calibrated, DiffDrive)
     summary["calibration"] = {
         "e_max_syst_before": e_max_syst_of_runs(runs, robot),
         "umbmark": {"E_d": um.result.E_d, "E_b": um.result.E_b,
                     "e_max_syst_after": um.e_max_syst_after},
         "exact": {"E_d": exact.E_d, "E_b": exact.E_b, "std_errors": exact.std_errors,
-                  "e_max_syst_after": e_max_syst_of_runs(runs, exact.robot)},
+                  "e_max_syst_after": e_max_syst_of_runs(runs, calibrated)},
     }
     # The same runs with the calibrated robot: with the systematic error gone, is the
     # per-wheel noise model's 95 % ellipse honest?
-    for stem, run in zip(stems, runs, strict=True):
-        track = dead_reckon_log(run, exact.robot, "exact", noise=noise[0])
-        ev = evaluate_track(track.poses, run.ground_truth, track.cov)
+    for stem, run, truth in zip(stems, runs, truths, strict=True):
+        track = dead_reckon_log(run, calibrated, "exact", noise=noise[0])
+        ev = evaluate_track(track.poses, truth, track.cov)
         summary["runs"][stem]["calibrated"] = ev.to_dict()
-    write_calibrated_robot(out / "calibrated_robot.toml", exact.robot, noise, overwrite=True)
+    write_calibrated_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
     (out / "diff_drive_controller.yaml").write_text(
-        ros2_diff_drive_yaml(exact.robot, wheel_radius=experiment.metadata.wheel_diameters[0] / 2),
+        ros2_diff_drive_yaml(calibrated, wheel_radius=experiment.metadata.wheel_diameters[0] / 2),
         encoding="utf-8")
 
     # One clockwise square as planned: four legs and four right turns on the spot.
