@@ -69,3 +69,31 @@ def test_demo_runs_on_builtin_data_and_calibration_helps(run_cli, tmp_path):
     # a second run without --force refuses to overwrite
     code, _, err = run_cli("demo", "--out", tmp_path)
     assert code == 2 and "exists already" in err
+
+
+def test_track_with_noise_fills_covariance_and_ros_export(run_cli, tmp_path):
+    out = tmp_path / "t.csv"
+    code, stdout, err = run_cli("track", RUN, "--robot", ROBOT, "--out", out, "--json")
+    assert code == 0, err
+    summary = json.loads(stdout)
+    table = np.genfromtxt(out, delimiter=",", names=True)
+    cov = np.array(summary["cov"])
+    assert cov == pytest.approx(np.array([[table["cov_xx"][-1], table["cov_xy"][-1], table["cov_xtheta"][-1]],
+                                          [table["cov_xy"][-1], table["cov_yy"][-1], table["cov_ytheta"][-1]],
+                                          [table["cov_xtheta"][-1], table["cov_ytheta"][-1],
+                                           table["cov_thetatheta"][-1]]]), rel=1e-8)
+    assert np.all(np.diff(table["cov_thetatheta"]) >= 0)  # heading variance never shrinks
+    ros = np.array(summary["ros_pose_covariance"]).reshape(6, 6)
+    assert ros[np.ix_([0, 1, 5], [0, 1, 5])] == pytest.approx(cov)
+    assert ros[2, 2] == ros[3, 3] == ros[4, 4] > 1e3  # z, roll, pitch: unobserved
+
+
+@pytest.mark.parametrize(("body", "message"), [
+    ('[robot]\ntype = "diff"\nwheel_base = -0.2\nm_per_tick = 1e-4\n', "wheel_base must be a positive"),
+    ('[robot]\ntype = "diff"\nm_per_tick = 1e-4\n', "needs 'wheel_base'"),
+])
+def test_bad_robot_file_exits_2(run_cli, tmp_path, body, message):
+    robot = tmp_path / "r.toml"
+    robot.write_text(body)
+    code, _, err = run_cli("track", RUN, "--robot", robot)
+    assert code == 2 and message in err and str(robot) in err

@@ -21,6 +21,7 @@ from odomkit.io.robotfile import read_robot
 from odomkit.io.trackio import write_track_csv, write_tum
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
+from odomkit.propagate.ros import ros_pose_covariance
 from odomkit.robot import DiffDrive, Robot
 from odomkit.track import Track, dead_reckon_log
 
@@ -89,6 +90,8 @@ class TrackRun:
             "pose": [float(final[0]), float(final[1]), float(wrap(final[2]))],
             "theta_unwrapped": float(final[2]),
             "cov": None if self.track.cov is None else self.track.cov[-1],
+            "ros_pose_covariance": (None if self.track.cov is None
+                                    else ros_pose_covariance(self.track.cov[-1])),
             "path_length": self.track.path_length,
             "duration": self.track.duration,
         }

@@ -101,12 +101,17 @@ class Prediction:
     def to_dict(self) -> dict[str, Any]:
         """The JSON object of ``odomkit predict --json`` (DESIGN.md): keys ``pose``
         [x, y, θ wrapped to [−π, π)], ``cov``, ``std``, ``corr`` {xy, xtheta, ytheta}
-        (coefficients; NaN stands for undefined and prints as null)."""
+        (coefficients; NaN stands for undefined and prints as null), and
+        ``ros_pose_covariance``: the 36 numbers of a ROS ``nav_msgs/Odometry`` pose
+        covariance (:func:`odomkit.propagate.ros.ros_pose_covariance`)."""
+        from odomkit.propagate.ros import ros_pose_covariance
+
         pose = self.pose.copy()
         pose[2] = wrap_angle(pose[2])
         return {
             "pose": pose.tolist(),
             "cov": self.cov.tolist(),
+            "ros_pose_covariance": ros_pose_covariance(self.cov),
             "std": self.std.tolist(),
             "corr": self.corr,
             "model": self.model,
