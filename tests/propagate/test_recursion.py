@@ -69,6 +69,14 @@ def test_kernel_equals_plain_loop(method):
     assert np.allclose(got, want, rtol=1e-12, atol=1e-15 * np.abs(want).max())
 
 
+def assert_rounding_close(got, want, rel=1e-12):
+    """Each matrix agrees to ``rel`` of its largest entry. Entry-wise relative error is
+    no measure of rounding here: a cross term that cancels to 1e-4 of the matrix scale
+    turns a 1e-16 change of a heading's cos/sin into 1e-12 of that entry."""
+    scale = np.abs(want).max(axis=(-2, -1), keepdims=True)
+    assert np.all(np.abs(got - want) <= rel * scale)
+
+
 def test_numpy_fallback_equals_kernel(monkeypatch):
     rng = np.random.default_rng(4)
     theta, dd, dtheta = random_path(rng, 200)
@@ -76,7 +84,10 @@ def test_numpy_fallback_equals_kernel(monkeypatch):
     fast = propagate_recursion(theta, dd, dtheta, q, np.eye(3) * 1e-3)
     monkeypatch.setattr(recursion, "_load_kernel", lambda parallel=False: None)
     slow = propagate_recursion(theta, dd, dtheta, q, np.eye(3) * 1e-3)
-    assert np.allclose(fast, slow, rtol=1e-12, atol=0)
+    # The kernel turns a carried heading vector where the numpy loop calls cos(θ + Δθ/2):
+    # equal to rounding, not bit for bit (before the turned vector, rtol=1e-12, atol=0
+    # held entry-wise; now 3e-15 of each matrix's scale, 5e-12 of one cancelled entry).
+    assert_rounding_close(fast, slow, 1e-13)
 
 
 def test_missing_numba_warns_and_still_works(monkeypatch):
@@ -134,6 +145,103 @@ def test_covariance_is_symmetric_psd(seed, m, curvy, method):
     assert np.array_equal(cov, np.swapaxes(cov, 1, 2))
     eig = np.linalg.eigvalsh(cov)
     assert eig.min() >= -1e-12 * max(eig.max(), 1e-300)
+
+
+# --- the turned heading vector (fast path) and its fallback ---------------------------
+
+def long_wheel_log(rng, m, base=0.4):
+    """A dead-reckoned differential-drive log with smooth turns and a few sharp ones
+    (|Δθ/2| > 0.25, where the kernel calls sin/cos of the half angle)."""
+    d_l = 0.01 + 0.005 * np.sin(np.arange(m) / 50.0) + rng.normal(0.0, 0.002, m)
+    d_r = 0.01 + 0.005 * np.cos(np.arange(m) / 70.0) + rng.normal(0.0, 0.002, m)
+    sharp = rng.choice(m, 20, replace=False)
+    d_r[sharp] += rng.choice([-0.3, 0.3], 20)
+    dd, dth = diff_body_steps(d_l, d_r, base)
+    steps = BodySteps(dd, dth, np.full(m, 0.01), {"d_left": d_l, "d_right": d_r},
+                      DiffDrive(base))
+    return steps, dead_reckon(dd, dth, (0.0, 0.0, 2.0))
+
+
+def anchors_of(theta, dd, dtheta, q, method):
+    """Number of real cos/sin of θ_k the kernel took over one chunk."""
+    state = recursion.new_heading_state()
+    recursion.recursion_chunk(theta, dd, dtheta, q, np.zeros((3, 3)), method, state=state)
+    return int(state[4])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_turned_heading_equals_per_step_loop_on_a_dead_reckoned_track(method):
+    """10^4 steps of consistent headings take the fast path (a real cos/sin only every
+    ANCHOR steps) and still agree with the per-step numpy loop to rounding."""
+    rng = np.random.default_rng(20)
+    m = 10_000
+    steps, poses = long_wheel_log(rng, m)
+    theta, dd, dth = poses[:-1, 2], steps.dd, steps.dtheta
+    assert np.abs(dth).max() > 0.5  # the sharp turns are there
+    q = wheel_input_cov(steps.inputs["d_left"], steps.inputs["d_right"], 0.4,
+                        WheelNoise(0.01, 0.02))
+    p0 = random_psd(rng, (3,), 1e-4)
+    assert anchors_of(theta, dd, dth, q, method) == -(-m // 128)
+    got = propagate_recursion(theta, dd, dth, q, p0, method)
+    want = np.empty((m + 1, 3, 3))
+    want[0] = p0
+    recursion._numpy_chunk(theta, dd, dth, q, p0, want[1:], method)
+    assert_rounding_close(got, want, 1e-12)
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_inconsistent_headings_take_the_per_step_fallback(method):
+    """Headings that are not θ_0 + ΣΔθ (here jittered by 1e-6 rad, and separately one
+    heading moved by 1e-9 rad inside an anchor block) must not be replaced by the turned
+    vector: the kernel re-anchors at exactly the steps that disagree."""
+    rng = np.random.default_rng(21)
+    m = 3000
+    steps, poses = long_wheel_log(rng, m)
+    dd, dth = steps.dd, steps.dtheta
+    q = random_psd(rng, (m, 2), 1e-6)
+    jittered = poses[:-1, 2] + rng.normal(0.0, 1e-6, m)
+    one_off = poses[:-1, 2].copy()
+    one_off[1000] += 1e-9  # 1000 % 128 = 104: between regular anchors
+    for theta, anchors in ((jittered, m), (one_off, -(-m // 128) + 2)):
+        # one_off: step 1000 disagrees with the carried sum, and so does step 1001 with
+        # the sum carried from the moved heading.
+        assert anchors_of(theta, dd, dth, q, method) == anchors
+        got = propagate_recursion(theta, dd, dth, q, np.zeros((3, 3)), method)
+        want = np.zeros((m + 1, 3, 3))
+        recursion._numpy_chunk(theta, dd, dth, q, np.zeros((3, 3)), want[1:], method)
+        assert_rounding_close(got[1:], want[1:], 1e-12)
+
+
+def test_nan_heading_propagates_instead_of_being_replaced():
+    rng = np.random.default_rng(22)
+    theta, dd, dtheta = random_path(rng, 300, 0.05)
+    theta[150] = np.nan
+    q = random_psd(rng, (300, 2), 1e-4)
+    cov = propagate_recursion(theta, dd, dtheta, q, np.eye(3))
+    want = np.empty((300, 3, 3))
+    recursion._numpy_chunk(theta, dd, dtheta, q, np.eye(3), want, "exact")
+    # Position rows go NaN from the bad step on, as in the per-step loop (whose full 3×3
+    # products also spread the NaN into var θ, which the kernel never multiplies by a
+    # heading term).
+    assert np.isfinite(cov[:151]).all() and np.isnan(cov[151:, :2]).all()
+    assert np.isnan(want[150:, :2]).all()
+    assert_rounding_close(cov[1:151], want[:150])
+
+
+@pytest.mark.parametrize("parallel", [False, True])
+def test_wheel_noise_formed_in_the_kernel_equals_wheel_input_cov(parallel):
+    """track_covariance lets the kernel form Q_k from the wheel travels; it must give
+    the bits of the recursion fed with inputs.wheel_input_cov, for any chunking and
+    with the parallel kernel (chunks not aligned with the anchor blocks)."""
+    rng = np.random.default_rng(23)
+    m, noise = 5000, WheelNoise(0.01, 0.02)
+    steps, poses = long_wheel_log(rng, m)
+    q = wheel_input_cov(steps.inputs["d_left"], steps.inputs["d_right"], 0.4, noise)
+    p0 = random_psd(rng, (3,), 1e-4)
+    want = propagate_recursion(poses[:-1, 2], steps.dd, steps.dtheta, q, p0)
+    for chunk in (1000, 77, 10**6):
+        got = track_covariance(steps, poses, noise, p0, chunk_size=chunk, parallel=parallel)
+        assert np.array_equal(got, want)
 
 
 # --- a constant arc: the recursion converges to the continuous integral ---------------

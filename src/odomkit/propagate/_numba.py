@@ -1,13 +1,38 @@
-"""The numba kernel of the step recursion (Chong–Kleeman eq. 2).
+"""The numba kernels of the step recursion (Chong–Kleeman eq. 2).
 
 The recurrence P_{k+1} = F_k P_k F_k^T + G_k Q_k G_k^T cannot be vectorised as written.
-It runs here in two compiled passes per chunk: the per-step terms (F_k and G_k Q_k G_k^T
-formed inline from (θ, Δd, Δθ), mostly sines and cosines; optionally in parallel over
-the steps), then the cheap sequential recurrence (about 4 ns a step). No (M, 3, 3)
-Jacobian arrays are ever materialised. Each step's terms do not depend on how steps are
-split across threads, so serial and parallel results are identical. The Jacobians are
-the same as :func:`odomkit.kinematics.step_jacobians` (and, for ``METHOD_CLASSICAL``,
+:func:`recursion_kernel` runs it in one compiled pass: each step forms F_k and
+G_k Q_k G_k^T inline from (θ, Δd, Δθ) and applies them at once, so no (M, 3, 3) Jacobian
+array and no per-step term array is ever materialised. The Jacobians are the same as
+:func:`odomkit.kinematics.step_jacobians` (and, for ``METHOD_CLASSICAL``,
 :func:`odomkit.propagate.inputs.classical_step_jacobians`); the tests compare them.
+
+Where the time went (10^7 wheel-noise steps, one core: ~70 ns a step before, ~19 ns now;
+benchmarks/propagation.py):
+
+* The per-step terms pass, mostly cos and sin of each heading (~42 ns). The heading is
+  now carried as a unit vector (cos, sin) turned by each step's half angle φ = Δθ/2,
+  whose sine and cosine come from Taylor polynomials (exact to rounding for |φ| < 0.25),
+  as :mod:`odomkit._integrate_numba` does for dead reckoning. This is valid only when
+  the headings satisfy θ_{k+1} = θ_k + Δθ_k, which the caller does not promise. So the
+  kernel also carries the scalar sum θ_a + Σ Δθ from the last anchor a and compares it
+  with θ_k at every step (one subtraction). If they differ by more than
+  ``heading_tolerance(θ_k)``, the vector is re-anchored at that step with a real cos/sin
+  of θ_k. Arbitrary headings thus re-anchor at every step, which is the exact per-step
+  computation (~40 ns a step). A dead-reckoned track (:func:`odomkit.integrate.dead_reckon`
+  sums headings in this same order) matches bit for bit and re-anchors only every
+  ``ANCHOR`` steps, so the rounding of repeated rotations cannot build up.
+* The per-wheel input covariance: ``QMODE_WHEEL`` forms Q_k from (d_L, d_R) in the
+  kernel, with the very operations of :func:`odomkit.propagate.inputs.wheel_input_cov`,
+  instead of a (n, 2, 2) numpy array per chunk (~8 ns a step).
+* A second pass over an (8, n) term array, and contiguous copies (~10 ns a step).
+
+Anchors sit at global step indices that are multiples of ``ANCHOR`` (plus the forced
+ones), and the carried (cos, sin, θ) passes from one chunk to the next in ``state``, so
+the numbers do not depend on the chunk size. No fastmath: without it LLVM may not
+contract a·b + c into an FMA, which keeps the serial kernel, the parallel kernel (terms
+stored, then the recurrence) and every chunking bit-identical. Contraction would save
+only ~11 % (18.6 -> 16.5 ns a step).
 
 Importing this module imports numba; :mod:`odomkit.propagate.recursion` does so lazily
 and falls back to a numpy loop when numba is missing.
@@ -26,114 +51,169 @@ METHOD_MIDPOINT = 1
 METHOD_EULER = 2
 METHOD_CLASSICAL = 3
 
-# Below this |u| = |Δθ/2| the Taylor series of sinc(u) = sin(u)/u and of its derivative
-# is used. Besides avoiding the cancellation in (u·cos u − sin u)/u², it spares two
-# transcendental calls per step (the kernel's main cost): at |u| = 0.1 the first omitted
-# terms, u^10/11! and 10·u^9/11!, are below 3e-17 relative.
+# Where Q_k comes from: the (n, 2, 2) cov_input array, or formed from the wheel travels.
+QMODE_ARRAY = 0
+QMODE_WHEEL = 1
+
+# ``state`` layout, carried from one chunk to the next: heading unit vector, carried
+# heading sum, 1.0 once the first three are valid, count of anchors (real cos/sin).
+STATE_SIZE = 5
+
+# A real cos/sin of θ_k at least every ANCHOR steps: the rotated vector then drifts by at
+# most ~ANCHOR rounding errors (~1e-14) from (cos θ_k, sin θ_k).
+ANCHOR = 128
+
+# Carried heading sum and θ_k may differ by this much before the step re-anchors:
+# 1e-12 rad absolute (a heading error δ changes the terms by ~δ relative), widened by
+# 64 ulp of |θ_k| because θ_k itself, summed by another integrator (e.g. θ_0 + cumsum),
+# drifts by a few ulp a step from our sum. A dead-reckoned track matches exactly.
+_TOL_ABS = 1e-12
+_TOL_REL = 64.0 * np.finfo(float).eps
+
+# Below this |u| = |Δθ/2| the Taylor series of the derivative of sinc(u) = sin(u)/u is
+# used: it avoids the cancellation in (u·cos u − sin u)/u² (at |u| = 0.1 the first
+# omitted terms, u^10/11! and 10·u^9/11!, are below 3e-17 relative).
 _SERIES_BELOW = 0.1
-
-
-@numba.njit(cache=True, nogil=True)
-def _sinc_and_derivative(dtheta: float) -> tuple[float, float]:
-    """sin(Δθ/2)/(Δθ/2) and its derivative d/dΔθ (kinematics.sinc_half[_derivative])."""
-    u = 0.5 * dtheta
-    if abs(u) < _SERIES_BELOW:
-        # Horner form with reciprocal constants: a chain of divisions would cost ~40 ns.
-        v = u * u
-        f = 1.0 - v * (1.0 / 6.0) * (1.0 - v * (1.0 / 20.0) * (
-            1.0 - v * (1.0 / 42.0) * (1.0 - v * (1.0 / 72.0))))
-        # d/du sinc = −u/3 + u³/30 − u⁵/840 + u⁷/45360 − u⁹/3991680
-        df = -u * (1.0 / 3.0) * (1.0 - v * (1.0 / 10.0) * (1.0 - v * (1.0 / 28.0) * (
-            1.0 - v * (1.0 / 54.0) * (1.0 - v * (1.0 / 88.0)))))
-        return f, 0.5 * df
-    s = math.sin(u)
-    return s / u, 0.5 * (u * math.cos(u) - s) / (u * u)
+# |φ| below this takes sin φ, cos φ, sinc φ from Taylor polynomials to φ^14: the first
+# omitted term, φ^16/17!, is under 1e-24 there, far below double rounding.
+_POLY_LIMIT = 0.25
+# Typical steps turn far less (|φ| < 0.015 for 99.99 % of the benchmark's 100 Hz log), and
+# there polynomials to φ^6 (φ^8 for the derivative series) suffice: at |φ| = 0.025 the
+# first omitted terms, φ^8/8! (cos), φ^8/9! (sinc) and the derivative's relative
+# v⁴/(10·28·54·88), are below 4e-18, a thirtieth of an ulp of 1. Horner's rule is a
+# chain of dependent operations, so the shorter polynomials cut the latency of every
+# step by about a quarter (measured 27 -> 19 ns a step).
+_SHORT_LIMIT = 0.025
+_S1, _S2, _S3, _S4, _S5, _S6, _S7 = (
+    (-1.0) ** k / math.factorial(2 * k + 1) for k in range(1, 8))
+_C1, _C2, _C3, _C4, _C5, _C6, _C7 = ((-1.0) ** k / math.factorial(2 * k) for k in range(1, 8))
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _step_terms_one(
-    k: int,
-    theta: np.ndarray,
-    dd: np.ndarray,
-    dtheta: np.ndarray,
-    cov_input: np.ndarray,
-    method: int,
-    terms: np.ndarray,
-) -> None:
-    """Per-step terms of step k: ``terms[:, k]`` = u = (−Δy, Δx) of F = I + u e_θ^T and
-    the entries (b00, b01, b11, b02, b12, b22) of B = G Q G^T. The sines and cosines
-    here are most of the work of the recursion."""
+def heading_tolerance(theta_k: float) -> float:
+    """Largest |carried heading − θ_k| [rad] that keeps the rotated heading vector."""
+    return _TOL_ABS + _TOL_REL * abs(theta_k)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _sin_cos_sinc(phi: float) -> tuple[float, float, float]:
+    """sin φ, cos φ, sin φ / φ (polynomials below _POLY_LIMIT)."""
+    if abs(phi) < _SHORT_LIMIT:
+        p2 = phi * phi
+        sinc = 1.0 + p2 * (_S1 + p2 * (_S2 + p2 * _S3))
+        cos = 1.0 + p2 * (_C1 + p2 * (_C2 + p2 * _C3))
+        return phi * sinc, cos, sinc
+    if abs(phi) < _POLY_LIMIT:
+        p2 = phi * phi
+        # Horner form with multiplied constants: a division costs several products.
+        sinc = 1.0 + p2 * (_S1 + p2 * (_S2 + p2 * (_S3 + p2 * (_S4 + p2 * (_S5 + p2 * (
+            _S6 + p2 * _S7))))))
+        cos = 1.0 + p2 * (_C1 + p2 * (_C2 + p2 * (_C3 + p2 * (_C4 + p2 * (_C5 + p2 * (
+            _C6 + p2 * _C7))))))
+        return phi * sinc, cos, sinc
+    s = math.sin(phi)
+    return s, math.cos(phi), s / phi
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _sinc_derivative(u: float, sin_u: float, cos_u: float) -> float:
+    """d/dΔθ of sinc(Δθ/2) at u = Δθ/2 (kinematics.sinc_half_derivative)."""
+    if abs(u) < _SHORT_LIMIT:
+        v = u * u
+        return -0.5 * u * (1.0 / 3.0) * (1.0 - v * (1.0 / 10.0) * (1.0 - v * (1.0 / 28.0) * (
+            1.0 - v * (1.0 / 54.0))))
+    if abs(u) < _SERIES_BELOW:
+        v = u * u
+        # d/du sinc = −u/3 + u³/30 − u⁵/840 + u⁷/45360 − u⁹/3991680
+        df = -u * (1.0 / 3.0) * (1.0 - v * (1.0 / 10.0) * (1.0 - v * (1.0 / 28.0) * (
+            1.0 - v * (1.0 / 54.0) * (1.0 - v * (1.0 / 88.0)))))
+        return 0.5 * df
+    return 0.5 * (u * cos_u - sin_u) / (u * u)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method,
+          c, s, th, force_anchor):
+    """Terms of step k and the heading state after it.
+
+    (c, s) is the carried unit vector of θ_k and th the carried heading sum. Returns
+    u0, u1 (F = I + u e_θ^T, u = (−Δy, Δx)), the entries b00, b01, b11, b02, b12, b22 of
+    B = G Q G^T, then (c, s, th) of step k+1 and 1 if this step re-anchored.
+    """
+    theta_k = theta[k]
+    anchored = 0
+    # ``not (… <= tol)`` so that a NaN heading re-anchors (and propagates as NaN).
+    if force_anchor or not (abs(th - theta_k) <= heading_tolerance(theta_k)):
+        c = math.cos(theta_k)
+        s = math.sin(theta_k)
+        th = theta_k
+        anchored = 1
     d = dd[k]
     a = dtheta[k]
-    # Heading of the displacement, chord factor f, f' and w = ∂heading/∂Δθ:
-    # exact arc / midpoint use θ + Δθ/2; euler θ; classical (rotate α, then
-    # translate D, Chong–Kleeman eq. 1) θ + α.
+    # Heading of the displacement (hc, hs), chord factor f, f' and w = ∂heading/∂Δθ:
+    # exact arc / midpoint use θ + Δθ/2; euler θ; classical (rotate α, then translate D,
+    # Chong–Kleeman eq. 1) θ + α. Each turns the carried vector; the next step's heading
+    # is θ + Δθ in all four maps.
     if method == METHOD_EULER:
-        h = theta[k]
+        sp, cp, _ = _sin_cos_sinc(a)
+        hc, hs = c, s
+        c, s = c * cp - s * sp, s * cp + c * sp
         f, df, w = 1.0, 0.0, 0.0
     elif method == METHOD_CLASSICAL:
-        h = theta[k] + a
+        sp, cp, _ = _sin_cos_sinc(a)
+        hc, hs = c * cp - s * sp, s * cp + c * sp
+        c, s = hc, hs
         f, df, w = 1.0, 0.0, 1.0
-    elif method == METHOD_MIDPOINT:
-        h = theta[k] + 0.5 * a
-        f, df, w = 1.0, 0.0, 0.5
     else:
-        h = theta[k] + 0.5 * a
-        f, df = _sinc_and_derivative(a)
-        w = 0.5
-    c = math.cos(h)
-    s = math.sin(h)
+        u = 0.5 * a
+        sp, cp, sinc = _sin_cos_sinc(u)
+        hc, hs = c * cp - s * sp, s * cp + c * sp
+        c, s = hc * cp - hs * sp, hs * cp + hc * sp
+        if method == METHOD_MIDPOINT:
+            f, df, w = 1.0, 0.0, 0.5
+        else:
+            f, df, w = sinc, _sinc_derivative(u, sp, cp), 0.5
+    th = th + a
+    if qmode == QMODE_WHEEL:
+        # inputs.wheel_input_cov, operation for operation: Cov(d_L, d_R) =
+        # diag(k_L²|d_L|, k_R²|d_R|) (Chong–Kleeman eq. 4) mapped by
+        # J = [[½, ½], [−1/b, 1/b]]; wheel = (k_L², k_R², J00², J01·J11, J11²).
+        var_l = abs(d_left[k]) * wheel[0]
+        var_r = abs(d_right[k]) * wheel[1]
+        var_sum = var_l + var_r
+        var_diff = var_r - var_l
+        q00 = wheel[2] * var_sum
+        q01 = wheel[3] * var_diff
+        q11 = wheel[4] * var_sum
+    else:
+        q00 = cov_input[k, 0, 0]
+        q01 = 0.5 * (cov_input[k, 0, 1] + cov_input[k, 1, 0])
+        q11 = cov_input[k, 1, 1]
     # G = [[g00, g01], [g10, g11], [0, 1]]: Chong–Kleeman eq. (17) in chord form.
-    g00 = f * c
-    g10 = f * s
-    g01 = d * (df * c - w * f * s)
-    g11 = d * (df * s + w * f * c)
-    q00 = cov_input[k, 0, 0]
-    q01 = 0.5 * (cov_input[k, 0, 1] + cov_input[k, 1, 0])
-    q11 = cov_input[k, 1, 1]
+    g00 = f * hc
+    g10 = f * hs
+    g01 = d * (df * hc - w * f * hs)
+    g11 = d * (df * hs + w * f * hc)
     r00 = g00 * q00 + g01 * q01  # rows of G Q
     r01 = g00 * q01 + g01 * q11
     r10 = g10 * q00 + g11 * q01
     r11 = g10 * q01 + g11 * q11
-    terms[0, k] = -d * g10  # −Δy
-    terms[1, k] = d * g00   # Δx
-    terms[2, k] = r00 * g00 + r01 * g01
-    terms[3, k] = r00 * g10 + r01 * g11
-    terms[4, k] = r10 * g10 + r11 * g11
-    terms[5, k] = r01
-    terms[6, k] = r11
-    terms[7, k] = q11
-
-
-# The same per-step pass twice: serial (the default: on a machine whose cores are busy
-# with other work, every parallel region waits for a scheduler slice, ~5 ms a chunk)
-# and with numba threads over the steps (``parallel=True`` in the engines). Each step's
-# numbers do not depend on how steps are split across threads.
-@numba.njit(cache=True, nogil=True)
-def step_terms_serial(
-    theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
-    method: int, terms: np.ndarray,
-) -> None:
-    """terms (8, n) of every step, one thread."""
-    for k in range(theta.shape[0]):
-        _step_terms_one(k, theta, dd, dtheta, cov_input, method, terms)
-
-
-@numba.njit(cache=True, nogil=True, parallel=True)
-def step_terms_parallel(
-    theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
-    method: int, terms: np.ndarray,
-) -> None:
-    """terms (8, n) of every step, numba's threads."""
-    for k in numba.prange(theta.shape[0]):
-        _step_terms_one(k, theta, dd, dtheta, cov_input, method, terms)
+    return (-d * g10, d * g00, r00 * g00 + r01 * g01, r00 * g10 + r01 * g11,
+            r10 * g10 + r11 * g11, r01, r11, q11, c, s, th, anchored)
 
 
 @numba.njit(cache=True, nogil=True)
-def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray) -> None:
-    """P_{k+1} = F_k P_k F_k^T + B_k over n steps; ``out[k]`` receives P after step k.
+def recursion_kernel(
+    theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
+    d_left: np.ndarray, d_right: np.ndarray, wheel: np.ndarray, qmode: int, method: int,
+    start: int, state: np.ndarray, cov_start: np.ndarray, out: np.ndarray,
+) -> None:
+    """Run the recursion over n steps; ``out[i]`` receives P after step i.
 
-    terms : (8, n) from :func:`step_terms_serial`; cov_start : (3, 3); out : (n, 3, 3).
+    theta, dd, dtheta : (n,); cov_input : (n, 2, 2) (QMODE_ARRAY) or d_left, d_right :
+    (n,) with wheel (5,) (QMODE_WHEEL); start : global index of the first step (anchors
+    sit at multiples of ANCHOR); state : (STATE_SIZE,) carried heading, updated;
+    cov_start : (3, 3) P before the first step; out : (n, 3, 3), written in place.
     """
     # Only the upper triangle (6 numbers) is carried and the lower one mirrored on
     # output: P is symmetric by construction, so round-off in F P F^T cannot make P_ij
@@ -145,10 +225,80 @@ def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray)
     p11 = cov_start[1, 1]
     p12 = 0.5 * (cov_start[1, 2] + cov_start[2, 1])
     p22 = cov_start[2, 2]
+    c, s, th = state[0], state[1], state[2]
+    valid = state[3] != 0.0
+    anchors = 0
+    for k in range(theta.shape[0]):
+        force = (not valid) or (start + k) % ANCHOR == 0
+        valid = True
+        (u0, u1, b00, b01, b11, b02, b12, b22, c, s, th, anchored) = _step(
+            k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method,
+            c, s, th, force)
+        anchors += anchored
+        # F P F^T with F = I + u e_θ^T (Chong–Kleeman eq. 16, chord form), then + B.
+        n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
+        n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
+        n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
+        n02 = p02 + u0 * p22
+        n12 = p12 + u1 * p22
+        p00 = n00 + b00
+        p01 = n01 + b01
+        p11 = n11 + b11
+        p02 = n02 + b02
+        p12 = n12 + b12
+        p22 = p22 + b22
+        o = out[k]
+        o[0, 0] = p00
+        o[0, 1] = p01
+        o[1, 0] = p01
+        o[0, 2] = p02
+        o[2, 0] = p02
+        o[1, 1] = p11
+        o[1, 2] = p12
+        o[2, 1] = p12
+        o[2, 2] = p22
+    state[0], state[1], state[2] = c, s, th
+    state[3] = 1.0 if valid else state[3]
+    state[4] += anchors
+
+
+@numba.njit(cache=True, nogil=True)
+def _terms_range(k0, k1, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode,
+                 method, start, c, s, th, valid, terms):
+    """Terms of steps k0 … k1−1 into ``terms`` (8, n), as :func:`recursion_kernel`
+    forms them; returns the heading state after k1−1 and the anchor count."""
+    anchors = 0
+    for k in range(k0, k1):
+        force = (not valid) or (start + k) % ANCHOR == 0
+        valid = True
+        (u0, u1, b00, b01, b11, b02, b12, b22, c, s, th, anchored) = _step(
+            k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method,
+            c, s, th, force)
+        anchors += anchored
+        terms[0, k] = u0
+        terms[1, k] = u1
+        terms[2, k] = b00
+        terms[3, k] = b01
+        terms[4, k] = b11
+        terms[5, k] = b02
+        terms[6, k] = b12
+        terms[7, k] = b22
+    return c, s, th, anchors
+
+
+@numba.njit(cache=True, nogil=True)
+def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray) -> None:
+    """P_{k+1} = F_k P_k F_k^T + B_k over n steps from terms (8, n); ``out[k]`` receives
+    P after step k (the same operations as :func:`recursion_kernel`)."""
+    p00 = cov_start[0, 0]
+    p01 = 0.5 * (cov_start[0, 1] + cov_start[1, 0])
+    p02 = 0.5 * (cov_start[0, 2] + cov_start[2, 0])
+    p11 = cov_start[1, 1]
+    p12 = 0.5 * (cov_start[1, 2] + cov_start[2, 1])
+    p22 = cov_start[2, 2]
     for k in range(terms.shape[1]):
         u0 = terms[0, k]
         u1 = terms[1, k]
-        # F P F^T with F = I + u e_θ^T (Chong–Kleeman eq. 16, chord form), then + B.
         n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
         n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
         n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
@@ -172,37 +322,36 @@ def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray)
         o[2, 2] = p22
 
 
-@numba.njit(cache=True, nogil=True)
-def recursion_kernel(
-    theta: np.ndarray,
-    dd: np.ndarray,
-    dtheta: np.ndarray,
-    cov_input: np.ndarray,
-    cov_start: np.ndarray,
-    out: np.ndarray,
-    method: int,
-) -> None:
-    """Run the recursion over n steps; ``out[i]`` receives P after step i.
-
-    theta, dd, dtheta : (n,); cov_input : (n, 2, 2); cov_start : (3, 3) P before the
-    first step; out : (n, 3, 3), written in place.
-    """
-    terms = np.empty((8, theta.shape[0]))
-    step_terms_serial(theta, dd, dtheta, cov_input, method, terms)
-    recurrence_kernel(terms, cov_start, out)
-
-
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, parallel=True)
 def recursion_kernel_parallel(
-    theta: np.ndarray,
-    dd: np.ndarray,
-    dtheta: np.ndarray,
-    cov_input: np.ndarray,
-    cov_start: np.ndarray,
-    out: np.ndarray,
-    method: int,
+    theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
+    d_left: np.ndarray, d_right: np.ndarray, wheel: np.ndarray, qmode: int, method: int,
+    start: int, state: np.ndarray, cov_start: np.ndarray, out: np.ndarray,
 ) -> None:
-    """:func:`recursion_kernel` with the per-step pass spread over numba's threads."""
-    terms = np.empty((8, theta.shape[0]))
-    step_terms_parallel(theta, dd, dtheta, cov_input, method, terms)
+    """:func:`recursion_kernel` with the per-step terms spread over numba's threads.
+
+    The blocks between two regular anchors are independent (each starts with a real
+    cos/sin), so they run in parallel; the part before the first regular anchor of the
+    chunk continues the carried state. Same operations as the serial kernel, so the
+    same bits; then the cheap sequential recurrence.
+    """
+    n = theta.shape[0]
+    terms = np.empty((8, n))
+    head = min((ANCHOR - start % ANCHOR) % ANCHOR, n)
+    c, s, th, anchors = _terms_range(0, head, theta, dd, dtheta, cov_input, d_left,
+                                     d_right, wheel, qmode, method, start, state[0],
+                                     state[1], state[2], state[3] != 0.0, terms)
+    if head > 0:
+        state[0], state[1], state[2], state[3] = c, s, th, 1.0
+    blocks = (n - head + ANCHOR - 1) // ANCHOR
+    for i in numba.prange(blocks):
+        k0 = head + i * ANCHOR
+        k1 = min(k0 + ANCHOR, n)
+        cb, sb, thb, nb = _terms_range(k0, k1, theta, dd, dtheta, cov_input, d_left,
+                                       d_right, wheel, qmode, method, start, 1.0, 0.0,
+                                       0.0, False, terms)
+        anchors += nb
+        if k1 == n:
+            state[0], state[1], state[2], state[3] = cb, sb, thb, 1.0
+    state[4] += anchors
     recurrence_kernel(terms, cov_start, out)

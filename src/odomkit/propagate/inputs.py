@@ -60,6 +60,18 @@ def _sym2(q00: ArrayLike, q01: ArrayLike, q11: ArrayLike) -> NDArray[np.float64]
     return np.stack([q00, q01, q01, q11], axis=-1).reshape(q00.shape + (2, 2))
 
 
+def wheel_cov_coefficients(wheel_base: float, noise: WheelNoise) -> NDArray[np.float64]:
+    """(k_L², k_R², J00², J01·J11, J11²), J = ∂(Δd, Δθ)/∂(d_L, d_R): the constants of
+    :func:`wheel_input_cov`, shared with the numba kernel so both give the same bits.
+
+    >>> wheel_cov_coefficients(0.5, WheelNoise(0.1, 0.2)).round(6).tolist()
+    [0.01, 0.04, 0.25, 1.0, 4.0]
+    """
+    jac = diff_body_jacobian(wheel_base)
+    return np.array([noise.k_left**2, noise.k_right**2, jac[0, 0] ** 2,
+                     jac[0, 1] * jac[1, 1], jac[1, 1] ** 2])
+
+
 def wheel_input_cov(
     d_left: ArrayLike, d_right: ArrayLike, wheel_base: float, noise: WheelNoise
 ) -> NDArray[np.float64]:
@@ -89,22 +101,46 @@ def wheel_input_cov(
     >>> np.allclose(q[0], [[0.005, 0.0], [0.0, 0.08]])
     True
     """
+    k_l2, k_r2, j00_sq, j01_j11, j11_sq = wheel_cov_coefficients(wheel_base, noise)
     var_l = np.abs(_f(d_left))
-    var_l *= noise.k_left**2
+    var_l *= k_l2
     var_r = np.abs(_f(d_right))
-    var_r *= noise.k_right**2
-    jac = diff_body_jacobian(wheel_base)
+    var_r *= k_r2
     # The Sun–Gao exercise prints Σ_ΔdΔθ = diag((σr²+σl²)/4, (σr²−σl²)/L²): wrong. The
     # θθ entry is (σr²+σl²)/b² (variances add), and the off-diagonal is (σr²−σl²)/(2b),
     # not 0. Its J_x also swaps sin and cos in the θ column; the engines use
     # [−Δy, Δx] (kinematics.step_jacobians), checked by finite differences.
     # J diag(var_l, var_r) J^T written out with J = [[½, ½], [−1/b, 1/b]]: no (M, 2, 2)
-    # temporaries, few passes (this runs once per chunk of a 10^7-sample log).
+    # temporaries, few passes. The numba kernel (_numba.py, QMODE_WHEEL) repeats these
+    # operations in this order; keep the two in step.
     var_sum = var_l + var_r
     var_diff = var_r
     var_diff -= var_l
-    return _sym2(jac[0, 0] ** 2 * var_sum, jac[0, 1] * jac[1, 1] * var_diff,
-                 jac[1, 1] ** 2 * var_sum)
+    return _sym2(j00_sq * var_sum, j01_j11 * var_diff, j11_sq * var_sum)
+
+
+@dataclass(frozen=True)
+class WheelInputs:
+    """Per-wheel noise of a whole log in the form a compiled engine consumes: the wheel
+    travels d_left, d_right (M,) [m] and :func:`wheel_cov_coefficients` (5,).
+
+    >>> w = WheelInputs(np.array([1.0]), np.array([1.0]),
+    ...                 wheel_cov_coefficients(0.5, WheelNoise(0.1, 0.1)))
+    >>> np.array_equal(w.cov_input(0, 1), wheel_input_cov([1.0], [1.0], 0.5, WheelNoise(0.1, 0.1)))
+    True
+    """
+
+    d_left: NDArray[np.float64]
+    d_right: NDArray[np.float64]
+    coefficients: NDArray[np.float64]
+
+    def cov_input(self, a: int, b: int) -> NDArray[np.float64]:
+        """:func:`wheel_input_cov` of steps a … b−1, (b − a, 2, 2)."""
+        k_l2, k_r2, j00_sq, j01_j11, j11_sq = self.coefficients
+        var_l = np.abs(self.d_left[a:b]) * k_l2
+        var_r = np.abs(self.d_right[a:b]) * k_r2
+        var_sum = var_l + var_r
+        return _sym2(j00_sq * var_sum, j01_j11 * (var_r - var_l), j11_sq * var_sum)
 
 
 def classical_input_cov(m: int, noise: ClassicalNoise) -> NDArray[np.float64]:
@@ -431,6 +467,9 @@ class NoisePlan:
         Direct heading: variance of each heading sample [rad²].
     var_params : ndarray, shape (p,), or None
         Bias-mode parameter variances; None when there is no bias term.
+    wheel : WheelInputs or None
+        Set when per-wheel noise is the only white source, so that the numba recursion
+        can form Q_k itself; ``white`` then holds the same model as a function.
     """
 
     method: str
@@ -439,6 +478,7 @@ class NoisePlan:
     var_heading: NDArray[np.float64] | None = None
     var_params: NDArray[np.float64] | None = None
     param_jac: InputFn | None = None
+    wheel: WheelInputs | None = None
 
     def cov_input(self, a: int, b: int) -> NDArray[np.float64]:
         """Summed white input covariance of steps a … b−1, (b − a, 2, 2)."""
@@ -526,6 +566,7 @@ def plan_noise(steps: Any, noise: Any, method: str = "exact") -> NoisePlan:
     dt = np.asarray(steps.dt, dtype=float)
     direct = isinstance(robot, CompassOdometry)
     white: list[InputFn] = []
+    wheel: WheelInputs | None = None
     if ClassicalNoise in by_type:
         if len(by_type) > 1:
             raise ModelError("ClassicalNoise has its own step map and cannot be combined")
@@ -535,7 +576,8 @@ def plan_noise(steps: Any, noise: Any, method: str = "exact") -> NoisePlan:
         _require_robot(by_type[WheelNoise], robot, DiffDrive)
         wn, d_l, d_r = by_type[WheelNoise], _input(steps, "d_left"), _input(steps, "d_right")
         base = robot.effective_wheel_base
-        white.append(lambda a, b: wheel_input_cov(d_l[a:b], d_r[a:b], base, wn))
+        wheel = WheelInputs(d_l, d_r, wheel_cov_coefficients(base, wn))
+        white.append(wheel.cov_input)
     if TricycleNoise in by_type:
         _require_robot(by_type[TricycleNoise], robot, Tricycle)
         tn, s, st = by_type[TricycleNoise], _input(steps, "travel"), _input(steps, "steer")
@@ -561,4 +603,6 @@ def plan_noise(steps: Any, noise: Any, method: str = "exact") -> NoisePlan:
             white.append(lambda a, b: white_parameter_cov(jac(a, b), var))
         else:
             var_params, param_jac = var, jac
-    return NoisePlan(method, direct, tuple(white), var_heading, var_params, param_jac)
+    only_wheel = wheel if len(white) == 1 and wheel is not None and not direct else None
+    return NoisePlan(method, direct, tuple(white), var_heading, var_params, param_jac,
+                     only_wheel)
