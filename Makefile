@@ -17,8 +17,11 @@ $(STAMP): $(BIN)/python pyproject.toml
 demo: $(STAMP)
 	$(BIN)/odomkit demo --out demo-output --force
 
+# The whole suite, then the linters (ruff, mypy): CI runs exactly this.
 test: $(STAMP)
 	$(BIN)/python -m pytest src tests
+	$(BIN)/ruff check src tests benchmarks
+	$(BIN)/mypy src
 
 test-fast: $(STAMP)
 	$(BIN)/python -m pytest src tests -m "not slow"

@@ -97,3 +97,15 @@ def test_bad_robot_file_exits_2(run_cli, tmp_path, body, message):
     robot.write_text(body)
     code, _, err = run_cli("track", RUN, "--robot", robot)
     assert code == 2 and message in err and str(robot) in err
+
+
+def test_both_covariance_engines_agree_through_the_cli(run_cli):
+    results = {}
+    for engine in ("recursion", "transition"):
+        code, stdout, err = run_cli("track", RUN, "--robot", ROBOT, "--engine", engine, "--json")
+        assert code == 0, err
+        results[engine] = np.array(json.loads(stdout)["cov"])
+    # Kelly's transition solution equals the recursion exactly in exact arithmetic.
+    assert results["transition"] == pytest.approx(results["recursion"], rel=1e-9)
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--engine", "kalman")
+    assert code == 2 and "engine" in err

@@ -62,6 +62,7 @@ def dead_reckon_log(
     pose0: ArrayLike | None = None,
     noise: object | None = None,
     cov0: ArrayLike | None = None,
+    engine: str = "recursion",
 ) -> Track:
     """Dead-reckon a whole log.
 
@@ -77,6 +78,9 @@ def dead_reckon_log(
         (:func:`odomkit.propagate.recursion.track_covariance`).
     cov0 : array_like, shape (3, 3), optional
         Initial covariance (default zero).
+    engine : {"recursion", "transition"}
+        Covariance engine: the step recursion (Chong–Kleeman eq. 2) or Kelly's
+        transition-matrix solution; they agree to round-off.
 
     Returns
     -------
@@ -96,5 +100,5 @@ def dead_reckon_log(
         from odomkit.propagate.recursion import track_covariance
 
         c0 = np.zeros((3, 3)) if cov0 is None else np.asarray(cov0, dtype=float)
-        cov = track_covariance(steps, poses, noise, c0, method=method)
+        cov = track_covariance(steps, poses, noise, c0, method=method, engine=engine)
     return Track(log.t, poses, cov, steps)

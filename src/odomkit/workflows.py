@@ -111,6 +111,7 @@ def run_track(
     decimate: int = 1,
     pose0: tuple[float, float, float] | None = None,
     with_covariance: bool = True,
+    engine: str = "recursion",
     out: str | Path | None = None,
     tum: str | Path | None = None,
     overwrite: bool = False,
@@ -122,7 +123,7 @@ def run_track(
             raise InputError("exists already; pass --force to replace it", source=str(target))
     log = load_log(log_path, robot, log_options).decimate(decimate)
     use_noise = (noise if len(noise) > 1 else noise[0]) if (noise and with_covariance) else None
-    track = dead_reckon_log(log, robot, method, pose0, noise=use_noise)
+    track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, engine=engine)
     outputs = {}
     if out is not None:
         outputs["track_csv"] = str(write_track_csv(out, track, overwrite))

@@ -45,6 +45,8 @@ def track(
         help="x,y,theta [m, m, rad]; default: first ground-truth pose or the origin")] = None,
     theta0_deg: Annotated[bool, typer.Option(help="Read theta of --initial-pose in degrees.")] = False,
     covariance: Annotated[bool, typer.Option(help="Propagate the robot file's noise.")] = True,
+    engine: Annotated[str, typer.Option(
+        help="Covariance engine: recursion (step recursion) | transition (Kelly).")] = "recursion",
     out: Annotated[Path | None, typer.Option(help="Write the track as CSV here.")] = None,
     tum: Annotated[Path | None, typer.Option(help="Write a TUM trajectory here.")] = None,
     force: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
@@ -55,7 +57,7 @@ def track(
         log, robot, method=method,  # type: ignore[arg-type]
         log_options=LogOptions(format, columns, cumulative, wrap_bits, period, time_scale),
         decimate=decimate, pose0=parse_pose(initial_pose, theta0_deg),
-        with_covariance=covariance, out=out, tum=tum, overwrite=force,
+        with_covariance=covariance, engine=engine, out=out, tum=tum, overwrite=force,
     )
     summary = result.summary()
     if json:
