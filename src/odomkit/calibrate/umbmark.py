@@ -5,7 +5,7 @@ counter-clockwise (CCW), starting at (0, 0) heading +x and making four on-the-sp
 turns. The return position errors ε = absolute − calculated (Borenstein–Feng eq. 3.1) of
 each run are the input here.
 
-Conventions (Borenstein–Feng section IV-A, re-derived; see docs/readme/umbmark.md):
+Conventions (Borenstein–Feng section IV-A, re-derived; see the README, "UMBmark calibration"):
 
 - α [rad] is the Type A error of each nominal 90° turn, positive when the robot turns
   *less* than 90° in both directions (actual wheel base larger than believed, E_b > 1).
