@@ -7,13 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from odomkit.calibrate.exact import (
-    _DiffModel,
-    _TricycleModel,
-    calibrate_exact,
-    integrate_with_sensitivity,
-    jackknife_runs,
-)
+from odomkit.calibrate.exact import calibrate_exact, jackknife_runs
+from odomkit.calibrate.residuals import _DiffModel, _TricycleModel, integrate_with_sensitivity
 from odomkit.calibrate.umbmark import apply_corrections, umbmark
 from odomkit.calibrate.virtual import (
     SystematicErrors,

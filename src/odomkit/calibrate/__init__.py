@@ -8,6 +8,7 @@ Modules (import them directly; nothing is imported eagerly here):
 - :mod:`odomkit.calibrate.virtual` — a simulated differential robot that drives the
   UMBmark square by its own odometry, for testing calibrations (virtual UMBmark).
 - :mod:`odomkit.calibrate.exact`, :mod:`odomkit.calibrate.noise_fit`,
-  :mod:`odomkit.calibrate.export` — exact-model least squares, (k_L, k_R) fitting and
-  export of calibrated robots.
+  :mod:`odomkit.calibrate.export` — exact-model least squares (its residuals and their
+  Jacobian in :mod:`odomkit.calibrate.residuals`), (k_L, k_R) fitting and export of
+  calibrated robots.
 """

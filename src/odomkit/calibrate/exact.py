@@ -29,165 +29,32 @@ whitened by a noise model (``noise=``); for unweighted endpoints it is approxima
 (x, y and θ errors of one run are correlated); for trajectories it is optimistic,
 because the errors along one track are a random walk, strongly correlated from row to
 row — use :func:`jackknife_runs` there.
+
+The re-integration with sensitivities, the parameter-to-body-step maps of each robot and
+the weighted residuals with their Jacobian are in :mod:`odomkit.calibrate.residuals`.
 """
 
 from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
+from odomkit.calibrate.residuals import _DiffModel, _model, _Problem, _whitening
 from odomkit.errors import InputError, ModelError
-from odomkit.kinematics import Method, body_steps, step_jacobians
+from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle
-from odomkit.track import initial_pose
 
 Source = Literal["endpoints", "trajectory"]
 
 #: Below this relative sensitivity the overall scale counts as unobservable.
 SCALE_OBSERVABLE_BELOW = 0.05
-
-
-def _wrap(angle: NDArray[np.float64]) -> NDArray[np.float64]:
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
-
-
-def integrate_with_sensitivity(
-    dd: NDArray[np.float64],
-    dtheta: NDArray[np.float64],
-    ddd_dp: NDArray[np.float64],
-    ddtheta_dp: NDArray[np.float64],
-    pose0: NDArray[np.float64],
-    method: Method = "exact",
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Dead-reckon body steps and, in the same vectorised pass, the derivative of every
-    pose with respect to P parameters the steps depend on.
-
-    Parameters
-    ----------
-    dd, dtheta : ndarray, shape (M,)
-        Body steps [m], [rad].
-    ddd_dp, ddtheta_dp : ndarray, shape (M, P)
-        Their derivatives with respect to the parameters.
-    pose0 : ndarray, shape (3,)
-        Initial pose (independent of the parameters).
-    method : {"exact", "midpoint", "euler"}
-
-    Returns
-    -------
-    poses : ndarray, shape (M + 1, 3)
-    dposes_dp : ndarray, shape (M + 1, 3, P)
-
-    Examples
-    --------
-    A straight metre with dd = p: x_end = p, so ∂x_end/∂p = 1.
-
-    >>> p, dp = integrate_with_sensitivity(np.full(4, 0.25), np.zeros(4), np.full((4, 1), 0.25),
-    ...                                    np.zeros((4, 1)), np.zeros(3))
-    >>> float(p[-1, 0]), float(dp[-1, 0, 0])
-    (1.0, 1.0)
-    """
-    m, n_par = ddd_dp.shape
-    theta = np.empty(m + 1)
-    theta[0] = pose0[2]
-    np.cumsum(dtheta, out=theta[1:])
-    theta[1:] += pose0[2]
-    dtheta_p = np.zeros((m + 1, n_par))
-    np.cumsum(ddtheta_dp, axis=0, out=dtheta_p[1:])
-    F, G = step_jacobians(theta[:-1], dd, dtheta, method)
-    # The step displacement depends on the parameters through (Δd, Δθ) of the step (G)
-    # and through the heading at its start (F[:, :2, 2] = (−Δy, Δx)).
-    ddx = G[:, 0, 0, None] * ddd_dp + G[:, 0, 1, None] * ddtheta_dp + F[:, 0, 2, None] * dtheta_p[:-1]
-    ddy = G[:, 1, 0, None] * ddd_dp + G[:, 1, 1, None] * ddtheta_dp + F[:, 1, 2, None] * dtheta_p[:-1]
-    poses = np.empty((m + 1, 3))
-    poses[0] = pose0
-    poses[1:, 0] = pose0[0] + np.cumsum(F[:, 1, 2])  # F[:, 1, 2] = Δx
-    poses[1:, 1] = pose0[1] - np.cumsum(F[:, 0, 2])  # F[:, 0, 2] = −Δy
-    poses[:, 2] = theta
-    dposes = np.zeros((m + 1, 3, n_par))
-    np.cumsum(ddx, axis=0, out=dposes[1:, 0])
-    np.cumsum(ddy, axis=0, out=dposes[1:, 1])
-    dposes[:, 2] = dtheta_p
-    return poses, dposes
-
-
-class _DiffModel:
-    """p = (c_left, c_right, c_wheel_base) of a DiffDrive."""
-
-    names = ("c_left", "c_right", "c_wheel_base")
-
-    def __init__(self, robot: DiffDrive, runs: Sequence[OdometryLog]):
-        self.robot = robot
-        raw = replace(robot, c_left=1.0, c_right=1.0, c_wheel_base=1.0)
-        steps = [body_steps(raw, log) for log in runs]
-        self.raw = [(s.inputs["d_left"], s.inputs["d_right"]) for s in steps]
-        self.p0 = np.array([robot.c_left, robot.c_right, robot.c_wheel_base])
-
-    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
-        a, r = self.raw[i]
-        b = p[2] * self.robot.wheel_base
-        d_left, d_right = p[0] * a, p[1] * r
-        # Borenstein–Feng (2.2)–(2.4) with (4.33): d = c·c_m·N, Δd = (dR + dL)/2, Δθ = (dR − dL)/b
-        dd = 0.5 * (d_left + d_right)
-        dtheta = (d_right - d_left) / b
-        ddd = np.stack([0.5 * a, 0.5 * r, np.zeros_like(a)], axis=1)
-        ddt = np.stack([-a / b, r / b, -dtheta / p[2]], axis=1)
-        return dd, dtheta, ddd, ddt
-
-    def make_robot(self, p: NDArray[np.float64]) -> DiffDrive:
-        return replace(self.robot, c_left=float(p[0]), c_right=float(p[1]), c_wheel_base=float(p[2]))
-
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """p = offset + T q keeping (c_left + c_right)/2 at its current value
-        (Borenstein–Feng eq. 4.28); q = (half difference, c_wheel_base)."""
-        mean = 0.5 * (p0[0] + p0[1])
-        T = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-        return np.array([mean, mean, 0.0]), T
-
-
-class _TricycleModel:
-    """p = (c_scale, steering_offset, wheel_to_axle) of a Tricycle."""
-
-    names = ("c_scale", "steering_offset", "wheel_to_axle")
-
-    def __init__(self, robot: Tricycle, runs: Sequence[OdometryLog]):
-        self.robot = robot
-        raw = replace(robot, c_scale=1.0, steering_offset=0.0)
-        steps = [body_steps(raw, log) for log in runs]
-        self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
-        self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_to_axle])
-
-    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
-        s0, a0 = self.raw[i]
-        s, alpha, L = p[0] * s0, a0 + p[1], p[2]
-        cos_a, sin_a = np.cos(alpha), np.sin(alpha)
-        # Tricycle model Δd = s·cos α, Δθ = s·sin α / L (kinematics.tricycle_body_steps)
-        dd, dtheta = s * cos_a, s * sin_a / L
-        ddd = np.stack([s0 * cos_a, -s * sin_a, np.zeros_like(s)], axis=1)
-        ddt = np.stack([s0 * sin_a / L, s * cos_a / L, -dtheta / L], axis=1)
-        return dd, dtheta, ddd, ddt
-
-    def make_robot(self, p: NDArray[np.float64]) -> Tricycle:
-        return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
-                       wheel_to_axle=float(p[2]))
-
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep c_scale; fit (steering_offset, wheel_to_axle)."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
-
-
-def _model(robot: Any, runs: Sequence[OdometryLog]) -> _DiffModel | _TricycleModel:
-    if isinstance(robot, DiffDrive):
-        return _DiffModel(robot, runs)
-    if isinstance(robot, Tricycle):
-        return _TricycleModel(robot, runs)
-    raise ModelError(f"exact calibration supports DiffDrive and Tricycle robots, got {type(robot).__name__}")
 
 
 @dataclass(frozen=True)
@@ -300,87 +167,6 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
             )
 
 
-class _Problem:
-    """Weighted residuals and their Jacobian over all runs, for parameters p = off + T q."""
-
-    def __init__(self, model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog],
-                 source: str, heading_weight: float, every: int,
-                 whiten: list[NDArray[np.float64]] | None, method: Method):
-        self.model, self.source, self.method = model, source, method
-        self.pose0 = [initial_pose(log, None) for log in runs]
-        self.truth = []
-        for log in runs:
-            gt = log.ground_truth
-            assert gt is not None
-            rows = np.array([len(log) - 1]) if source == "endpoints" else np.arange(1, len(log), every)
-            if source == "trajectory" and rows[-1] != len(log) - 1:
-                rows = np.append(rows, len(log) - 1)
-            self.truth.append((rows, gt[rows]))
-        self.w = heading_weight
-        self.whiten = whiten
-        self.offset = np.zeros(3)
-        self.T = np.eye(3)
-        self._cache: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None
-
-    def full(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        return self.offset + self.T @ q
-
-    def _run(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        dd, dth, ddd, ddt = self.model.steps(p, i)
-        poses, dposes = integrate_with_sensitivity(dd, dth, ddd, ddt, self.pose0[i], self.method)
-        rows, gt = self.truth[i]
-        res = poses[rows] - gt
-        res[:, 2] = _wrap(res[:, 2])
-        jac = dposes[rows]
-        if self.whiten is not None:
-            # Endpoint GLS: r ← L⁻¹ r with C = L Lᵀ the predicted end-pose covariance.
-            L = self.whiten[i]
-            res = np.linalg.solve(L, res[0])[None, :]
-            jac = np.linalg.solve(L, jac[0])[None, :, :]
-        else:
-            res[:, 2] *= self.w
-            jac = jac.copy()
-            jac[:, 2] *= self.w
-        return res.reshape(-1), jac.reshape(-1, jac.shape[-1])
-
-    def scale_sensitivity(self, p: NDArray[np.float64]) -> float:
-        """Relative observability of the overall scale, in [0, 1].
-
-        Scaling every length by s moves each compared position by (s − 1)·(pos − start),
-        while the other errors move it by up to (s − 1)·(distance travelled so far). The
-        ratio sqrt(Σ|pos − start|²)/sqrt(Σ travelled²) over the compared rows is therefore
-        the scale's sensitivity relative to a typical parameter's: about 0.002 for the end of
-        a closed square, 1 on a straight line, about 0.3 for a whole square track.
-        """
-        num = den = 0.0
-        for i, pose0 in enumerate(self.pose0):
-            dd, dth = self.model.steps(p, i)[:2]
-            poses, _ = integrate_with_sensitivity(dd, dth, np.zeros((dd.size, 0)),
-                                                  np.zeros((dd.size, 0)), pose0, self.method)
-            travelled = np.r_[0.0, np.cumsum(np.abs(dd))]
-            rows = self.truth[i][0]
-            num += float(np.sum((poses[rows, :2] - pose0[:2]) ** 2))
-            den += float(np.sum(travelled[rows] ** 2))
-        return float(np.sqrt(num / den)) if den > 0 else 0.0
-
-    def _all(self, p: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        # least_squares asks for residuals and Jacobian at the same point: integrate once.
-        if self._cache is None or not np.array_equal(self._cache[0], p):
-            parts = [self._run(p, i) for i in range(len(self.pose0))]
-            self._cache = (p.copy(), np.concatenate([r for r, _ in parts]),
-                           np.concatenate([j for _, j in parts]))
-        return self._cache[1], self._cache[2]
-
-    def residuals(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        return self._all(self.full(q))[0]
-
-    def jacobian_full(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        return self._all(p)[1]
-
-    def jacobian(self, q: NDArray[np.float64]) -> NDArray[np.float64]:
-        return self.jacobian_full(self.full(q)) @ self.T
-
-
 def calibrate_exact(
     runs: Sequence[OdometryLog],
     robot: DiffDrive | Tricycle,
@@ -409,7 +195,7 @@ def calibrate_exact(
         a quarter of the mean path length of the runs (the side of a square: a heading
         error δθ at the end counts like a lateral miss of side·δθ). The default 0 fits
         positions only, like UMBmark and E_max,syst; on the OptiOdom squares adding the
-        heading made the calibration worse in and out of sample (docs/readme/calibration.md).
+        heading made the calibration worse in and out of sample (README, "Exact least squares").
     fix_scale : bool, optional
         Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
         value. Default: automatically, when the compared poses lie closer to the start than
@@ -503,28 +289,6 @@ def calibrate_exact(
         corr=corr, residual_variance=var_res, n_residuals=n_res, n_runs=len(runs),
         source=source, scale_fixed=bool(fix_scale), scale_sensitivity=sens, notes=tuple(notes),
     )
-
-
-def _whitening(model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog], source: str,
-               noise: Any, method: Method) -> list[NDArray[np.float64]]:
-    from odomkit.calibrate.noise_fit import wheel_noise_basis
-    from odomkit.noise import WheelNoise
-
-    if source != "endpoints" or not isinstance(model, _DiffModel) or not isinstance(noise, WheelNoise):
-        raise ModelError("noise weighting is available for diff-drive endpoint fits with a WheelNoise")
-    out = []
-    for i in range(len(runs)):
-        a, r = model.raw[i]
-        A, B = wheel_noise_basis(model.p0[0] * a, model.p0[1] * r,
-                                 model.p0[2] * model.robot.wheel_base,
-                                 initial_pose(runs[i], None), method)
-        C = noise.k_left**2 * A + noise.k_right**2 * B
-        try:
-            out.append(np.asarray(np.linalg.cholesky(C), dtype=np.float64))
-        except np.linalg.LinAlgError:
-            raise ModelError(f"predicted end-pose covariance of run {runs[i].source} is singular; "
-                             "both k_left and k_right must be > 0 for weighting") from None
-    return out
 
 
 def jackknife_runs(

@@ -28,13 +28,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.propagate.inputs import (
-    NoisePlan,
-    WheelInputs,
-    any_step_jacobians,
-    plan_noise,
-    step_terms,
-)
+from odomkit.propagate.inputs import any_step_jacobians, step_terms
+from odomkit.propagate.plan import NoisePlan, WheelInputs, plan_noise
 from odomkit.propagate.transition import (
     check_cov3,
     check_cov_input,
@@ -308,7 +303,7 @@ def track_covariance(
         The track dead-reckoned from ``steps`` (headings at the start of each step are
         ``poses[:-1, 2]``; for a compass robot the measured heading).
     noise : noise model or tuple of noise models
-        Any of :mod:`odomkit.noise`; see :func:`odomkit.propagate.inputs.plan_noise` for
+        Any of :mod:`odomkit.noise`; see :func:`odomkit.propagate.plan.plan_noise` for
         which combine with which robot.
     cov0 : array_like, shape (3, 3)
         Covariance of the first pose (for a compass robot only its position block is
