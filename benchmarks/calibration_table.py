@@ -17,14 +17,15 @@ from pathlib import Path
 
 import numpy as np
 
-from odomkit.calibrate.realdata import square_table, square_table_markdown
+from odomkit.calibrate.realdata import square_table_markdown
+from odomkit.workflows.calibration import optiodom_square_table
 
 
 def main() -> None:
     default = os.environ.get("ODOMKIT_DATA") or str(Path(__file__).resolve().parents[2] / "shared" / "data")
     data_dir = Path(sys.argv[1] if len(sys.argv) > 1 else default)
     start = time.perf_counter()
-    rows = square_table(data_dir)
+    rows = optiodom_square_table(data_dir)
     seconds = time.perf_counter() - start
     print(square_table_markdown(rows))
     for side in sorted({r.side for r in rows}):

@@ -11,25 +11,19 @@ from typing import Any
 import numpy as np
 
 from odomkit.calibrate.exact import calibrate_exact
-from odomkit.calibrate.export import ros2_diff_drive_yaml, write_calibrated_robot
+from odomkit.calibrate.export import ros2_diff_drive_yaml
 from odomkit.calibrate.realdata import e_max_syst_of_runs, umbmark_from_runs
 from odomkit.cli.output import to_jsonable
-from odomkit.errors import InputError
 from odomkit.evaluate import evaluate_track
+from odomkit.io.files import refuse_overwrite, write_new_text
 from odomkit.io.optiodom import read_experiment
-from odomkit.io.robotfile import read_robot
+from odomkit.io.robotfile import read_robot, write_robot
 from odomkit.io.trackio import write_track_csv, write_tum
 from odomkit.path import Spin, Straight
 from odomkit.propagate.predict import predict
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
 from odomkit.workflows import builtin_data_path
-
-
-def _check_free(paths: list[Path], overwrite: bool) -> None:
-    for path in paths:
-        if path.exists() and not overwrite:
-            raise InputError("exists already; pass --force to replace it", source=str(path))
 
 
 def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
@@ -52,7 +46,7 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     targets = [out / f"{s}_track.csv" for s in stems] + [out / f"{s}.tum" for s in stems]
     targets += [out / n for n in ("calibrated_robot.toml", "diff_drive_controller.yaml",
                                   "summary.json", "demo_tracks.png")]
-    _check_free(targets, overwrite)
+    refuse_overwrite(*targets, overwrite=overwrite)
 
     summary: dict[str, Any] = {"robot": str(robot_file), "runs": {}}
     tracks = []
@@ -82,10 +76,10 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
         track = dead_reckon_log(run, calibrated, "exact", noise=noise[0])
         ev = evaluate_track(track.poses, truth, track.cov)
         summary["runs"][stem]["calibrated"] = ev.to_dict()
-    write_calibrated_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
-    (out / "diff_drive_controller.yaml").write_text(
-        ros2_diff_drive_yaml(calibrated, wheel_radius=experiment.metadata.wheel_diameters[0] / 2),
-        encoding="utf-8")
+    write_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
+    write_new_text(out / "diff_drive_controller.yaml",
+                   ros2_diff_drive_yaml(calibrated, wheel_radius=experiment.metadata.wheel_diameters[0] / 2),
+                   overwrite=True)
 
     # One clockwise square as planned: four legs and four right turns on the spot.
     square = [seg for _ in range(4) for seg in (Straight(side), Spin(-np.pi / 2))]

@@ -3,7 +3,7 @@
 A robot says how raw log channels become body motion; it holds no noise (see
 :mod:`odomkit.noise`) and no state. All lengths are metres, angles radians.
 
-Log channels each robot consumes (see :mod:`odomkit.io.log`):
+Log channels each robot consumes (see :mod:`odomkit.log`):
 
 =========================  ======================================================
 robot                      channels

@@ -8,23 +8,24 @@ import math
 import numpy as np
 import pytest
 
-from odomkit.calibrate.export import ros2_diff_drive_yaml, write_calibrated_robot, write_ros2_yaml
+from odomkit.calibrate.export import ros2_diff_drive_yaml
 from odomkit.errors import InputError, OdomkitError
-from odomkit.io.robotfile import read_robot
+from odomkit.io.robotfile import read_robot, write_robot
 from odomkit.robot import DiffDrive, Tricycle
+from odomkit.workflows.calibration import write_ros2_yaml
 
 ROBOT = DiffDrive(0.2, 9.4e-5, 9.6e-5, 0.999, 1.002, 1.0064)
 
 
 def test_robot_file_round_trips_and_is_not_overwritten(tmp_path):
     path = tmp_path / "robot.toml"
-    write_calibrated_robot(path, ROBOT)
+    write_robot(path, ROBOT)
     assert read_robot(path)[0] == ROBOT
     before = path.read_text()
     with pytest.raises(InputError, match="exists"):
-        write_calibrated_robot(path, DiffDrive(0.3))
+        write_robot(path, DiffDrive(0.3))
     assert path.read_text() == before
-    write_calibrated_robot(path, DiffDrive(0.3), overwrite=True)
+    write_robot(path, DiffDrive(0.3), overwrite=True)
     assert read_robot(path)[0] == DiffDrive(0.3)
 
 
@@ -69,7 +70,7 @@ def _robot_file(tmp_path, folder):
 
     meta = read_metadata(next(folder.glob("*_metadata.csv")))
     path = tmp_path / "nominal.toml"
-    write_calibrated_robot(path, meta.robot())
+    write_robot(path, meta.robot())
     return path, meta
 
 
@@ -132,7 +133,7 @@ def test_cli_noise_fit_runs_on_repeated_logs(tmp_path, data_dir, run_cli):
 
 
 def test_umbmark_command_reads_runs_through_this_module(tmp_path, data_dir, run_cli):
-    # `odomkit umbmark --runs` (the UMBmark command) calls exact.umbmark_from_runs with file
+    # `odomkit umbmark --runs` (the UMBmark command) calls workflows.calibration.umbmark_from_files with file
     # paths; the E_max,syst it reports must equal the library's on the same logs.
     from odomkit.calibrate.realdata import umbmark_from_runs
     from odomkit.io.optiodom import read_experiment

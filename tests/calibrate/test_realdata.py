@@ -12,7 +12,6 @@ from odomkit.calibrate.realdata import (
     e_max_syst_of_runs,
     return_errors_from_runs,
     run_direction,
-    square_table,
     square_table_markdown,
     transfer,
     umbmark_from_runs,
@@ -29,6 +28,7 @@ from odomkit.integrate import dead_reckon
 from odomkit.kinematics import diff_body_steps
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive
+from odomkit.workflows.calibration import optiodom_square_table
 
 NOMINAL = DiffDrive(wheel_base=0.34, m_per_tick_left=1e-4, m_per_tick_right=1e-4)
 
@@ -153,7 +153,7 @@ def test_optiodom_square_table_exact_beats_umbmark_out_of_sample(data_dir):
     folder = data_dir / "optiodom" / "diff" / "square"
     if not folder.is_dir():
         pytest.skip(f"no OptiOdom square experiments under {data_dir}")
-    rows = square_table(data_dir)
+    rows = optiodom_square_table(data_dir)
     assert len(rows) == 8
     first = rows[0]
     assert first.before == pytest.approx(_independent_e_max(folder / first.experiment), rel=1e-9)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-import odomkit.calibrate.exact as exact_module
+import odomkit.workflows.calibration as calibration_workflows
 from odomkit.cli import main
 
 HAND_CSV = """direction,x,y
@@ -122,14 +122,18 @@ def test_bad_arguments_exit_2(tmp_path, capsys, args, needle) -> None:
     assert err.count("\n") == 1 and needle in err
 
 
-def test_runs_form_calls_the_exact_calibration_hook(tmp_path, capsys, monkeypatch) -> None:
+def test_runs_form_passes_every_run_to_the_workflow(tmp_path, capsys, monkeypatch) -> None:
     calls = []
+
+    class Fake:
+        def to_dict(self):
+            return {"e_max_syst": 0.5}
 
     def fake(runs, robot, side):
         calls.append((runs, robot, side))
-        return {"e_max_syst": 0.5}
+        return Fake()
 
-    monkeypatch.setattr(exact_module, "umbmark_from_runs", fake, raising=False)
+    monkeypatch.setattr(calibration_workflows, "umbmark_from_files", fake)
     assert main(["umbmark", "--runs", "a.csv", "b.csv", "--runs", "c.csv", "--robot", "r.toml",
                  "--side", "0.75", "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == {"e_max_syst": 0.5}

@@ -317,24 +317,3 @@ def jackknife_runs(
         loo = np.array([calibrate_exact([r for j, r in enumerate(runs) if j != i], robot, source,
                                         **kwargs).values for i in range(n)])
     return full, np.sqrt((n - 1) / n * np.sum((loo - loo.mean(axis=0)) ** 2, axis=0))
-
-
-def umbmark_from_runs(runs: Sequence[Any], robot: Any, side: float, **kwargs: Any) -> Any:
-    """UMBmark from logged runs, :func:`odomkit.calibrate.realdata.umbmark_from_runs`.
-
-    Also accepts file paths for ``runs`` (read by :func:`odomkit.workflows.load_log`) and a
-    robot-file path for ``robot``, which is how ``odomkit umbmark --runs`` calls it.
-    """
-    from pathlib import Path
-
-    from odomkit.calibrate.realdata import umbmark_from_runs as from_logs
-
-    if isinstance(robot, str | Path):
-        from odomkit.io.robotfile import read_robot
-
-        robot = read_robot(robot)[0]
-    if any(isinstance(r, str | Path) for r in runs):
-        from odomkit.workflows import load_log
-
-        runs = [load_log(r, robot) if isinstance(r, str | Path) else r for r in runs]
-    return from_logs(runs, robot, side, **kwargs)

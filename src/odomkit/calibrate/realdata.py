@@ -17,7 +17,6 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from pathlib import Path
 from typing import Any, cast
 
 import numpy as np
@@ -214,34 +213,24 @@ class SquareRow:
     n_out: int
 
 
-def _experiments(data_dir: str | Path) -> list[Any]:
-    from odomkit.io.optiodom import read_experiment
-
-    root = Path(data_dir)
-    folder = root / "optiodom" / "diff" / "square"
-    if not folder.is_dir():
-        folder = root / "diff" / "square"
-    if not folder.is_dir():
-        raise InputError("no optiodom/diff/square folder here", source=str(root))
-    return [read_experiment(p) for p in sorted(folder.iterdir()) if p.is_dir()]
-
-
-def square_table(data_dir: str | Path, **exact_kwargs: Any) -> list[SquareRow]:
+def square_table(experiments: Sequence[Any], **exact_kwargs: Any) -> list[SquareRow]:
     """E_max,syst of every OptiOdom ``diff/square`` experiment: before calibration, after
     UMBmark and after the exact calibration (endpoints), in sample and out of sample.
 
     Parameters
     ----------
-    data_dir : path
-        The data folder holding ``optiodom/`` (or the ``optiodom`` folder itself).
+    experiments : sequence of experiments
+        Each with ``.metadata`` (``experiment``, ``side``, ``robot()``) and ``.runs``
+        (logs with ground truth), e.g. :class:`odomkit.io.optiodom.OptiOdomExperiment`;
+        :func:`odomkit.workflows.calibration.optiodom_square_table` reads them from disk.
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact`
         for the endpoint fit (default: positions only).
 
     Returns
     -------
-    list of SquareRow, one per experiment, in folder order.
+    list of SquareRow, one per experiment, in the order given.
     """
-    exps = _experiments(data_dir)
+    exps = list(experiments)
     cal: dict[str, tuple[DiffDrive, DiffDrive]] = {}
     traj: dict[str, DiffDrive] = {}
     for ex in exps:

@@ -52,7 +52,7 @@ def calibrate_command(
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
-    from odomkit.calibrate.export import calibrate_files
+    from odomkit.workflows.calibration import calibrate_files
 
     extra = {"heading_weight": heading_weight} if method == "exact" else {}
     out = calibrate_files(runs, robot, method=method, source=source, side=side,
@@ -101,7 +101,7 @@ def calibrate_noise_command(
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Maximum-likelihood k_L, k_R (per-wheel noise, m^½) with profile-likelihood intervals."""
-    from odomkit.calibrate.export import noise_files
+    from odomkit.workflows.calibration import noise_files
 
     comps = tuple(c.strip() for c in components.split(",") if c.strip())
     if not 0 < level < 1:

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 from odomkit.cli import app
 from odomkit.cli.output import print_json
-from odomkit.errors import InputError, OdomkitError
+from odomkit.errors import InputError
 
 REQUIRED_COLUMNS = ("direction", "x", "y")
 MIN_RUNS_PER_DIRECTION = 2
@@ -89,16 +89,12 @@ def read_errors_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.f
 
 
 def _from_runs(run_paths: list[Path], robot: Path | None, side: float) -> dict[str, Any]:
-    """The logs-with-ground-truth form, owned by odomkit.calibrate.exact."""
+    """The logs-with-ground-truth form (:mod:`odomkit.workflows.calibration`)."""
     if robot is None:
         raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
-    try:
-        from odomkit.calibrate.exact import umbmark_from_runs  # type: ignore[attr-defined]
-    except ImportError:
-        raise OdomkitError("--runs is not available: odomkit.calibrate.exact.umbmark_from_runs "
-                           "is missing in this installation") from None
-    result = umbmark_from_runs(run_paths, robot, side=side)
-    return result.to_dict() if hasattr(result, "to_dict") else dict(result)
+    from odomkit.workflows.calibration import umbmark_from_files
+
+    return umbmark_from_files(run_paths, robot, side).to_dict()
 
 
 def _print_text(out: dict[str, Any]) -> None:

@@ -31,6 +31,7 @@ import tomli_w
 
 from odomkit import noise as nz
 from odomkit.errors import InputError, ModelError
+from odomkit.io.files import refuse_overwrite
 from odomkit.robot import (
     CompassOdometry,
     DiffDrive,
@@ -217,8 +218,6 @@ def write_robot(path: str | Path, robot: Robot, noise: tuple[Any, ...] = (),
                 overwrite: bool = False) -> Path:
     """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
     path = Path(path)
-    if path.exists() and not overwrite:
-        raise InputError("exists already; pass overwrite=True (CLI: --force) to replace it",
-                         source=str(path))
+    refuse_overwrite(path, overwrite=overwrite)
     path.write_text(tomli_w.dumps(robot_to_dict(robot, noise)), encoding="utf-8")
     return path

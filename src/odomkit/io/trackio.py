@@ -7,17 +7,12 @@ from pathlib import Path
 
 import numpy as np
 
-from odomkit.errors import InputError
+from odomkit.io.files import refuse_overwrite
 from odomkit.track import Track
 
 TRACK_COLUMNS = ("t", "x", "y", "theta", "cov_xx", "cov_xy", "cov_xtheta", "cov_yy",
                  "cov_ytheta", "cov_thetatheta")
 _COV_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))
-
-
-def _refuse_overwrite(path: Path, overwrite: bool) -> None:
-    if path.exists() and not overwrite:
-        raise InputError("exists already; pass --force to replace it", source=str(path))
 
 
 def track_table(track: Track) -> np.ndarray:
@@ -37,7 +32,7 @@ def write_track_csv(path: str | Path, track: Track, overwrite: bool = False) -> 
     """Write ``t,x,y,theta,cov_xx,...`` (DESIGN.md); covariance cells are empty when the
     track has no covariance. θ is written continuous (unwrapped)."""
     path = Path(path)
-    _refuse_overwrite(path, overwrite)
+    refuse_overwrite(path, overwrite=overwrite)
     table = track_table(track)
     buffer = io.StringIO()
     if track.cov is None:
@@ -58,7 +53,7 @@ def write_tum(path: str | Path, track: Track, overwrite: bool = False) -> Path:
     with θ wrapped to [−π, π), so that q_w >= 0 (q and −q are the same rotation).
     """
     path = Path(path)
-    _refuse_overwrite(path, overwrite)
+    refuse_overwrite(path, overwrite=overwrite)
     theta = (track.poses[:, 2] + np.pi) % (2 * np.pi) - np.pi
     n = theta.size
     table = np.column_stack((track.t, track.poses[:, 0], track.poses[:, 1], np.zeros(n),

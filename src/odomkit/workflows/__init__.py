@@ -15,6 +15,7 @@ from typing import Any
 from odomkit.errors import InputError
 from odomkit.evaluate import evaluate_track, wrap
 from odomkit.io.csvlog import parse_column_map, read_csv_log
+from odomkit.io.files import refuse_overwrite
 from odomkit.io.halmstad import read_khepera, read_snowhite
 from odomkit.io.optiodom import read_run
 from odomkit.io.robotfile import read_robot
@@ -118,9 +119,7 @@ def run_track(
 ) -> TrackRun:
     """Read a robot file and a log, dead-reckon, write the requested outputs."""
     robot, noise = read_robot(robot_path)
-    for target in (out, tum):
-        if target is not None and Path(target).exists() and not overwrite:
-            raise InputError("exists already; pass --force to replace it", source=str(target))
+    refuse_overwrite(out, tum, overwrite=overwrite)
     log = load_log(log_path, robot, log_options).decimate(decimate)
     use_noise = (noise if len(noise) > 1 else noise[0]) if (noise and with_covariance) else None
     track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, engine=engine)
