@@ -45,6 +45,8 @@ import math
 import numba
 import numpy as np
 
+from odomkit._sincos import ANCHOR, SHORT_LIMIT, sin_cos_sinc
+
 # Method codes shared with recursion.py.
 METHOD_EXACT = 0
 METHOD_MIDPOINT = 1
@@ -59,9 +61,6 @@ QMODE_WHEEL = 1
 # heading sum, 1.0 once the first three are valid, count of anchors (real cos/sin).
 STATE_SIZE = 5
 
-# A real cos/sin of θ_k at least every ANCHOR steps: the rotated vector then drifts by at
-# most ~ANCHOR rounding errors (~1e-14) from (cos θ_k, sin θ_k).
-ANCHOR = 128
 
 # Carried heading sum and θ_k may differ by this much before the step re-anchors:
 # 1e-12 rad absolute (a heading error δ changes the terms by ~δ relative), widened by
@@ -74,45 +73,15 @@ _TOL_REL = 64.0 * np.finfo(float).eps
 # used: it avoids the cancellation in (u·cos u − sin u)/u² (at |u| = 0.1 the first
 # omitted terms, u^10/11! and 10·u^9/11!, are below 3e-17 relative).
 _SERIES_BELOW = 0.1
-# |φ| below this takes sin φ, cos φ, sinc φ from Taylor polynomials to φ^14: the first
-# omitted term, φ^16/17!, is under 1e-24 there, far below double rounding.
-_POLY_LIMIT = 0.25
-# Typical steps turn far less (|φ| < 0.015 for 99.99 % of the benchmark's 100 Hz log), and
-# there polynomials to φ^6 (φ^8 for the derivative series) suffice: at |φ| = 0.025 the
-# first omitted terms, φ^8/8! (cos), φ^8/9! (sinc) and the derivative's relative
-# v⁴/(10·28·54·88), are below 4e-18, a thirtieth of an ulp of 1. Horner's rule is a
-# chain of dependent operations, so the shorter polynomials cut the latency of every
-# step by about a quarter (measured 27 -> 19 ns a step).
-_SHORT_LIMIT = 0.025
-_S1, _S2, _S3, _S4, _S5, _S6, _S7 = (
-    (-1.0) ** k / math.factorial(2 * k + 1) for k in range(1, 8))
-_C1, _C2, _C3, _C4, _C5, _C6, _C7 = ((-1.0) ** k / math.factorial(2 * k) for k in range(1, 8))
+# The derivative series below uses the short form under SHORT_LIMIT too (φ^8 term):
+# its relative error there, v⁴/(10·28·54·88), is below 4e-18.
+_SHORT_LIMIT = SHORT_LIMIT
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def heading_tolerance(theta_k: float) -> float:
     """Largest |carried heading − θ_k| [rad] that keeps the rotated heading vector."""
     return _TOL_ABS + _TOL_REL * abs(theta_k)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _sin_cos_sinc(phi: float) -> tuple[float, float, float]:
-    """sin φ, cos φ, sin φ / φ (polynomials below _POLY_LIMIT)."""
-    if abs(phi) < _SHORT_LIMIT:
-        p2 = phi * phi
-        sinc = 1.0 + p2 * (_S1 + p2 * (_S2 + p2 * _S3))
-        cos = 1.0 + p2 * (_C1 + p2 * (_C2 + p2 * _C3))
-        return phi * sinc, cos, sinc
-    if abs(phi) < _POLY_LIMIT:
-        p2 = phi * phi
-        # Horner form with multiplied constants: a division costs several products.
-        sinc = 1.0 + p2 * (_S1 + p2 * (_S2 + p2 * (_S3 + p2 * (_S4 + p2 * (_S5 + p2 * (
-            _S6 + p2 * _S7))))))
-        cos = 1.0 + p2 * (_C1 + p2 * (_C2 + p2 * (_C3 + p2 * (_C4 + p2 * (_C5 + p2 * (
-            _C6 + p2 * _C7))))))
-        return phi * sinc, cos, sinc
-    s = math.sin(phi)
-    return s, math.cos(phi), s / phi
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -155,18 +124,18 @@ def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method
     # Chong–Kleeman eq. 1) θ + α. Each turns the carried vector; the next step's heading
     # is θ + Δθ in all four maps.
     if method == METHOD_EULER:
-        sp, cp, _ = _sin_cos_sinc(a)
+        sp, cp, _ = sin_cos_sinc(a)
         hc, hs = c, s
         c, s = c * cp - s * sp, s * cp + c * sp
         f, df, w = 1.0, 0.0, 0.0
     elif method == METHOD_CLASSICAL:
-        sp, cp, _ = _sin_cos_sinc(a)
+        sp, cp, _ = sin_cos_sinc(a)
         hc, hs = c * cp - s * sp, s * cp + c * sp
         c, s = hc, hs
         f, df, w = 1.0, 0.0, 1.0
     else:
         u = 0.5 * a
-        sp, cp, sinc = _sin_cos_sinc(u)
+        sp, cp, sinc = sin_cos_sinc(u)
         hc, hs = c * cp - s * sp, s * cp + c * sp
         c, s = hc * cp - hs * sp, hs * cp + hc * sp
         if method == METHOD_MIDPOINT:
