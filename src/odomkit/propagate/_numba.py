@@ -171,6 +171,47 @@ def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method
             r10 * g10 + r11 * g11, r01, r11, q11, c, s, th, anchored)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _upper(cov: np.ndarray) -> tuple[float, float, float, float, float, float]:
+    """(p00, p01, p02, p11, p12, p22) of a 3×3 covariance, off-diagonals averaged.
+
+    Only the upper triangle is carried and the lower one mirrored on output: P is then
+    symmetric by construction, so round-off in F P F^T cannot make P_ij and P_ji drift
+    apart over 10^7 steps (filterpy symmetrises with (P + P^T)/2 for the same reason; an
+    asymmetric P breaks Cholesky and eigh downstream).
+    """
+    return (cov[0, 0], 0.5 * (cov[0, 1] + cov[1, 0]), 0.5 * (cov[0, 2] + cov[2, 0]),
+            cov[1, 1], 0.5 * (cov[1, 2] + cov[2, 1]), cov[2, 2])
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _advance(p00: float, p01: float, p02: float, p11: float, p12: float, p22: float,
+             u0: float, u1: float, b00: float, b01: float, b11: float, b02: float,
+             b12: float, b22: float) -> tuple[float, float, float, float, float, float]:
+    """F P F^T + B with F = I + u e_θ^T (Chong–Kleeman eq. 16, chord form), upper triangle."""
+    n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
+    n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
+    n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
+    n02 = p02 + u0 * p22
+    n12 = p12 + u1 * p22
+    return n00 + b00, n01 + b01, n02 + b02, n11 + b11, n12 + b12, p22 + b22
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _store(o: np.ndarray, p00: float, p01: float, p02: float, p11: float, p12: float,
+           p22: float) -> None:
+    """Write the upper triangle and its mirror into the 3×3 ``o``."""
+    o[0, 0] = p00
+    o[0, 1] = p01
+    o[1, 0] = p01
+    o[0, 2] = p02
+    o[2, 0] = p02
+    o[1, 1] = p11
+    o[1, 2] = p12
+    o[2, 1] = p12
+    o[2, 2] = p22
+
+
 @numba.njit(cache=True, nogil=True)
 def recursion_kernel(
     theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
@@ -184,16 +225,7 @@ def recursion_kernel(
     sit at multiples of ANCHOR); state : (STATE_SIZE,) carried heading, updated;
     cov_start : (3, 3) P before the first step; out : (n, 3, 3), written in place.
     """
-    # Only the upper triangle (6 numbers) is carried and the lower one mirrored on
-    # output: P is symmetric by construction, so round-off in F P F^T cannot make P_ij
-    # and P_ji drift apart over 10^7 steps (filterpy symmetrises with (P + P^T)/2 for
-    # the same reason; an asymmetric P breaks Cholesky and eigh downstream).
-    p00 = cov_start[0, 0]
-    p01 = 0.5 * (cov_start[0, 1] + cov_start[1, 0])
-    p02 = 0.5 * (cov_start[0, 2] + cov_start[2, 0])
-    p11 = cov_start[1, 1]
-    p12 = 0.5 * (cov_start[1, 2] + cov_start[2, 1])
-    p22 = cov_start[2, 2]
+    p00, p01, p02, p11, p12, p22 = _upper(cov_start)
     c, s, th = state[0], state[1], state[2]
     valid = state[3] != 0.0
     anchors = 0
@@ -204,28 +236,9 @@ def recursion_kernel(
             k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method,
             c, s, th, force)
         anchors += anchored
-        # F P F^T with F = I + u e_θ^T (Chong–Kleeman eq. 16, chord form), then + B.
-        n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
-        n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
-        n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
-        n02 = p02 + u0 * p22
-        n12 = p12 + u1 * p22
-        p00 = n00 + b00
-        p01 = n01 + b01
-        p11 = n11 + b11
-        p02 = n02 + b02
-        p12 = n12 + b12
-        p22 = p22 + b22
-        o = out[k]
-        o[0, 0] = p00
-        o[0, 1] = p01
-        o[1, 0] = p01
-        o[0, 2] = p02
-        o[2, 0] = p02
-        o[1, 1] = p11
-        o[1, 2] = p12
-        o[2, 1] = p12
-        o[2, 2] = p22
+        p00, p01, p02, p11, p12, p22 = _advance(p00, p01, p02, p11, p12, p22,
+                                                u0, u1, b00, b01, b11, b02, b12, b22)
+        _store(out[k], p00, p01, p02, p11, p12, p22)
     state[0], state[1], state[2] = c, s, th
     state[3] = 1.0 if valid else state[3]
     state[4] += anchors
@@ -259,36 +272,12 @@ def _terms_range(k0, k1, theta, dd, dtheta, cov_input, d_left, d_right, wheel, q
 def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray) -> None:
     """P_{k+1} = F_k P_k F_k^T + B_k over n steps from terms (8, n); ``out[k]`` receives
     P after step k (the same operations as :func:`recursion_kernel`)."""
-    p00 = cov_start[0, 0]
-    p01 = 0.5 * (cov_start[0, 1] + cov_start[1, 0])
-    p02 = 0.5 * (cov_start[0, 2] + cov_start[2, 0])
-    p11 = cov_start[1, 1]
-    p12 = 0.5 * (cov_start[1, 2] + cov_start[2, 1])
-    p22 = cov_start[2, 2]
+    p00, p01, p02, p11, p12, p22 = _upper(cov_start)
     for k in range(terms.shape[1]):
-        u0 = terms[0, k]
-        u1 = terms[1, k]
-        n00 = p00 + 2.0 * u0 * p02 + u0 * u0 * p22
-        n01 = p01 + u0 * p12 + u1 * p02 + u0 * u1 * p22
-        n11 = p11 + 2.0 * u1 * p12 + u1 * u1 * p22
-        n02 = p02 + u0 * p22
-        n12 = p12 + u1 * p22
-        p00 = n00 + terms[2, k]
-        p01 = n01 + terms[3, k]
-        p11 = n11 + terms[4, k]
-        p02 = n02 + terms[5, k]
-        p12 = n12 + terms[6, k]
-        p22 = p22 + terms[7, k]
-        o = out[k]
-        o[0, 0] = p00
-        o[0, 1] = p01
-        o[1, 0] = p01
-        o[0, 2] = p02
-        o[2, 0] = p02
-        o[1, 1] = p11
-        o[1, 2] = p12
-        o[2, 1] = p12
-        o[2, 2] = p22
+        p00, p01, p02, p11, p12, p22 = _advance(
+            p00, p01, p02, p11, p12, p22, terms[0, k], terms[1, k], terms[2, k],
+            terms[3, k], terms[4, k], terms[5, k], terms[6, k], terms[7, k])
+        _store(out[k], p00, p01, p02, p11, p12, p22)
 
 
 @numba.njit(cache=True, nogil=True, parallel=True)
