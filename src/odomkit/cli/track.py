@@ -52,7 +52,7 @@ def track(
     force: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Dead-reckon LOG with the robot in ROBOT (and its covariance if it has [noise])."""
+    """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     result = run_track(
         log, robot, method=method,  # type: ignore[arg-type]
         log_options=LogOptions(format, columns, cumulative, wrap_bits, period, time_scale),
