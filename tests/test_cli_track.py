@@ -109,3 +109,30 @@ def test_both_covariance_engines_agree_through_the_cli(run_cli):
     assert results["transition"] == pytest.approx(results["recursion"], rel=1e-9)
     code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--engine", "kalman")
     assert code == 2 and "engine" in err
+
+
+@pytest.mark.parametrize("cov", [True, False])
+def test_track_csv_is_the_same_with_either_writer(tmp_path, monkeypatch, cov):
+    pytest.importorskip("polars")
+    import odomkit.io.table as table
+    from odomkit.io.optiodom import read_run
+    from odomkit.io.robotfile import read_robot
+    from odomkit.io.trackio import write_track_csv
+    from odomkit.track import dead_reckon_log
+
+    robot, noise = read_robot(ROBOT)
+    track = dead_reckon_log(read_run(RUN), robot, noise=noise[0] if cov else None)
+    write_track_csv(tmp_path / "fast.csv", track)
+    monkeypatch.setattr(table, "polars_module", lambda: None)
+    import odomkit.io.trackio as trackio
+
+    monkeypatch.setattr(trackio, "polars_module", lambda: None)
+    write_track_csv(tmp_path / "slow.csv", track)
+    fast = np.genfromtxt(tmp_path / "fast.csv", delimiter=",", names=True)
+    slow = np.genfromtxt(tmp_path / "slow.csv", delimiter=",", names=True)
+    assert fast.dtype.names == slow.dtype.names == tuple(
+        "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta".split(","))
+    for name in fast.dtype.names:  # both round-trip every double exactly
+        assert np.array_equal(fast[name], slow[name], equal_nan=True)
+    assert np.array_equal(fast["x"], track.poses[:, 0])
+    assert np.isnan(fast["cov_xx"]).all() != cov

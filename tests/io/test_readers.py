@@ -126,3 +126,43 @@ def test_bad_robot_files(tmp_path, body, message):
     with pytest.raises(InputError, match=message) as info:
         read_robot(path)
     assert str(path) in str(info.value)
+
+
+@pytest.fixture(params=["polars", "numpy"])
+def parser(request, monkeypatch):
+    """Run a reader test through both parsers: polars (fast extra) and numpy."""
+    import odomkit.io.table as table
+
+    if request.param == "polars":
+        pytest.importorskip("polars")
+    else:
+        monkeypatch.setattr(table, "polars_module", lambda: None)
+    return request.param
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("t,L,R\n0,0,0\n1,2,3,4\n", "line 3: expected 3 columns, found 4"),
+    ("t,L,R\n0,0,0\n1,2\n", "line 3: expected 3 columns, found 2"),
+    ("t,L,R\n0,0,0\n1,x,3\n", "line 3: column 2: 'x' is not a number"),
+    ("t,L,R\n0,0,0\n1,,3\n", "line 3: column 2: '' is not a number"),
+    ("t,L,R\n0,0,0\n# pause\n\n1,nan,3\n", "line 5: column 2 is nan"),
+    ("t,L,R\n", "empty"),
+])
+def test_csv_errors_are_the_same_with_either_parser(tmp_path, parser, text, message):
+    path = write(tmp_path, "log.csv", text)
+    with pytest.raises(InputError, match=message):
+        read_csv_log(path, {"t": "t", "ticks_left": "L", "ticks_right": "R"})
+
+
+def test_both_parsers_read_the_same_numbers(tmp_path, monkeypatch):
+    pytest.importorskip("polars")
+    import odomkit.io.table as table
+
+    rng = np.random.default_rng(4)
+    values = rng.normal(size=(500, 3)) * 10.0 ** rng.integers(-9, 9, size=(500, 3))
+    path = tmp_path / "v.csv"
+    np.savetxt(path, values, delimiter=",", fmt="%.17g")
+    fast = table.read_numeric(path, 3, delimiter=",")
+    monkeypatch.setattr(table, "polars_module", lambda: None)
+    slow = table.read_numeric(path, 3, delimiter=",")
+    assert np.array_equal(fast, slow) and np.array_equal(fast, values)  # correctly rounded
