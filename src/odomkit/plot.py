@@ -35,7 +35,7 @@ def plot_tracks(
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 6))
+    fig, ax = plt.subplots(figsize=(9, 6))
     for label, track, truth in tracks:
         line, = ax.plot(track.poses[:, 0], track.poses[:, 1], label=f"{label} odometry")
         if truth is not None:
@@ -49,7 +49,8 @@ def plot_tracks(
     ax.set_ylabel("y [m]")
     ax.set_aspect("equal")
     ax.set_title("Dead reckoning with 95 % position ellipses (χ²₂ = 5.99)")
-    ax.legend(fontsize=8, loc="best")
+    # Outside the axes, so it never hides a track.
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0), borderaxespad=0.0)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
