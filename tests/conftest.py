@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 REPO = Path(__file__).resolve().parents[1]
@@ -38,3 +39,22 @@ def run_cli(capsys):
         return code, captured.out, captured.err
 
     return run
+
+
+def _central_difference_jacobian(f, x, eps=1e-6):
+    """∂f/∂x by central differences (manif-style perturbation check of a Jacobian):
+    column i is (f(x + eps·e_i) − f(x − eps·e_i)) / (2·eps), error O(eps²)."""
+    x = np.asarray(x, dtype=float)
+    cols = []
+    for i in range(x.size):
+        h = np.zeros_like(x)
+        h[i] = eps
+        cols.append((np.asarray(f(x + h)) - np.asarray(f(x - h))) / (2 * eps))
+    return np.column_stack(cols)
+
+
+@pytest.fixture(scope="session")
+def numeric_jacobian():
+    """The central-difference Jacobian every Jacobian test compares against (session
+    scope, so hypothesis tests may use it)."""
+    return _central_difference_jacobian

@@ -22,20 +22,10 @@ def step(pose, u, method):
     return np.array([pose[0] + dx, pose[1] + dy, pose[2] + u[1]])
 
 
-def numeric_jacobian(f, x, eps=1e-6):
-    x = np.asarray(x, dtype=float)
-    cols = []
-    for i in range(x.size):
-        h = np.zeros_like(x)
-        h[i] = eps
-        cols.append((f(x + h) - f(x - h)) / (2 * eps))
-    return np.column_stack(cols)
-
-
 @pytest.mark.parametrize("method", ["exact", "midpoint", "euler"])
 @settings(max_examples=50, deadline=None)
 @given(theta=st.floats(-7, 7), dd=st.floats(-0.5, 0.5), dth=st.floats(-1.5, 1.5))
-def test_step_jacobians_match_central_differences(method, theta, dd, dth):
+def test_step_jacobians_match_central_differences(numeric_jacobian, method, theta, dd, dth):
     pose = np.array([0.3, -0.2, theta])
     u = np.array([dd, dth])
     F, G = step_jacobians(theta, dd, dth, method)
@@ -54,7 +44,7 @@ def test_sinc_half_is_continuous_across_the_series_threshold():
     assert np.allclose(sinc_half_derivative(big), fd, atol=1e-9)
 
 
-def test_tricycle_jacobian_matches_central_differences():
+def test_tricycle_jacobian_matches_central_differences(numeric_jacobian):
     s, a, L = 0.07, 0.4, 0.68
 
     def f(v):

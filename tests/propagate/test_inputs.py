@@ -34,24 +34,13 @@ from odomkit.propagate.recursion import track_covariance
 from odomkit.propagate.transition import parameter_sensitivity
 from odomkit.robot import DiffDrive, GyroOdometry, Tricycle
 
-
-def numeric_jacobian(f, x, eps=1e-6):
-    x = np.asarray(x, dtype=float)
-    cols = []
-    for i in range(x.size):
-        h = np.zeros_like(x)
-        h[i] = eps
-        cols.append((np.asarray(f(x + h)) - np.asarray(f(x - h))) / (2 * eps))
-    return np.column_stack(cols)
-
-
 finite = dict(allow_nan=False, allow_infinity=False)
 
 
 @settings(max_examples=40, deadline=None)
 @given(s=st.floats(-0.5, 0.5, **finite), a=st.floats(-1.2, 1.2, **finite),
        t=st.floats(0.01, 0.2, **finite))
-def test_tricycle_input_jacobian(s, a, t):
+def test_tricycle_input_jacobian(numeric_jacobian, s, a, t):
     length = 0.8
 
     def body(x):  # (v, α, T) -> (Δd, Δθ), Sun–Gao Snowhite model
@@ -63,7 +52,7 @@ def test_tricycle_input_jacobian(s, a, t):
 
 @settings(max_examples=40, deadline=None)
 @given(dl=st.floats(-0.3, 0.3, **finite), dr=st.floats(-0.3, 0.3, **finite))
-def test_diff_parameter_jacobian(dl, dr):
+def test_diff_parameter_jacobian(numeric_jacobian, dl, dr):
     base = 0.35
 
     def body(p):  # (b, ε_L, ε_R) -> (Δd, Δθ)
@@ -75,7 +64,7 @@ def test_diff_parameter_jacobian(dl, dr):
 
 @settings(max_examples=40, deadline=None)
 @given(s=st.floats(-0.5, 0.5, **finite), a=st.floats(-1.2, 1.2, **finite))
-def test_tricycle_parameter_jacobian(s, a):
+def test_tricycle_parameter_jacobian(numeric_jacobian, s, a):
     length = 0.8
 
     def body(p):  # (L, ε) -> (Δd, Δθ)
@@ -85,7 +74,7 @@ def test_tricycle_parameter_jacobian(s, a):
     assert np.allclose(got, numeric_jacobian(body, [length, 0.0]), atol=1e-8)
 
 
-def test_scale_parameter_jacobian():
+def test_scale_parameter_jacobian(numeric_jacobian):
     got = scale_parameter_jacobian([0.3, -0.2])
     num = numeric_jacobian(lambda p: np.array([0.3 * (1 + p[0]), 0.0]), [0.0])
     assert np.allclose(got[0], num)
@@ -95,7 +84,7 @@ def test_scale_parameter_jacobian():
 @settings(max_examples=40, deadline=None)
 @given(theta=st.floats(-7, 7, **finite), d=st.floats(-0.5, 0.5, **finite),
        a=st.floats(-1.5, 1.5, **finite))
-def test_classical_step_jacobians(theta, d, a):
+def test_classical_step_jacobians(numeric_jacobian, theta, d, a):
     """Chong–Kleeman eq. (1): rotate α, then translate D."""
 
     def step(pose, u):
@@ -108,7 +97,7 @@ def test_classical_step_jacobians(theta, d, a):
     assert np.allclose(G, numeric_jacobian(lambda v: step(pose, v), u), atol=1e-8)
 
 
-def test_wheel_input_cov_maps_wheel_variances():
+def test_wheel_input_cov_maps_wheel_variances(numeric_jacobian):
     """Cov(Δd, Δθ) = J diag(k²|d|) J^T with J by finite differences; the off-diagonal
     (σR² − σL²)/(2b) is what the Sun–Gao exercise drops, and θθ adds the variances."""
     dl, dr, base, noise = np.array([0.1, -0.2]), np.array([0.3, 0.05]), 0.5, WheelNoise(0.01, 0.03)
@@ -164,7 +153,7 @@ def test_scale_bias_on_a_long_straight_line_matches_the_closed_form():
 
 
 @pytest.mark.parametrize("engine", ["recursion", "transition"])
-def test_wheel_base_bias_on_a_circle_is_the_sensitivity_outer_product(engine):
+def test_wheel_base_bias_on_a_circle_is_the_sensitivity_outer_product(numeric_jacobian, engine):
     """Bias mode must equal s·s^T σ² with s = ∂pose_M/∂b by finite differences of the
     whole dead reckoning, plus the independent wheel noise."""
     m, base, sigma_b = 400, 0.4, 0.005
@@ -208,7 +197,7 @@ def test_bias_mode_matches_monte_carlo_and_white_mode_does_not():
         assert close == ok, (mode, cov.diagonal(), var_mc)
 
 
-def test_tricycle_and_gyro_parameter_bias_are_sensitivities():
+def test_tricycle_and_gyro_parameter_bias_are_sensitivities(numeric_jacobian):
     rng = np.random.default_rng(13)
     m, length = 100, 0.7
     travel, steer = rng.uniform(0.0, 0.05, m), rng.normal(0.2, 0.2, m)
@@ -230,7 +219,7 @@ def test_tricycle_and_gyro_parameter_bias_are_sensitivities():
     assert np.allclose(cov, 4e-4 * sens @ sens.T, rtol=1e-6, atol=1e-14)
 
 
-def test_parameter_sensitivity_function_and_white_cov():
+def test_parameter_sensitivity_function_and_white_cov(numeric_jacobian):
     rng = np.random.default_rng(14)
     d_l, d_r = rng.uniform(0, 0.05, 50), rng.uniform(0, 0.05, 50)
     dd, dth = diff_body_steps(d_l, d_r, 0.4)

@@ -352,15 +352,6 @@ def test_classical_model_depends_on_step_size():
 
 # --- whole logs: finite differences of dead reckoning give the truth -----------------
 
-def fd_jacobian(fun, x, eps):
-    cols = []
-    for i in range(x.size):
-        h = np.zeros_like(x)
-        h[i] = eps
-        cols.append((fun(x + h) - fun(x - h)) / (2 * eps))
-    return np.column_stack(cols)
-
-
 def diff_steps(rng, m, base=0.4):
     d_l = rng.uniform(0.0, 0.05, m)
     d_r = d_l + rng.normal(0.0, 0.02, m)
@@ -371,7 +362,7 @@ def diff_steps(rng, m, base=0.4):
 
 @pytest.mark.parametrize("engine", ["recursion", "transition"])
 @pytest.mark.parametrize("method", ["exact", "midpoint", "euler"])
-def test_wheel_noise_track_equals_finite_difference_truth(engine, method):
+def test_wheel_noise_track_equals_finite_difference_truth(numeric_jacobian, engine, method):
     """Linearised covariance of the final pose = J diag(k²|d|) J^T with J the
     finite-difference Jacobian of dead reckoning w.r.t. all 2M wheel travels."""
     rng = np.random.default_rng(7)
@@ -386,13 +377,13 @@ def test_wheel_noise_track_equals_finite_difference_truth(engine, method):
         return dead_reckon(dd, dth, p0, method)[-1]
 
     x = np.concatenate([steps.inputs["d_left"], steps.inputs["d_right"]])
-    jac = fd_jacobian(final, x, 1e-6)
+    jac = numeric_jacobian(final, x, 1e-6)
     var = np.concatenate([noise.k_left**2 * np.abs(x[:m]), noise.k_right**2 * np.abs(x[m:])])
     assert np.allclose(cov[-1], jac @ np.diag(var) @ jac.T, rtol=1e-6, atol=1e-14)
 
 
 @pytest.mark.parametrize("engine", ["recursion", "transition"])
-def test_tricycle_noise_track_equals_finite_difference_truth(engine):
+def test_tricycle_noise_track_equals_finite_difference_truth(numeric_jacobian, engine):
     """Speed v, steering α and sample period T of every step perturbed one at a time."""
     rng = np.random.default_rng(8)
     m, length = 30, 0.7
@@ -409,13 +400,13 @@ def test_tricycle_noise_track_equals_finite_difference_truth(engine):
         vv, aa, tt = x[:m], x[m:2 * m], x[2 * m:]
         return dead_reckon(*tricycle_body_steps(vv * tt, aa, length), (0.0, 0.0, np.pi / 2))[-1]
 
-    jac = fd_jacobian(final, np.concatenate([v, steer, dt]), 1e-7)
+    jac = numeric_jacobian(final, np.concatenate([v, steer, dt]), 1e-7)
     var = np.repeat([noise.sigma_speed**2, noise.sigma_steer**2, noise.sigma_dt**2], m)
     assert np.allclose(cov[-1], jac @ np.diag(var) @ jac.T, rtol=1e-6, atol=1e-14)
 
 
 @pytest.mark.parametrize("engine", ["recursion", "transition"])
-def test_gyro_odometry_track_equals_finite_difference_truth(engine):
+def test_gyro_odometry_track_equals_finite_difference_truth(numeric_jacobian, engine):
     rng = np.random.default_rng(9)
     m = 50
     dd = rng.uniform(0.0, 0.1, m)
@@ -429,7 +420,7 @@ def test_gyro_odometry_track_equals_finite_difference_truth(engine):
     def final(x):
         return dead_reckon(x[:m], x[m:] * dt)[-1]
 
-    jac = fd_jacobian(final, np.concatenate([dd, rate]), 1e-7)
+    jac = numeric_jacobian(final, np.concatenate([dd, rate]), 1e-7)
     # var Δd = α_ss|Δd|; var of the rate sample = psd/Δt so that var Δθ = psd·Δt
     var = np.concatenate([1e-3 * dd, np.full(m, 1e-4 / 0.1)])
     assert np.allclose(cov[-1], jac @ np.diag(var) @ jac.T, rtol=1e-6, atol=1e-14)

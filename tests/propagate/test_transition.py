@@ -27,15 +27,6 @@ def random_psd(rng, n, scale, batch=()):
     return scale * a @ np.swapaxes(a, -1, -2)
 
 
-def fd_jacobian(fun, x, eps):
-    cols = []
-    for i in range(x.size):
-        h = np.zeros_like(x)
-        h[i] = eps
-        cols.append((fun(x + h) - fun(x - h)) / (2 * eps))
-    return np.column_stack(cols)
-
-
 @settings(max_examples=30, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), m=st.integers(1, 400), curvy=st.floats(0.0, 2.0),
        chunk=st.integers(1, 500), method=st.sampled_from(["exact", "midpoint", "euler"]))
@@ -96,7 +87,7 @@ def test_out_argument_and_shape_errors():
 # --- direct heading ------------------------------------------------------------------
 
 @pytest.mark.parametrize("method", ["exact", "midpoint", "euler"])
-def test_direct_heading_equals_finite_difference_truth(method):
+def test_direct_heading_equals_finite_difference_truth(numeric_jacobian, method):
     """Every Δd and every heading sample perturbed: cov = J diag(var) J^T of the final
     pose of dead_reckon_direct_heading (heading measured, not integrated)."""
     rng = np.random.default_rng(3)
@@ -111,7 +102,7 @@ def test_direct_heading_equals_finite_difference_truth(method):
     def final(x):
         return dead_reckon_direct_heading(x[:m], x[m:], (0.0, 0.0), method)[-1]
 
-    jac = fd_jacobian(final, np.concatenate([dd, heading]), 1e-7)
+    jac = numeric_jacobian(final, np.concatenate([dd, heading]), 1e-7)
     want = jac @ np.diag(np.concatenate([var_dd, var_h])) @ jac.T
     assert np.allclose(cov[-1], want, rtol=1e-6, atol=1e-15)
     assert np.allclose(cov[:, 2, 2], var_h)  # heading errors do not accumulate
