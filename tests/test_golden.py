@@ -1,0 +1,59 @@
+"""Golden ``--json`` outputs of every CLI command on built-in inputs (issue 9).
+
+The files in ``tests/golden/`` were written by the code before the redesign. A later change
+may alter one only in the commit that fixes that output, saying why. Numbers must agree to
+1e-12 relative (1e-18 absolute, for values that are rounding-level zeros); keys and strings
+must be identical.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+
+import pytest
+
+GOLDEN = Path(__file__).resolve().parent / "golden"
+_spec = importlib.util.spec_from_file_location("golden_cases", GOLDEN / "cases.py")
+assert _spec is not None and _spec.loader is not None
+cases = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(cases)
+
+
+def _same(a: object, b: object, where: str) -> None:
+    if isinstance(a, dict) and isinstance(b, dict):
+        assert a.keys() == b.keys(), f"{where}: keys {sorted(a)} != {sorted(b)}"
+        for k in a:
+            _same(a[k], b[k], f"{where}.{k}")
+    elif isinstance(a, list) and isinstance(b, list):
+        assert len(a) == len(b), f"{where}: length {len(a)} != {len(b)}"
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _same(x, y, f"{where}[{i}]")
+    elif isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str) or a is None:
+        assert a == b, f"{where}: {a!r} != {b!r}"
+    else:
+        assert isinstance(a, int | float) and isinstance(b, int | float), f"{where}: {a!r} vs {b!r}"
+        if math.isnan(a) or math.isnan(b):
+            assert math.isnan(a) and math.isnan(b), f"{where}: {a!r} != {b!r}"
+        else:
+            tol = max(1e-12 * max(abs(a), abs(b)), 1e-18)
+            assert abs(a - b) <= tol, f"{where}: {a!r} != golden {b!r}"
+
+
+@pytest.mark.parametrize("name,argv", cases.CASES, ids=[c[0] for c in cases.CASES])
+def test_cli_json_matches_golden(name: str, argv: list[str]) -> None:
+    expected = (GOLDEN / f"{name}.json").read_text()
+    got = cases.run_case(argv)
+    if got != expected:
+        _same(json.loads(got), json.loads(expected), name)
+
+
+def test_comparison_catches_a_changed_number() -> None:
+    """The comparator itself: a change in the 11th digit fails, one in the 15th passes."""
+    _same({"a": [1.0 + 1e-15]}, {"a": [1.0]}, "x")
+    with pytest.raises(AssertionError):
+        _same({"a": [1.0 + 1e-11]}, {"a": [1.0]}, "x")
+    with pytest.raises(AssertionError):
+        _same({"a": 1.0, "b": 2.0}, {"a": 1.0}, "x")
