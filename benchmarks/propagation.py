@@ -26,7 +26,7 @@ from scipy.signal import lfilter
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import BodySteps, diff_body_steps, step_jacobians
 from odomkit.noise import WheelNoise
-from odomkit.propagate.inputs import wheel_input_cov
+from odomkit.noise.wheel import wheel_input_cov
 from odomkit.propagate.recursion import iter_track_covariance
 from odomkit.robot import DiffDrive
 

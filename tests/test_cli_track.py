@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from odomkit.workflows import builtin_data_path
+from odomkit.data import builtin_data_path
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUN = builtin_data_path("230620202042_run-01.csv")

@@ -3,10 +3,12 @@
 The numpy path spends its time in three transcendental calls per sample (cos and sin of
 the heading, sin of the half step for the chord factor). Here the heading is carried as a
 unit vector (cos θ, sin θ) and turned by each step's half angle φ = Δθ/2, whose sine and
-cosine come from short Taylor polynomials when |φ| is small (always, at usual sampling
-rates). Every ``ANCHOR`` steps the vector is recomputed from the summed heading, so the
-rounding of repeated rotations cannot build up; the result agrees with the numpy path to
-about 1e-15 relative.
+cosine come from the Taylor series of :mod:`odomkit.angles` when |φ| is small (always, at
+usual sampling rates; :func:`odomkit.angles.sin_cos_sinc`). Every ``ANCHOR`` steps the
+vector is recomputed from the summed heading, so the rounding of repeated rotations cannot
+build up; the result agrees with the numpy path to about 1e-15 relative.
+
+Loaded by :func:`odomkit.jit.load`; importing this module imports numba.
 """
 
 from __future__ import annotations
@@ -14,9 +16,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
 
-from odomkit._sincos import ANCHOR, sin_cos_sinc
+from odomkit import angles
+from odomkit.angles import ANCHOR
+from odomkit.jit import njit
+
+# inline="always" inlines the polynomials into the kernel, which compiles them with its
+# own flags (fastmath here; the covariance kernel has none).
+sin_cos_sinc = njit(angles.sin_cos_sinc, inline="always")
+
+__all__ = ["dead_reckon_kernel"]
 
 EULER, MIDPOINT, EXACT = 0, 1, 2
 
@@ -25,7 +34,7 @@ EULER, MIDPOINT, EXACT = 0, 1, 2
 # heading sum stays a plain sequential sum (a loop-carried dependence is not reordered),
 # which the tests check bit for bit; inputs are checked finite by the caller, as the
 # flags assume.
-@njit(cache=True, fastmath=True)
+@njit(fastmath=True)
 def dead_reckon_kernel(dd: np.ndarray, dtheta: np.ndarray, x0: float, y0: float,
                        theta0: float, method: int, out: np.ndarray) -> None:
     """Fill ``out`` (M+1, 3) with the poses; see ``integrate.dead_reckon``."""

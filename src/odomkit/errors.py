@@ -6,6 +6,8 @@ Every error a user can cause by what they give us (a file, a flag, an argument) 
 
 from __future__ import annotations
 
+__all__ = ["InputError", "ModelError", "OdomkitError"]
+
 
 class OdomkitError(Exception):
     """Base class: something the user gave is not what odomkit expects."""

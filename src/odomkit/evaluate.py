@@ -12,7 +12,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
+from odomkit import validate
 from odomkit.errors import ModelError
+
+__all__ = [
+    "ellipse_points", "evaluate_track", "nees", "pose_errors", "relative_pose_errors", "TrackEvaluation",
+    "wrap"
+]
 
 
 def wrap(angle: ArrayLike) -> NDArray[np.float64]:
@@ -26,10 +32,8 @@ def wrap(angle: ArrayLike) -> NDArray[np.float64]:
 
 def pose_errors(estimate: ArrayLike, truth: ArrayLike) -> NDArray[np.float64]:
     """``estimate − truth`` per row, shape (N, 3), heading wrapped."""
-    est = np.asarray(estimate, dtype=float)
-    ref = np.asarray(truth, dtype=float)
-    if est.shape != ref.shape or est.ndim != 2 or est.shape[1] != 3:
-        raise ModelError(f"estimate and truth must both be (N, 3); got {est.shape} and {ref.shape}")
+    est = validate.shape(estimate, "estimate", ("N", 3))
+    ref = validate.shape(truth, "truth", (est.shape[0], 3))
     err = est - ref
     err[:, 2] = wrap(err[:, 2])
     return err

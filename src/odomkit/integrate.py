@@ -10,8 +10,11 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.kinematics import METHODS, Method, step_displacement
+
+__all__ = ["dead_reckon", "dead_reckon_direct_heading", "path_length"]
 
 _METHOD_CODE = {"euler": 0, "midpoint": 1, "exact": 2}
 # Below this many steps the numpy path is as fast and needs no compilation.
@@ -24,13 +27,6 @@ def _numba_kernel():  # pragma: no cover - trivial import shim
     except ImportError:  # numba is the optional "fast" extra
         return None
     return dead_reckon_kernel
-
-
-def _pose0(pose0: ArrayLike) -> NDArray[np.float64]:
-    p = np.asarray(pose0, dtype=float).reshape(-1)
-    if p.shape != (3,) or not np.all(np.isfinite(p)):
-        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
-    return p
 
 
 def dead_reckon(
@@ -77,13 +73,9 @@ def dead_reckon(
     dtheta = np.asarray(dtheta, dtype=float)
     if dd.shape != dtheta.shape or dd.ndim != 1:
         raise ModelError(f"dd and dtheta must be 1-D of equal length, got {dd.shape} and {dtheta.shape}")
-    for name, values in (("dd", dd), ("dtheta", dtheta)):
-        # A sum is NaN or inf if any term is; only then look for the culprit (a sum that
-        # merely overflowed finds none and passes).
-        if not np.isfinite(values.sum()) and not np.all(np.isfinite(values)):
-            bad = int(np.flatnonzero(~np.isfinite(values))[0])
-            raise ModelError(f"{name}[{bad}] is {values[bad]}: steps must be finite numbers")
-    p0 = _pose0(pose0)
+    validate.finite_array(dd, "dd")
+    validate.finite_array(dtheta, "dtheta")
+    p0 = validate.pose(pose0, "initial pose")
     poses = np.empty((dd.size + 1, 3))
     if engine == "numba" or (engine == "auto" and dd.size >= _NUMBA_FROM):
         kernel = _numba_kernel()

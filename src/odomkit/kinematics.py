@@ -12,7 +12,8 @@ the Sun–Gao exercise, eq. for x_n, y_n) is::
     θ' = θ + Δθ
 
 which equals Chong–Kleeman eq. (14) rewritten without the radius, so it stays finite on
-straight lines (r -> ∞).
+straight lines (r -> ∞). The factor sinc(Δθ/2) and its derivative come from
+:mod:`odomkit.angles`.
 """
 
 from __future__ import annotations
@@ -24,38 +25,19 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit.angles import sinc_half, sinc_half_derivative, unwrap_angle
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
 from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle
 
+__all__ = [
+    "METHODS", "body_steps", "BodySteps", "diff_body_jacobian", "diff_body_steps", "Method",
+    "step_displacement", "step_jacobians", "tricycle_body_jacobian",
+    "tricycle_body_steps"
+]
+
 Method = Literal["euler", "midpoint", "exact"]
 METHODS: tuple[Method, ...] = ("euler", "midpoint", "exact")
-
-# Below this |u| the series of sinc and its derivative is used: the direct formula
-# loses accuracy to cancellation in (u·cos u − sin u)/u².
-_SERIES_BELOW = 1e-3
-
-
-def sinc_half(dtheta: ArrayLike) -> NDArray[np.float64]:
-    """``sin(Δθ/2)/(Δθ/2)``, the chord-to-arc factor, exact at Δθ = 0.
-
-    >>> float(sinc_half(0.0)), round(float(sinc_half(np.pi)), 12)
-    (1.0, 0.636619772368)
-    """
-    # sin(u)/u is accurate to rounding for every u != 0 (sin is, and so is the division);
-    # only u = 0 needs its limit. (np.sinc does the same but 4x slower.)
-    u = 0.5 * np.asarray(dtheta, dtype=float)
-    return np.divide(np.sin(u), u, out=np.ones_like(u), where=u != 0.0)
-
-
-def sinc_half_derivative(dtheta: ArrayLike) -> NDArray[np.float64]:
-    """d/dΔθ of :func:`sinc_half`, numerically safe at Δθ -> 0 (limit −Δθ/12)."""
-    u = 0.5 * np.asarray(dtheta, dtype=float)
-    small = np.abs(u) < _SERIES_BELOW
-    safe_u = np.where(small, 1.0, u)
-    direct = (safe_u * np.cos(safe_u) - np.sin(safe_u)) / safe_u**2
-    series = -u / 3.0 + u**3 / 30.0  # d/du sinc(u) = −u/3 + u³/30 − …
-    return 0.5 * np.where(small, series, direct)
 
 
 def diff_body_steps(
@@ -274,6 +256,6 @@ def body_steps(robot: Robot, log: OdometryLog) -> BodySteps:
         return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
     if isinstance(robot, CompassOdometry):
         dd = _travel(log, robot.m_per_tick)
-        heading = np.unwrap(log.channel("heading") + robot.heading_offset)
+        heading = unwrap_angle(log.channel("heading") + robot.heading_offset)
         return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
     raise ModelError(f"not an odomkit robot: {type(robot).__name__}")

@@ -15,11 +15,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import validate
 from odomkit.errors import InputError
+
+__all__ = ["ABSOLUTE_CHANNELS", "INCREMENT_CHANNELS", "KNOWN_CHANNELS", "RATE_CHANNELS", "OdometryLog"]
 
 INCREMENT_CHANNELS = frozenset({"ticks_left", "ticks_right", "ticks", "dist_left", "dist_right", "dist"})
 RATE_CHANNELS = frozenset({"speed", "yaw_rate"})
@@ -51,21 +55,14 @@ class OdometryLog:
     meta: Mapping[str, object] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
-        n = self.t.shape[0]
-        if self.t.ndim != 1:
-            raise InputError(f"time must be 1-D, got shape {self.t.shape}", source=self.source)
+        error = partial(InputError, source=self.source)
+        n = validate.shape(self.t, "time", ("N",), error=error).shape[0]
         for name, values in self.channels.items():
             if name not in KNOWN_CHANNELS:
-                raise InputError(
-                    f"unknown channel {name!r}; expected one of {sorted(KNOWN_CHANNELS)}",
-                    source=self.source,
-                )
-            if values.shape != (n,):
-                raise InputError(f"channel {name!r} has shape {values.shape}, expected ({n},)",
-                                 source=self.source)
-        if self.ground_truth is not None and self.ground_truth.shape != (n, 3):
-            raise InputError(f"ground truth has shape {self.ground_truth.shape}, expected ({n}, 3)",
-                             source=self.source)
+                raise error(f"unknown channel {name!r}; expected one of {sorted(KNOWN_CHANNELS)}")
+            validate.shape(values, f"channel {name!r}", (n,), error=error)
+        if self.ground_truth is not None:
+            validate.shape(self.ground_truth, "ground truth", (n, 3), error=error)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
@@ -85,8 +82,7 @@ class OdometryLog:
         Increments are summed over the dropped rows (a counter read less often sees the
         same total), rate and absolute channels are sampled.
         """
-        if every < 1:
-            raise InputError(f"decimation must be a positive integer, got {every}", source=self.source)
+        every = validate.positive_int(every, "decimation", error=partial(InputError, source=self.source))
         if every == 1:
             return self
         keep = np.arange(0, len(self), every)

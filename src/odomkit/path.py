@@ -10,7 +10,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+from odomkit import validate
 from odomkit.errors import ModelError
+
+__all__ = ["Arc", "DiffSegment", "KellyArc", "parse_segment", "Segment", "Spin", "Straight"]
 
 
 @dataclass(frozen=True)
@@ -22,6 +25,10 @@ class Arc:
     left: float
     right: float
 
+    def __post_init__(self) -> None:
+        validate.finite(self.left, "Arc.left", unit="m")
+        validate.finite(self.right, "Arc.right", unit="m")
+
     def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
         return self.left, self.right
 
@@ -32,6 +39,9 @@ class Straight:
 
     distance: float
 
+    def __post_init__(self) -> None:
+        validate.finite(self.distance, "Straight.distance", unit="m")
+
     def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
         return self.distance, self.distance
 
@@ -41,6 +51,9 @@ class Spin:
     """Differential drive: a turn on the spot by ``dtheta`` [rad] (positive = CCW)."""
 
     dtheta: float
+
+    def __post_init__(self) -> None:
+        validate.finite(self.dtheta, "Spin.dtheta", unit="rad")
 
     def wheel_travel(self, wheel_base: float) -> tuple[float, float]:
         half = 0.5 * wheel_base * self.dtheta
@@ -58,8 +71,9 @@ class KellyArc:
     duration: float
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.duration) and self.duration >= 0):
-            raise ModelError(f"segment duration must be >= 0 s, got {self.duration!r}")
+        validate.finite(self.speed, "KellyArc.speed", unit="m/s")
+        validate.finite(self.yaw_rate, "KellyArc.yaw_rate", unit="rad/s")
+        validate.non_negative(self.duration, "segment duration", unit="s")
 
 
 DiffSegment = Arc | Straight | Spin

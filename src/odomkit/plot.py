@@ -15,6 +15,8 @@ from odomkit.track import Track
 if TYPE_CHECKING:
     from odomkit.calibrate.noise_fit import WheelNoiseFit
 
+__all__ = ["have_matplotlib", "plot_noise_fit", "plot_tracks"]
+
 
 def have_matplotlib() -> bool:
     """Whether the optional ``plot`` extra is installed."""

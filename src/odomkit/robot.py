@@ -21,21 +21,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any
+from typing import Any, ClassVar
 
+from odomkit import validate
 from odomkit.errors import ModelError
 
+__all__ = [
+    "ROBOT_TYPES", "CompassOdometry", "DiffDrive", "GyroOdometry", "metres_per_tick", "Robot",
+    "robot_type_name", "SystematicErrors", "Tricycle", "true_robot"
+]
 
-def _require_positive(owner: str, **values: float) -> None:
-    for name, value in values.items():
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise ModelError(f"{owner}.{name} must be a positive finite number, got {value!r}")
 
-
-def _require_finite(owner: str, **values: float) -> None:
-    for name, value in values.items():
-        if not (isinstance(value, int | float) and math.isfinite(value)):
-            raise ModelError(f"{owner}.{name} must be a finite number, got {value!r}")
+def _positive_fields(obj: object, *names: str) -> None:
+    for name in names:
+        validate.positive(getattr(obj, name), f"{type(obj).__name__}.{name}")
 
 
 def metres_per_tick(wheel_diameter: float, encoder_resolution: float, gear_ratio: float = 1.0) -> float:
@@ -48,9 +47,10 @@ def metres_per_tick(wheel_diameter: float, encoder_resolution: float, gear_ratio
     >>> round(metres_per_tick(0.084, 64, 43.7), 10)   # OptiOdom differential robot
     9.43556e-05
     """
-    _require_positive("metres_per_tick", wheel_diameter=wheel_diameter,
-                      encoder_resolution=encoder_resolution, gear_ratio=gear_ratio)
-    return math.pi * wheel_diameter / (gear_ratio * encoder_resolution)
+    d = validate.positive(wheel_diameter, "metres_per_tick.wheel_diameter", unit="m")
+    c_e = validate.positive(encoder_resolution, "metres_per_tick.encoder_resolution")
+    n = validate.positive(gear_ratio, "metres_per_tick.gear_ratio")
+    return math.pi * d / (n * c_e)
 
 
 @dataclass(frozen=True)
@@ -72,6 +72,11 @@ class DiffDrive:
         ``c_wheel_base · wheel_base`` (Borenstein–Feng eq. 4.32, b_new = E_b·b_nominal).
     """
 
+    type_name: ClassVar[str] = "diff"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = False
+    """Heading is integrated from the steps, not measured."""
+
     wheel_base: float
     m_per_tick_left: float = 1.0
     m_per_tick_right: float = 1.0
@@ -80,7 +85,7 @@ class DiffDrive:
     c_wheel_base: float = 1.0
 
     def __post_init__(self) -> None:
-        _require_positive("DiffDrive", **{f.name: getattr(self, f.name) for f in fields(self)})
+        _positive_fields(self, *(f.name for f in fields(self)))
 
     @classmethod
     def from_wheels(
@@ -134,15 +139,19 @@ class Tricycle:
         Dimensionless traction-wheel scale correction.
     """
 
+    type_name: ClassVar[str] = "tricycle"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = False
+    """Heading is integrated from the steps, not measured."""
+
     wheel_to_axle: float
     m_per_tick: float = 1.0
     steering_offset: float = 0.0
     c_scale: float = 1.0
 
     def __post_init__(self) -> None:
-        _require_positive("Tricycle", wheel_to_axle=self.wheel_to_axle,
-                          m_per_tick=self.m_per_tick, c_scale=self.c_scale)
-        _require_finite("Tricycle", steering_offset=self.steering_offset)
+        _positive_fields(self, "wheel_to_axle", "m_per_tick", "c_scale")
+        validate.finite(self.steering_offset, "Tricycle.steering_offset")
 
     @property
     def scale(self) -> float:
@@ -164,13 +173,18 @@ class GyroOdometry:
         Dimensionless; the yaw rate used is ``gyro_scale · (measured − gyro_bias)``.
     """
 
+    type_name: ClassVar[str] = "gyro"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = False
+    """Heading is integrated from the steps, not measured."""
+
     m_per_tick: float = 1.0
     gyro_bias: float = 0.0
     gyro_scale: float = 1.0
 
     def __post_init__(self) -> None:
-        _require_positive("GyroOdometry", m_per_tick=self.m_per_tick, gyro_scale=self.gyro_scale)
-        _require_finite("GyroOdometry", gyro_bias=self.gyro_bias)
+        _positive_fields(self, "m_per_tick", "gyro_scale")
+        validate.finite(self.gyro_bias, "GyroOdometry.gyro_bias")
 
 
 @dataclass(frozen=True)
@@ -185,12 +199,17 @@ class CompassOdometry:
         Added to the measured heading [rad].
     """
 
+    type_name: ClassVar[str] = "compass"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = True
+    """Heading is measured (direct heading), not integrated."""
+
     m_per_tick: float = 1.0
     heading_offset: float = 0.0
 
     def __post_init__(self) -> None:
-        _require_positive("CompassOdometry", m_per_tick=self.m_per_tick)
-        _require_finite("CompassOdometry", heading_offset=self.heading_offset)
+        _positive_fields(self, "m_per_tick")
+        validate.finite(self.heading_offset, "CompassOdometry.heading_offset")
 
 
 @dataclass(frozen=True)
@@ -223,11 +242,7 @@ class SystematicErrors:
     E_s: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("E_d", "E_b", "E_s"):
-            value = getattr(self, name)
-            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-                raise ModelError(f"SystematicErrors.{name} must be a positive finite number, "
-                                 f"got {value!r}")
+        _positive_fields(self, "E_d", "E_b", "E_s")
 
     def wheel_scales(self) -> tuple[float, float]:
         """True/nominal distance per tick of the left and right wheel."""
@@ -260,7 +275,7 @@ ROBOT_TYPES: dict[str, type[Any]] = {
 
 def robot_type_name(robot: Robot) -> str:
     """The robot-file ``type`` string of a robot instance."""
-    for name, cls in ROBOT_TYPES.items():
-        if isinstance(robot, cls):
-            return name
-    raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
+    name = getattr(robot, "type_name", None)
+    if name not in ROBOT_TYPES or not isinstance(robot, ROBOT_TYPES[name]):
+        raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
+    return name

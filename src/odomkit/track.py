@@ -7,11 +7,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import InputError
 from odomkit.integrate import dead_reckon, path_length
 from odomkit.kinematics import BodySteps, Method, body_steps
 from odomkit.log import OdometryLog
 from odomkit.robot import CompassOdometry, Robot
+
+__all__ = ["dead_reckon_log", "initial_pose", "Track"]
 
 
 @dataclass(frozen=True)
@@ -49,7 +52,7 @@ class Track:
 def initial_pose(log: OdometryLog, pose0: ArrayLike | None) -> NDArray[np.float64]:
     """``pose0`` if given, else the first ground-truth pose, else the origin."""
     if pose0 is not None:
-        return np.asarray(pose0, dtype=float).reshape(3)
+        return validate.pose(pose0, "initial pose")
     if log.ground_truth is not None:
         return log.ground_truth[0].copy()
     return np.zeros(3)
@@ -99,6 +102,6 @@ def dead_reckon_log(
     if noise is not None:
         from odomkit.propagate.recursion import track_covariance
 
-        c0 = np.zeros((3, 3)) if cov0 is None else np.asarray(cov0, dtype=float)
+        c0 = np.zeros((3, 3)) if cov0 is None else validate.covariance(cov0, "initial covariance")
         cov = track_covariance(steps, poses, noise, c0, method=method, engine=engine)
     return Track(log.t, poses, cov, steps)

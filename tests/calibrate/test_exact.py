@@ -8,7 +8,11 @@ import numpy as np
 import pytest
 
 from odomkit.calibrate.exact import calibrate_exact, jackknife_runs
-from odomkit.calibrate.residuals import _DiffModel, _TricycleModel, integrate_with_sensitivity
+from odomkit.calibrate.residuals import (
+    DiffCalibrationModel,
+    TricycleCalibrationModel,
+    integrate_with_sensitivity,
+)
 from odomkit.calibrate.umbmark import apply_corrections, umbmark
 from odomkit.calibrate.virtual import (
     SystematicErrors,
@@ -159,7 +163,7 @@ def test_sensitivities_match_finite_differences(kind):
         robot = Tricycle(0.3, 1e-3, 0.05, 1.01)
         ch = {"ticks": np.r_[0, rng.uniform(0, 20, n)], "steer": rng.uniform(-0.6, 0.6, n + 1)}
     log = OdometryLog(np.arange(n + 1.0), ch, np.zeros((n + 1, 3)))
-    model = _DiffModel(robot, [log]) if kind == "diff" else _TricycleModel(robot, [log])
+    model = DiffCalibrationModel(robot, [log]) if kind == "diff" else TricycleCalibrationModel(robot, [log])
     pose0 = np.array([0.3, -0.2, 0.7])
 
     def poses(p):
@@ -211,7 +215,7 @@ def test_body_steps_of_the_model_match_the_library():
     errors = SystematicErrors(E_d=1.01)
     log = square_logs(errors, NOMINAL, 1.0, 1)[0]
     robot = DiffDrive(0.34, 1e-4, 1.1e-4, 0.98, 1.03, 1.05)
-    model = _DiffModel(robot, [log])
+    model = DiffCalibrationModel(robot, [log])
     dd, dth = model.steps(model.p0, 0)[:2]
     ref = body_steps(robot, log)
     np.testing.assert_allclose(dd, ref.dd, rtol=1e-13)

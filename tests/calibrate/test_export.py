@@ -8,11 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from odomkit.calibrate.export import ros2_diff_drive_yaml
 from odomkit.errors import InputError, OdomkitError
 from odomkit.io.robotfile import read_robot, write_robot
+from odomkit.io.ros import ros2_diff_drive_yaml, write_ros2_yaml
 from odomkit.robot import DiffDrive, Tricycle
-from odomkit.workflows.calibration import write_ros2_yaml
 
 ROBOT = DiffDrive(0.2, 9.4e-5, 9.6e-5, 0.999, 1.002, 1.0064)
 
@@ -133,7 +132,7 @@ def test_cli_noise_fit_runs_on_repeated_logs(tmp_path, data_dir, run_cli):
 
 
 def test_umbmark_command_reads_runs_through_this_module(tmp_path, data_dir, run_cli):
-    # `odomkit umbmark --runs` (the UMBmark command) calls workflows.calibration.umbmark_from_files with file
+    # `odomkit umbmark --runs` (the UMBmark command) calls workflows.umbmark.umbmark_from_files with file
     # paths; the E_max,syst it reports must equal the library's on the same logs.
     from odomkit.calibrate.realdata import umbmark_from_runs
     from odomkit.io.optiodom import read_experiment
@@ -156,7 +155,7 @@ def test_calibrate_noise_plot_is_written_and_never_overwritten(run_cli, tmp_path
     import pytest
 
     pytest.importorskip("matplotlib")
-    from odomkit.workflows import builtin_data_path
+    from odomkit.data import builtin_data_path
 
     runs = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in (1, 2, 3)]
     out = tmp_path / "noise.png"

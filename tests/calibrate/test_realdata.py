@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
 import warnings
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,7 +14,6 @@ from odomkit.calibrate.realdata import (
     e_max_syst_of_runs,
     return_errors_from_runs,
     run_direction,
-    square_table_markdown,
     transfer,
     umbmark_from_runs,
 )
@@ -29,6 +30,19 @@ from odomkit.kinematics import diff_body_steps
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive
 from odomkit.workflows.calibration import optiodom_square_table
+
+BENCHMARKS = Path(__file__).resolve().parents[2] / "benchmarks"
+
+
+def square_table_markdown(rows):
+    """The markdown table of ``benchmarks/calibration_table.py`` (its only printer)."""
+    spec = importlib.util.spec_from_file_location("calibration_table",
+                                                  BENCHMARKS / "calibration_table.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module.square_table_markdown(rows)
+
 
 NOMINAL = DiffDrive(wheel_base=0.34, m_per_tick_left=1e-4, m_per_tick_right=1e-4)
 

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-import odomkit.workflows.calibration as calibration_workflows
+import odomkit.workflows.umbmark as umbmark_workflow
 from odomkit.cli import main
 
 HAND_CSV = """direction,x,y
@@ -133,7 +133,7 @@ def test_runs_form_passes_every_run_to_the_workflow(tmp_path, capsys, monkeypatc
         calls.append((runs, robot, side))
         return Fake()
 
-    monkeypatch.setattr(calibration_workflows, "umbmark_from_files", fake)
+    monkeypatch.setattr(umbmark_workflow, "umbmark_from_files", fake)
     assert main(["umbmark", "--runs", "a.csv", "b.csv", "--runs", "c.csv", "--robot", "r.toml",
                  "--side", "0.75", "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == {"e_max_syst": 0.5}

@@ -18,18 +18,16 @@ from odomkit.noise import (
     TricycleNoise,
     WheelNoise,
 )
-from odomkit.propagate.inputs import (
-    classical_step_displacement,
-    classical_step_jacobians,
+from odomkit.noise.kelly import speed_gyro_input_cov
+from odomkit.noise.parameters import (
     diff_parameter_jacobian,
     scale_parameter_jacobian,
-    speed_gyro_input_cov,
-    tricycle_input_cov,
-    tricycle_input_jacobian,
     tricycle_parameter_jacobian,
-    wheel_input_cov,
     white_parameter_cov,
 )
+from odomkit.noise.tricycle import tricycle_input_cov, tricycle_input_jacobian
+from odomkit.noise.wheel import wheel_input_cov
+from odomkit.propagate.inputs import classical_step_displacement, classical_step_jacobians
 from odomkit.propagate.recursion import track_covariance
 from odomkit.propagate.transition import parameter_sensitivity
 from odomkit.robot import DiffDrive, GyroOdometry, Tricycle

@@ -21,13 +21,9 @@ from odomkit.noise import (
     TricycleNoise,
     WheelNoise,
 )
+from odomkit.noise.wheel import classical_input_cov, wheel_input_cov
 from odomkit.propagate import recursion
-from odomkit.propagate.inputs import (
-    any_step_displacement,
-    any_step_jacobians,
-    classical_input_cov,
-    wheel_input_cov,
-)
+from odomkit.propagate.inputs import any_step_displacement, any_step_jacobians
 from odomkit.propagate.recursion import propagate_recursion, track_covariance
 from odomkit.propagate.transition import transition_matrix
 from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle

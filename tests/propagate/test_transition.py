@@ -12,7 +12,8 @@ from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon, dead_reckon_direct_heading
 from odomkit.kinematics import BodySteps
 from odomkit.noise import CompassNoise, ParameterUncertainty, SpeedNoise
-from odomkit.propagate.inputs import any_step_jacobians, direct_heading_variances
+from odomkit.noise.kelly import direct_heading_variances
+from odomkit.propagate.inputs import any_step_jacobians
 from odomkit.propagate.recursion import propagate_recursion, track_covariance
 from odomkit.propagate.transition import (
     propagate_direct_heading,

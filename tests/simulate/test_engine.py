@@ -12,7 +12,7 @@ from odomkit.integrate import dead_reckon
 from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
 from odomkit.path import Arc, KellyArc, Spin, Straight
 from odomkit.simulate import SystematicErrors, simulate_runs
-from odomkit.simulate import engine as eng
+from odomkit.simulate.blocks import run_block
 from odomkit.simulate.plan import make_plan
 
 
@@ -104,8 +104,8 @@ def test_same_seed_bit_identical_whatever_chunks_and_workers(engine):
 
 def test_partition_chunking_never_changes_numbers():
     plan = make_plan([Arc(3, 1), Spin(1)], WheelNoise(0.01, 0.02), 0.4, 1000)
-    a, ea = eng.run_block(plan, 5, 2, 100, "numba", True, partition_chunk=512)
-    b, eb = eng.run_block(plan, 5, 2, 100, "numba", True, partition_chunk=37)
+    a, ea = run_block(plan, 5, 2, 100, "numba", True, partition_chunk=512)
+    b, eb = run_block(plan, 5, 2, 100, "numba", True, partition_chunk=37)
     assert np.array_equal(a, b) and np.array_equal(ea, eb)
 
 

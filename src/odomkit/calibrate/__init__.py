@@ -12,3 +12,5 @@ Modules (import them directly; nothing is imported eagerly here):
   Jacobian in :mod:`odomkit.calibrate.residuals`), (k_L, k_R) fitting and export of
   calibrated robots.
 """
+
+__all__: list[str] = []

@@ -45,11 +45,19 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.optimize import least_squares
 
-from odomkit.calibrate.residuals import _DiffModel, _model, _Problem, _whitening
+from odomkit import validate
+from odomkit.calibrate.residuals import (
+    DiffCalibrationModel,
+    ResidualProblem,
+    calibration_model,
+    endpoint_whitening,
+)
 from odomkit.errors import InputError, ModelError
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle
+
+__all__ = ["SCALE_OBSERVABLE_BELOW", "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source"]
 
 Source = Literal["endpoints", "trajectory"]
 
@@ -231,20 +239,18 @@ def calibrate_exact(
     [1.0, 1.01, 1.0]
     """
     _check_runs(runs, source)
-    if every < 1:
-        raise ModelError(f"every must be a positive integer, got {every}")
-    model = _model(robot, runs)
+    every = validate.positive_int(every, "every")
+    model = calibration_model(robot, runs)
     if heading_weight is None:
         lengths = [float(np.sum(np.abs(model.steps(model.p0, i)[0]))) for i in range(len(runs))]
         heading_weight = 0.25 * float(np.mean(lengths))
-    if not (np.isfinite(heading_weight) and heading_weight >= 0):
-        raise ModelError(f"heading_weight must be >= 0 m/rad, got {heading_weight!r}")
+    heading_weight = validate.non_negative(heading_weight, "heading_weight", unit="m/rad")
     whiten = None
     if noise is not None:
-        whiten = _whitening(model, runs, source, noise, method)
-    prob = _Problem(model, runs, source, heading_weight, every, whiten, method)
+        whiten = endpoint_whitening(model, runs, source, noise, method)
+    prob = ResidualProblem(model, runs, source, heading_weight, every, whiten, method)
     p0 = model.p0.copy()
-    scale_index = [0, 1, 2] if isinstance(model, _DiffModel) else [0, 2]
+    scale_index = [0, 1, 2] if isinstance(model, DiffCalibrationModel) else [0, 2]
     sens = prob.scale_sensitivity(p0)
     notes: list[str] = []
     if fix_scale is None:

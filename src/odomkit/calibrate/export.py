@@ -1,9 +1,8 @@
-"""What robots consume: a ROS 2 ``diff_drive_controller`` parameter snippet (YAML text)
-with ``wheel_separation``/``wheel_radius`` and their multipliers.
+"""What robots consume: the ROS 2 ``diff_drive_controller`` settings of a calibrated robot,
+``wheel_separation``/``wheel_radius`` and their multipliers, as numbers.
 
-The corrected robot itself is written as an odomkit robot file by
-:func:`odomkit.io.robotfile.write_robot`; writing files is the job of
-:mod:`odomkit.workflows.calibration`.
+The YAML file the controller reads is written by :mod:`odomkit.io.ros`; the corrected
+robot itself by :func:`odomkit.io.robotfile.write_robot`.
 """
 
 from __future__ import annotations
@@ -11,15 +10,16 @@ from __future__ import annotations
 from odomkit.errors import ModelError
 from odomkit.robot import DiffDrive
 
+__all__ = ["diff_drive_controller_parameters"]
 
-def ros2_diff_drive_yaml(
+
+def diff_drive_controller_parameters(
     robot: DiffDrive,
     wheel_radius: float,
     *,
-    controller_name: str = "diff_drive_controller",
     nominal_m_per_tick: float | None = None,
-) -> str:
-    """ROS 2 ``diff_drive_controller`` parameters for a calibrated robot (YAML text).
+) -> dict[str, float]:
+    """ROS 2 ``diff_drive_controller`` parameters that reproduce a calibrated robot.
 
     The controller computes wheel travel as ``radius · multiplier · joint angle`` and uses
     ``wheel_separation · wheel_separation_multiplier`` as the wheel base, so:
@@ -36,36 +36,31 @@ def ros2_diff_drive_yaml(
         Calibrated robot.
     wheel_radius : float
         Nominal wheel radius configured in the controller [m].
-    controller_name : str
-        Top-level key (the controller's node name).
     nominal_m_per_tick : float, optional
         Metres per tick that ``wheel_radius`` corresponds to.
 
+    Returns
+    -------
+    dict
+        ``wheel_separation`` [m], ``wheel_radius`` [m], ``wheel_separation_multiplier``,
+        ``left_wheel_radius_multiplier``, ``right_wheel_radius_multiplier`` (in the
+        controller's YAML order).
+
     Examples
     --------
-    >>> print(ros2_diff_drive_yaml(DiffDrive(0.2, 1e-4, 1e-4, 0.999, 1.001, 1.006), 0.042))
-    diff_drive_controller:
-      ros__parameters:
-        wheel_separation: 0.2
-        wheel_radius: 0.042
-        wheel_separation_multiplier: 1.006
-        left_wheel_radius_multiplier: 0.999
-        right_wheel_radius_multiplier: 1.001
-    <BLANKLINE>
+    >>> p = diff_drive_controller_parameters(DiffDrive(0.2, 1e-4, 1e-4, 0.999, 1.001, 1.006), 0.042)
+    >>> p["wheel_separation_multiplier"], p["left_wheel_radius_multiplier"]
+    (1.006, 0.999)
     """
     if not isinstance(robot, DiffDrive):
         raise ModelError("diff_drive_controller parameters need a DiffDrive robot")
     if not (isinstance(wheel_radius, int | float) and wheel_radius > 0):
         raise ModelError(f"wheel_radius must be a positive number of metres, got {wheel_radius!r}")
-    if not controller_name or any(c in controller_name for c in ":#\n "):
-        raise ModelError(f"controller_name must be a plain ROS node name, got {controller_name!r}")
     ref = nominal_m_per_tick or 0.5 * (robot.m_per_tick_left + robot.m_per_tick_right)
-    values = {
-        "wheel_separation": robot.wheel_base,
+    return {
+        "wheel_separation": float(robot.wheel_base),
         "wheel_radius": float(wheel_radius),
-        "wheel_separation_multiplier": robot.c_wheel_base,
-        "left_wheel_radius_multiplier": robot.scale_left / ref,
-        "right_wheel_radius_multiplier": robot.scale_right / ref,
+        "wheel_separation_multiplier": float(robot.c_wheel_base),
+        "left_wheel_radius_multiplier": float(robot.scale_left / ref),
+        "right_wheel_radius_multiplier": float(robot.scale_right / ref),
     }
-    body = "".join(f"    {k}: {float(v)!r}\n" for k, v in values.items())
-    return f"{controller_name}:\n  ros__parameters:\n{body}"

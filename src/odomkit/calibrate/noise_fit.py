@@ -36,10 +36,13 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq, minimize, minimize_scalar
 from scipy.special import ndtri
 
+from odomkit import validate
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import ellipse_points
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import Method, diff_body_jacobian, diff_body_steps, step_jacobians
+
+__all__ = ["fit_wheel_noise", "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
 
 _AXES = {"x": 0, "y": 1, "theta": 2}
 
@@ -240,9 +243,7 @@ def fit_wheel_noise(
     >>> fit.ci_left[0] < 0.002 < fit.ci_left[1], fit.ci_right[0] < 0.001 < fit.ci_right[1]
     (True, True)
     """
-    e = np.asarray(errors, dtype=float)
-    if e.ndim != 2 or e.shape[1] != 3:
-        raise InputError(f"errors must have shape (n, 3) [x, y, theta], got {e.shape}")
+    e = validate.shape(errors, "errors [x, y, theta]", ("n", 3), error=InputError)
     n = e.shape[0]
     if n < 2:
         raise InputError(f"fitting k_L, k_R needs at least two runs, got {n}")

@@ -22,12 +22,18 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import validate
 from odomkit.calibrate.exact import calibrate_exact
 from odomkit.calibrate.umbmark import UmbmarkResult, apply_corrections, umbmark
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
+
+__all__ = [
+    "e_max_syst_of_runs", "return_errors_from_runs", "run_direction", "square_table", "SquareRow",
+    "transfer", "umbmark_from_runs", "UmbmarkFromRuns"
+]
 
 
 def run_direction(log: OdometryLog) -> str:
@@ -167,8 +173,7 @@ def umbmark_from_runs(
         See :func:`return_errors_from_runs`.
     **kwargs : passed to :func:`odomkit.calibrate.umbmark.umbmark` (e.g. ``variant``).
     """
-    if not (isinstance(side, int | float) and np.isfinite(side) and side > 0):
-        raise ModelError(f"side must be a positive number of metres, got {side!r}")
+    validate.positive(side, "side", unit="m")
     robots = _robots(runs, robot, allow_mixed)
     cw, ccw = return_errors_from_runs(runs, robots, allow_mixed=allow_mixed)
     _need_both(cw, ccw)
@@ -263,24 +268,3 @@ def square_table(experiments: Sequence[Any], **exact_kwargs: Any) -> list[Square
             out_exact=float(np.mean(out_e)) if out_e else float("nan"), n_out=len(others),
         ))
     return rows
-
-
-def square_table_markdown(rows: Sequence[SquareRow]) -> str:
-    """The table as markdown, E_max,syst in millimetres, with a mean row per square side."""
-    head = ("| experiment | side [m] | runs CW/CCW | before | UMBmark (in) | exact (in) "
-            "| trajectory fit (in) | UMBmark (out) | exact (out) |\n"
-            "|---|---|---|---|---|---|---|---|---|\n")
-    lines = []
-    for r in rows:
-        lines.append(f"| {r.experiment} | {r.side:g} | {r.n_cw}/{r.n_ccw} | {1e3 * r.before:.1f} "
-                     f"| {1e3 * r.in_umbmark:.1f} | {1e3 * r.in_exact:.1f} | {1e3 * r.in_trajectory:.1f} "
-                     f"| {1e3 * r.out_umbmark:.1f} | {1e3 * r.out_exact:.1f} |")
-    for side in sorted({r.side for r in rows}):
-        sel = [r for r in rows if r.side == side]
-        m = {k: 1e3 * float(np.mean([getattr(r, k) for r in sel]))
-             for k in ("before", "in_umbmark", "in_exact", "in_trajectory", "out_umbmark",
-                  "out_exact")}
-        lines.append(f"| **mean** | {side:g} | | {m['before']:.1f} | {m['in_umbmark']:.1f} "
-                     f"| {m['in_exact']:.1f} | {m['in_trajectory']:.1f} | {m['out_umbmark']:.1f} "
-                     f"| {m['out_exact']:.1f} |")
-    return head + "\n".join(lines) + "\n"

@@ -3,12 +3,13 @@ set of runs and their analytic Jacobian with respect to the robot's parameters.
 
 * :func:`integrate_with_sensitivity` dead-reckons body steps and, in the same vectorised
   pass, the derivative of every pose with respect to the parameters;
-* ``_DiffModel`` and ``_TricycleModel`` map a parameter vector p onto the body steps of
-  each run (and their derivatives) and back onto a robot;
-* ``_Problem`` compares the integrated poses with the ground truth (endpoints or whole
+* :class:`DiffCalibrationModel` and :class:`TricycleCalibrationModel` map a parameter
+  vector p onto the body steps of each run (and their derivatives) and back onto a robot;
+  :func:`calibration_model` picks the one for a robot;
+* :class:`ResidualProblem` compares the integrated poses with the ground truth (endpoints or whole
   trajectories), weights or whitens the residuals and stacks them, with their Jacobian,
-  over all runs for :func:`scipy.optimize.least_squares`; ``_whitening`` gives the
-  endpoint whitening matrices from a per-wheel noise model.
+  over all runs for :func:`scipy.optimize.least_squares`; :func:`endpoint_whitening` gives
+  the endpoint whitening matrices from a per-wheel noise model.
 
 It is separate from :mod:`odomkit.calibrate.exact`, which keeps the fit itself, its input
 checks and its result type, because this part is self-contained mathematics: it takes
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any
+from typing import TypeAlias
 
 import numpy as np
 from numpy.typing import NDArray
@@ -31,6 +32,9 @@ from odomkit.kinematics import Method, body_steps, step_jacobians
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle
 from odomkit.track import initial_pose
+
+__all__ = ["CalibrationModel", "DiffCalibrationModel", "ResidualProblem", "TricycleCalibrationModel",
+           "calibration_model", "endpoint_whitening", "integrate_with_sensitivity"]
 
 
 def _wrap(angle: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -96,7 +100,7 @@ def integrate_with_sensitivity(
     return poses, dposes
 
 
-class _DiffModel:
+class DiffCalibrationModel:
     """p = (c_left, c_right, c_wheel_base) of a DiffDrive."""
 
     names = ("c_left", "c_right", "c_wheel_base")
@@ -130,7 +134,7 @@ class _DiffModel:
         return np.array([mean, mean, 0.0]), T
 
 
-class _TricycleModel:
+class TricycleCalibrationModel:
     """p = (c_scale, steering_offset, wheel_to_axle) of a Tricycle."""
 
     names = ("c_scale", "steering_offset", "wheel_to_axle")
@@ -161,18 +165,23 @@ class _TricycleModel:
         return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-def _model(robot: Any, runs: Sequence[OdometryLog]) -> _DiffModel | _TricycleModel:
+CalibrationModel: TypeAlias = DiffCalibrationModel | TricycleCalibrationModel
+"""The parameter-to-body-step map of a robot the exact calibration supports."""
+
+
+def calibration_model(robot: DiffDrive | Tricycle, runs: Sequence[OdometryLog]) -> CalibrationModel:
+    """The :data:`CalibrationModel` of ``robot`` over ``runs`` (ModelError if unsupported)."""
     if isinstance(robot, DiffDrive):
-        return _DiffModel(robot, runs)
+        return DiffCalibrationModel(robot, runs)
     if isinstance(robot, Tricycle):
-        return _TricycleModel(robot, runs)
+        return TricycleCalibrationModel(robot, runs)
     raise ModelError(f"exact calibration supports DiffDrive and Tricycle robots, got {type(robot).__name__}")
 
 
-class _Problem:
+class ResidualProblem:
     """Weighted residuals and their Jacobian over all runs, for parameters p = off + T q."""
 
-    def __init__(self, model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog],
+    def __init__(self, model: CalibrationModel, runs: Sequence[OdometryLog],
                  source: str, heading_weight: float, every: int,
                  whiten: list[NDArray[np.float64]] | None, method: Method):
         self.model, self.source, self.method = model, source, method
@@ -250,12 +259,15 @@ class _Problem:
         return self.jacobian_full(self.full(q)) @ self.T
 
 
-def _whitening(model: _DiffModel | _TricycleModel, runs: Sequence[OdometryLog], source: str,
-               noise: Any, method: Method) -> list[NDArray[np.float64]]:
+def endpoint_whitening(model: CalibrationModel, runs: Sequence[OdometryLog], source: str,
+                       noise: object, method: Method) -> list[NDArray[np.float64]]:
+    """Per run, the Cholesky factor L (3, 3) of the predicted end-pose covariance
+    C = L Lᵀ under the per-wheel noise ``noise``: the endpoint residuals are whitened by L⁻¹."""
     from odomkit.calibrate.noise_fit import wheel_noise_basis
     from odomkit.noise import WheelNoise
 
-    if source != "endpoints" or not isinstance(model, _DiffModel) or not isinstance(noise, WheelNoise):
+    if (source != "endpoints" or not isinstance(model, DiffCalibrationModel)
+            or not isinstance(noise, WheelNoise)):
         raise ModelError("noise weighting is available for diff-drive endpoint fits with a WheelNoise")
     out = []
     for i in range(len(runs)):

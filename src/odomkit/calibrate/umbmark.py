@@ -38,6 +38,7 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import InputError, ModelError
 from odomkit.robot import DiffDrive
 
@@ -173,22 +174,10 @@ class UmbmarkResult:
 
 
 def _errors_array(errors: ArrayLike, name: str) -> NDArray[np.float64]:
-    try:
-        arr = np.asarray(errors, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise InputError(f"{name} must be numbers, shape (n, 2): {exc}") from None
-    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
-        raise InputError(f"{name} must have shape (n, 2) with n >= 1 runs, got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        row = int(np.argwhere(~np.isfinite(arr))[0, 0])
-        raise InputError(f"{name} row {row} is not finite: {arr[row].tolist()}")
+    arr = validate.finite_array(errors, name, ("n", 2), error=InputError)
+    if arr.shape[0] < 1:
+        raise InputError(f"{name} must hold at least one run (one row x, y), got none")
     return arr
-
-
-def _positive(name: str, value: float) -> float:
-    if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-        raise ModelError(f"{name} must be a positive finite number [m], got {value!r}")
-    return float(value)
 
 
 def e_max_syst(errors_cw: ArrayLike, errors_ccw: ArrayLike) -> float:
@@ -263,8 +252,8 @@ def umbmark(
         raise ModelError(f"variant must be 'borenstein-feng' or 'chong-kleeman', got {variant!r}")
     cw = _errors_array(errors_cw, "errors_cw")
     ccw = _errors_array(errors_ccw, "errors_ccw")
-    L = _positive("side", side)
-    b = _positive("wheel_base", wheel_base)
+    L = validate.positive(side, "side", unit="m")
+    b = validate.positive(wheel_base, "wheel_base", unit="m")
 
     x_cw, y_cw = cw.mean(axis=0)  # Borenstein–Feng eq. (3.2)
     x_ccw, y_ccw = ccw.mean(axis=0)

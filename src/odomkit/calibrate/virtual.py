@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import validate
 from odomkit.calibrate.umbmark import UmbmarkResult, Variant, apply_corrections, umbmark
 from odomkit.errors import ModelError
 from odomkit.kinematics import step_displacement
@@ -165,11 +166,9 @@ def _validate(true_errors: SystematicErrors, believed_robot: DiffDrive, side: fl
         raise ModelError("true_errors must be an odomkit.calibrate.virtual.SystematicErrors")
     if not isinstance(believed_robot, DiffDrive):
         raise ModelError("believed_robot must be an odomkit.robot.DiffDrive")
-    for name, value in (("side", side), ("step", step)):
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise ModelError(f"{name} must be a positive finite number [m], got {value!r}")
-    if not isinstance(runs_per_direction, int | np.integer) or runs_per_direction < 1:
-        raise ModelError(f"runs_per_direction must be an integer >= 1, got {runs_per_direction!r}")
+    validate.positive(side, "side", unit="m")
+    validate.positive(step, "step", unit="m")
+    validate.positive_int(runs_per_direction, "runs_per_direction")
 
 
 def run_virtual_umbmark(
@@ -275,8 +274,7 @@ def iterate_umbmark(
     >>> [round(e, 3) for e in it.e_max_syst]   # [m] before and after one compensation
     [0.448, 0.005]
     """
-    if not isinstance(iterations, int | np.integer) or iterations < 0:
-        raise ModelError(f"iterations must be an integer >= 0, got {iterations!r}")
+    iterations = validate.non_negative_int(iterations, "iterations")
     gen = _generator(rng)
     robots = [believed_robot]
     results: list[UmbmarkResult] = []
@@ -317,8 +315,7 @@ def virtual_umbmark_logs(
     """
     from odomkit.log import OdometryLog
 
-    if not (isinstance(speed, int | float) and math.isfinite(speed) and speed > 0):
-        raise ModelError(f"speed must be a positive finite number [m/s], got {speed!r}")
+    validate.positive(speed, "speed", unit="m/s")
     _validate(true_errors, believed_robot, side, runs_per_direction, step)
     gen = _generator(rng)
     logs: list[OdometryLog] = []

@@ -1,6 +1,8 @@
 """The ``odomkit`` command line: each command parses, calls one library function, prints.
 
-Commands live one per module in this package and register themselves on :data:`app`.
+Commands live one per module in this package and register themselves on :data:`app`
+(:mod:`odomkit.cli.application`). Only the command that runs imports its stack, so that
+``--help`` starts fast (``benchmarks/startup.py``).
 User errors (:class:`~odomkit.errors.OdomkitError`) are printed on one line and exit
 with status 2, never with a traceback.
 """
@@ -10,17 +12,10 @@ from __future__ import annotations
 import sys
 from collections.abc import Sequence
 
-import typer
-
+from odomkit.cli.application import app
 from odomkit.errors import OdomkitError
 
-app = typer.Typer(
-    name="odomkit",
-    help="Wheeled-robot odometry: dead reckoning, error covariance, Monte Carlo, calibration.",
-    no_args_is_help=True,
-    add_completion=False,
-    pretty_exceptions_enable=False,
-)
+__all__ = ["app", "main"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:

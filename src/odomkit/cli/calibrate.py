@@ -16,15 +16,17 @@ from typing import Annotated, Any
 
 import typer
 
-from odomkit.cli import app
+from odomkit.cli.application import app
 from odomkit.cli.output import print_json
 from odomkit.errors import InputError
+
+__all__ = ["calibrate_command", "calibrate_noise_command"]
 
 _FORMAT_HELP = "Log format: auto, csv, khepera, snowhite, optiodom."
 
 
 def _log_options(fmt: str, columns: str | None) -> Any:
-    from odomkit.workflows import LogOptions
+    from odomkit.workflows.logs import LogOptions
 
     return LogOptions(format=fmt, columns=columns)
 

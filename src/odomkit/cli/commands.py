@@ -2,8 +2,11 @@
 
 from odomkit.cli import (
     calibrate,  # noqa: F401
+    demo,  # noqa: F401
     predict,  # noqa: F401
     simulate,  # noqa: F401
     track,  # noqa: F401
     umbmark,  # noqa: F401
 )
+
+__all__: list[str] = []

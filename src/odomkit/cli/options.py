@@ -5,13 +5,21 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.errors import ModelError
-from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
-from odomkit.path import Segment, parse_segment
+
+if TYPE_CHECKING:
+    from odomkit.path import Segment
+
+__all__ = [
+    "MODEL_FLAGS", "GyroNoiseOption", "HeadingNoiseOption", "InitialCovMatrixOption", "InitialCovOption",
+    "InitialPoseOption", "JsonOption", "KLeftOption", "KRightOption", "ModelOption", "noise_from_flags",
+    "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "SegmentOption",
+    "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption", "WheelBaseOption"
+]
 
 Opt = typer.Option
 
@@ -80,6 +88,8 @@ def _non_negative(flag: str, value: float | None, unit: str) -> float:
 
 def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> Any:
     """The noise model(s) the flags describe (see :func:`odomkit.propagate.predict.predict`)."""
+    from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+
     if model == "diff" and noise == "wheel":
         return WheelNoise(_non_negative("--k-left", given["--k-left"], "m^1/2"),
                           _non_negative("--k-right", given["--k-right"], "m^1/2"))
@@ -115,6 +125,8 @@ def path_problem(
     ``given`` maps each model flag (``--wheel-base``, ``--k-left``, ...) to its value or
     None; a flag that does not belong to ``model`` is an error, not silently ignored.
     """
+    from odomkit.path import parse_segment  # not at import time: keeps --help fast
+
     if model not in MODEL_FLAGS:
         raise ModelError(f"--model must be one of {', '.join(MODEL_FLAGS)}, got {model!r}")
     stray = [flag for flag, v in given.items() if v is not None and flag not in MODEL_FLAGS[model]]

@@ -3,9 +3,9 @@
 from __future__ import annotations
 
 import math
-from typing import Annotated
+from typing import Annotated, Any
 
-from odomkit.cli import app
+from odomkit.cli.application import app
 from odomkit.cli.options import (
     GyroNoiseOption,
     HeadingNoiseOption,
@@ -27,15 +27,15 @@ from odomkit.cli.options import (
 )
 from odomkit.cli.output import print_json
 from odomkit.errors import ModelError
-from odomkit.propagate.predict import ENGINES, Prediction, predict
+
+__all__ = ["predict_command"]
 
 
-def _print_table(result: Prediction) -> None:
+def _print_table(data: dict[str, Any]) -> None:
     from rich.console import Console
     from rich.table import Table
 
-    data = result.to_dict()
-    table = Table(title=f"odomkit predict ({result.model} model, {result.engine} engine)")
+    table = Table(title=f"odomkit predict ({data['model']} model, {data['engine']} engine)")
     table.add_column("")
     for name in ("x (m)", "y (m)", "θ (rad)"):
         table.add_column(name, justify="right")
@@ -70,6 +70,10 @@ def predict_command(
     json_out: JsonOption = False,
 ) -> None:
     """Predict the end pose and its covariance for a path of segments (closed form)."""
+    # The propagation stack loads only when the command runs (fast --help).
+    from odomkit.propagate.predict import ENGINES
+    from odomkit.workflows.predict import run_predict
+
     if engine not in ENGINES:
         raise ModelError(f"--engine must be one of {', '.join(ENGINES)}, got {engine!r}")
     problem = path_problem(
@@ -79,16 +83,10 @@ def predict_command(
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
          "--heading-noise": heading_noise},
         initial_pose, initial_cov, initial_cov_matrix)
-    result = predict(
-        problem.segments,
-        problem.noise,
-        wheel_base=problem.wheel_base,
-        pose0=problem.pose0,
-        cov0=problem.cov0,
-        engine=engine,  # type: ignore[arg-type]
-        partitions=partitions,
-    )
+    result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
+                         pose0=problem.pose0, cov0=problem.cov0, engine=engine,
+                         partitions=partitions)
     if json_out:
-        print_json(result.to_dict())
+        print_json(result)
     else:
         _print_table(result)

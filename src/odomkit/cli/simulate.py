@@ -17,7 +17,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from typing import Annotated, Any
 
-from odomkit.cli import app
+from odomkit.cli.application import app
 from odomkit.cli.options import (
     GyroNoiseOption,
     HeadingNoiseOption,
@@ -40,7 +40,8 @@ from odomkit.cli.options import (
 )
 from odomkit.cli.output import print_json
 from odomkit.errors import ModelError
-from odomkit.simulate import SystematicErrors, monte_carlo
+
+__all__ = ["simulate_command"]
 
 
 @contextmanager
@@ -130,6 +131,10 @@ def simulate_command(
     json_out: JsonOption = False,
 ) -> None:
     """Simulate noisy runs of a path and compare them with the predicted covariance."""
+    # The Monte Carlo stack (scipy.stats, numba, dask) loads only when the command runs.
+    from odomkit.robot import SystematicErrors
+    from odomkit.workflows.simulate import run_simulate
+
     problem = path_problem(
         model, noise, segment,
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
@@ -145,7 +150,7 @@ def simulate_command(
         raise ModelError(f"--alpha must be between 0 and 1, got {alpha!r}")
     show_bar = not json_out and sys.stdout.isatty() and runs * partitions >= 10**7
     with _progress(runs, show_bar) as progress:
-        result = monte_carlo(
+        result = run_simulate(
             problem.segments,
             problem.noise,
             problem.wheel_base,

@@ -5,96 +5,23 @@
     odomkit umbmark ERRORS.csv --side 4 --wheel-base 0.34 [--json]
     odomkit umbmark --runs RUN.csv [RUN.csv ...] --robot ROBOT.toml --side 0.75 [--json]
 
-ERRORS.csv has a header naming the columns ``direction,x,y`` (any order, extra columns
-ignored); ``direction`` is ``cw`` or ``ccw``, x and y are the return position errors in
-metres, absolute minus calculated (Borenstein–Feng eq. 3.1). Each direction needs at least
-two runs (the 3·SEM rule needs a standard deviation; Borenstein–Feng used five).
+ERRORS.csv has a header naming the columns ``direction,x,y`` (see
+:mod:`odomkit.io.umbmark_errors`); the work is done by :mod:`odomkit.workflows.umbmark`.
 """
 
 from __future__ import annotations
 
-import csv
 import math
 from pathlib import Path
 from typing import Annotated, Any
 
-import numpy as np
 import typer
-from numpy.typing import NDArray
 
-from odomkit.cli import app
+from odomkit.cli.application import app
 from odomkit.cli.output import print_json
 from odomkit.errors import InputError
 
-REQUIRED_COLUMNS = ("direction", "x", "y")
-MIN_RUNS_PER_DIRECTION = 2
-
-
-def read_errors_csv(path: str | Path) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Read an UMBmark errors CSV -> (errors_cw (n, 2), errors_ccw (m, 2)) [m].
-
-    Raises :class:`~odomkit.errors.InputError` naming the file, line and field for a
-    missing file, a header without ``direction``, ``x`` or ``y``, a direction other than
-    cw/ccw, a value that is not a finite number, a direction with no runs, or fewer than
-    two runs in a direction.
-    """
-    p = Path(path)
-    source = str(p)
-    try:
-        text = p.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError("file not found", source=source) from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"cannot read: {exc}", source=source) from None
-    rows = [(n, r) for n, r in enumerate(csv.reader(text.splitlines()), start=1)
-            if r and any(c.strip() for c in r)]
-    if not rows:
-        raise InputError("empty file; expected a header 'direction,x,y' and one row per run",
-                         source=source)
-    header_line, header = rows[0]
-    names = [c.strip().lower() for c in header]
-    missing = [c for c in REQUIRED_COLUMNS if c not in names]
-    if missing:
-        raise InputError(f"header {','.join(header)!r} lacks column(s) {', '.join(missing)}; "
-                         "expected 'direction,x,y'", source=source, line=header_line)
-    index = {c: names.index(c) for c in REQUIRED_COLUMNS}
-    runs: dict[str, list[tuple[float, float]]] = {"cw": [], "ccw": []}
-    for line, row in rows[1:]:
-        if len(row) < len(names):
-            raise InputError(f"expected {len(names)} fields, got {len(row)}", source=source,
-                             line=line)
-        direction = row[index["direction"]].strip().lower()
-        if direction not in runs:
-            raise InputError(f"field 'direction' must be 'cw' or 'ccw', got {direction!r}",
-                             source=source, line=line)
-        values = []
-        for col in ("x", "y"):
-            raw = row[index[col]].strip()
-            try:
-                value = float(raw)
-            except ValueError:
-                value = math.nan
-            if not math.isfinite(value):
-                raise InputError(f"field {col!r} must be a finite number [m], got {raw!r}",
-                                 source=source, line=line)
-            values.append(value)
-        runs[direction].append((values[0], values[1]))
-    for direction, found in runs.items():
-        if len(found) < MIN_RUNS_PER_DIRECTION:
-            raise InputError(
-                f"{len(found)} {direction} run(s); UMBmark needs at least "
-                f"{MIN_RUNS_PER_DIRECTION} per direction (Borenstein–Feng used 5)",
-                source=source)
-    return np.array(runs["cw"]), np.array(runs["ccw"])
-
-
-def _from_runs(run_paths: list[Path], robot: Path | None, side: float) -> dict[str, Any]:
-    """The logs-with-ground-truth form (:mod:`odomkit.workflows.calibration`)."""
-    if robot is None:
-        raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
-    from odomkit.workflows.calibration import umbmark_from_files
-
-    return umbmark_from_files(run_paths, robot, side).to_dict()
+__all__ = ["umbmark_command"]
 
 
 def _print_text(out: dict[str, Any]) -> None:
@@ -144,35 +71,23 @@ def umbmark_command(
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
+    from odomkit.workflows import umbmark as workflow
+
     positional = list(errors_csv or [])
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"--side must be a positive length in metres, got {side!r} "
                          "(it is required)")
     if runs:
         # `--runs a.csv b.csv` leaves b.csv as a positional argument: they are all runs.
-        out = _from_runs(list(runs) + positional, robot, side)
+        if robot is None:
+            raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
+        out = workflow.umbmark_from_files(list(runs) + positional, robot, side).to_dict()
     else:
         if len(positional) != 1:
             raise InputError(
                 "give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
-        if wheel_base is None:
-            if robot is None:
-                raise InputError("--wheel-base (or --robot ROBOT.toml) is required")
-            from odomkit.io.robotfile import read_robot
-            from odomkit.robot import DiffDrive
-
-            parsed, _ = read_robot(robot)
-            if not isinstance(parsed, DiffDrive):
-                raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
-                                 source=str(robot))
-            wheel_base = parsed.effective_wheel_base
-        if not (math.isfinite(wheel_base) and wheel_base > 0):
-            raise InputError(
-                f"--wheel-base must be a positive length in metres, got {wheel_base!r}")
-        from odomkit.calibrate.umbmark import umbmark_summary
-
-        errors_cw, errors_ccw = read_errors_csv(positional[0])
-        out = umbmark_summary(errors_cw, errors_ccw, side, wheel_base)
+        out = workflow.umbmark_from_errors_file(positional[0], side, wheel_base=wheel_base,
+                                                robot_path=robot)
     if json_out:
         print_json(out)
     else:

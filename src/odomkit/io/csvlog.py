@@ -8,9 +8,12 @@ from pathlib import Path
 
 import numpy as np
 
+from odomkit import validate
 from odomkit.errors import InputError
 from odomkit.io.table import cumulative_to_increments, order_by_time, read_numeric, unwrap_counter
 from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
+
+__all__ = ["GROUND_TRUTH_FIELDS", "parse_column_map", "read_csv_log"]
 
 GROUND_TRUTH_FIELDS = ("gt_x", "gt_y", "gt_theta")
 
@@ -53,6 +56,7 @@ def read_csv_log(
     wrap_bits : unwrap cumulative counters of this width (16 or 32 typically)
     """
     path = Path(path)
+    time_scale = validate.positive(time_scale, "time_scale", unit="s per time unit", error=InputError)
     if not path.is_file():
         raise InputError("no such file", source=str(path))
     with path.open(newline="", encoding="utf-8") as fh:

@@ -6,6 +6,8 @@ from pathlib import Path
 
 from odomkit.errors import InputError
 
+__all__ = ["refuse_overwrite", "write_new_text"]
+
 
 def refuse_overwrite(*paths: str | Path | None, overwrite: bool = False) -> None:
     """Raise if any of ``paths`` exists and ``overwrite`` is false.

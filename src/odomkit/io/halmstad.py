@@ -11,8 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
+from odomkit import validate
+from odomkit.errors import InputError
 from odomkit.io.table import cumulative_to_increments, read_numeric, unwrap_counter
 from odomkit.log import OdometryLog
+
+__all__ = ["SNOWHITE_PERIOD", "read_khepera", "read_snowhite"]
 
 #: Sampling period of the Snowhite log (exercise handout) [s].
 SNOWHITE_PERIOD = 0.05
@@ -28,11 +32,12 @@ def read_khepera(path: str | Path, period: float = 1.0, wrap_bits: int | None = 
         by default.
     wrap_bits : undo wrap-around of a counter of this width (None: the counts never wrap).
     """
+    period = validate.positive(period, "period", unit="s", error=InputError)
     data = read_numeric(path, 2)
     left, right = data[:, 0], data[:, 1]
     if wrap_bits is not None:
         left, right = unwrap_counter(left, wrap_bits), unwrap_counter(right, wrap_bits)
-    t = np.arange(data.shape[0], dtype=float) * float(period)
+    t = np.arange(data.shape[0], dtype=float) * period
     channels = {"ticks_left": cumulative_to_increments(left),
                 "ticks_right": cumulative_to_increments(right)}
     return OdometryLog(t, channels, None, str(path), {"format": "khepera"})
@@ -44,8 +49,9 @@ def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> Odometry
     Millimetres are converted to metres here; the ground-truth heading (given in
     [0, 2π)) is unwrapped so that it is continuous like odomkit's θ.
     """
+    period = validate.positive(period, "period", unit="s", error=InputError)
     data = read_numeric(path, 5)
-    t = np.arange(data.shape[0], dtype=float) * float(period)
+    t = np.arange(data.shape[0], dtype=float) * period
     channels = {"speed": data[:, 0] / 1000.0, "steer": data[:, 1].copy()}
     truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, np.unwrap(data[:, 4])))
     return OdometryLog(t, channels, truth, str(path), {"format": "snowhite"})

@@ -20,6 +20,8 @@ from odomkit.io.table import read_numeric
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle, metres_per_tick
 
+__all__ = ["OptiOdomExperiment", "OptiOdomMetadata", "read_experiment", "read_metadata", "read_run"]
+
 
 @dataclass(frozen=True)
 class OptiOdomMetadata:

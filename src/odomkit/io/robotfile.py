@@ -24,12 +24,13 @@ Example (all lengths in metres, angles in radians)::
 from __future__ import annotations
 
 import tomllib
+from dataclasses import fields
 from pathlib import Path
 from typing import Any
 
 import tomli_w
 
-from odomkit import noise as nz
+from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import refuse_overwrite
 from odomkit.robot import (
@@ -42,15 +43,7 @@ from odomkit.robot import (
     robot_type_name,
 )
 
-_NOISE_KEYS: tuple[tuple[type[Any], frozenset[str], frozenset[str]], ...] = (
-    # (model, required keys, optional keys)
-    (nz.WheelNoise, frozenset({"k_left", "k_right"}), frozenset()),
-    (nz.ClassicalNoise, frozenset({"sigma_distance", "sigma_angle"}), frozenset()),
-    (nz.SpeedNoise, frozenset({"alpha_ss"}), frozenset()),
-    (nz.GyroNoise, frozenset({"psd_gyro"}), frozenset()),
-    (nz.CompassNoise, frozenset({"psd_compass"}), frozenset()),
-    (nz.TricycleNoise, frozenset({"sigma_speed", "sigma_steer"}), frozenset({"sigma_dt"})),
-)
+__all__ = ["read_robot", "robot_to_dict", "write_robot"]
 
 
 class _Fields:
@@ -139,35 +132,49 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
     return robot
 
 
-def _noise_from_table(table: dict[str, Any], source: str) -> tuple[Any, ...]:
-    models: list[Any] = []
-    params = table.get("parameters")
-    plain = {k: v for k, v in table.items() if k != "parameters"}
+def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, ...]:
+    """The noise models of a ``[noise]`` table: each registered model
+    (:data:`odomkit.noise.NOISE_MODELS`) whose keys (its fields) are present, plus the
+    models of sub-tables such as ``[noise.parameters]``."""
+    models: list[NoiseModel] = []
+    sub_tables = {cls.toml_table.split(".", 1)[1]: cls for cls in NOISE_MODELS.values()
+                  if cls.toml_table.startswith("noise.")}
+    plain = {k: v for k, v in table.items() if k not in sub_tables}
     f = _Fields(plain, "noise", source)
-    for model, required, optional in _NOISE_KEYS:
+    for cls in NOISE_MODELS.values():
+        if cls.toml_table != "noise":
+            continue
+        required, optional = noise_fields(cls)
         present = required & set(plain)
         if not present:
             continue
         if present != required:
             missing = ", ".join(sorted(required - present))
-            raise InputError(f"[noise] {model.__name__} also needs {missing}", source=source)
+            raise InputError(f"[noise] {cls.__name__} also needs {missing}", source=source)
         kwargs = {k: f.number(k) for k in sorted(required | (optional & set(plain)))}
-        models.append(model(**kwargs))
+        models.append(cls(**kwargs))
     f.check_unused()
-    if params is not None:
-        pf = _Fields(params, "noise.parameters", source)
-        pf.used.add("mode")
-        models.append(nz.ParameterUncertainty(
-            sigma_wheel_base=pf.number("sigma_wheel_base", 0.0),
-            sigma_scale_left=pf.number("sigma_scale_left", 0.0),
-            sigma_scale_right=pf.number("sigma_scale_right", 0.0),
-            mode=params.get("mode", "bias"),
-        ))
+    for name, cls in sub_tables.items():
+        sub = table.get(name)
+        if sub is None:
+            continue
+        if not isinstance(sub, dict):
+            raise InputError(f"[noise] {name} must be a table ([noise.{name}])", source=source)
+        pf = _Fields(sub, f"noise.{name}", source)
+        kwargs = {}
+        for fld in fields(cls):  # type: ignore[arg-type]
+            if isinstance(fld.default, str):  # a mode word, checked by the class
+                pf.used.add(fld.name)
+                if fld.name in sub:
+                    kwargs[fld.name] = sub[fld.name]
+            elif fld.name in sub:
+                kwargs[fld.name] = pf.number(fld.name)
+        models.append(cls(**kwargs))
         pf.check_unused()
     return tuple(models)
 
 
-def read_robot(path: str | Path) -> tuple[Robot, tuple[Any, ...]]:
+def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     """Read a robot file.
 
     Returns
@@ -196,7 +203,7 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[Any, ...]]:
     return robot, noise
 
 
-def robot_to_dict(robot: Robot, noise: tuple[Any, ...] = ()) -> dict[str, Any]:
+def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = ()) -> dict[str, Any]:
     """The TOML document of a robot (and noise), as written by :func:`write_robot`."""
     from dataclasses import asdict
 
@@ -206,15 +213,15 @@ def robot_to_dict(robot: Robot, noise: tuple[Any, ...] = ()) -> dict[str, Any]:
     if noise:
         noise_table: dict[str, Any] = {}
         for model in noise:
-            if isinstance(model, nz.ParameterUncertainty):
-                noise_table["parameters"] = asdict(model)
+            if model.toml_table.startswith("noise."):
+                noise_table[model.toml_table.split(".", 1)[1]] = asdict(model)
             else:
                 noise_table.update(asdict(model))
         doc["noise"] = noise_table
     return doc
 
 
-def write_robot(path: str | Path, robot: Robot, noise: tuple[Any, ...] = (),
+def write_robot(path: str | Path, robot: Robot, noise: tuple[NoiseModel, ...] = (),
                 overwrite: bool = False) -> Path:
     """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
     path = Path(path)

@@ -11,6 +11,8 @@ from numpy.typing import NDArray
 
 from odomkit.errors import InputError
 
+__all__ = ["cumulative_to_increments", "order_by_time", "polars_module", "read_numeric", "unwrap_counter"]
+
 
 def _first_bad_line(path: Path, ncols: int, delimiter: str | None, skip: int) -> InputError:
     """Re-scan a file that numpy refused, to say exactly where and why."""

@@ -12,6 +12,8 @@ from odomkit.io.files import refuse_overwrite
 from odomkit.io.table import polars_module
 from odomkit.track import Track
 
+__all__ = ["TRACK_COLUMNS", "track_table", "write_track_csv", "write_tum"]
+
 TRACK_COLUMNS = ("t", "x", "y", "theta", "cov_xx", "cov_xy", "cov_xtheta", "cov_yy",
                  "cov_ytheta", "cov_thetatheta")
 _COV_INDEX = ((0, 0), (0, 1), (0, 2), (1, 1), (1, 2), (2, 2))

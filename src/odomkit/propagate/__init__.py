@@ -1,1 +1,3 @@
 """Covariance propagation: step recursion, Kelly transition matrix, closed forms."""
+
+__all__: list[str] = []

@@ -12,18 +12,19 @@ benchmarks/propagation.py):
 
 * The per-step terms pass, mostly cos and sin of each heading (~42 ns). The heading is
   now carried as a unit vector (cos, sin) turned by each step's half angle φ = Δθ/2,
-  whose sine and cosine come from Taylor polynomials (exact to rounding for |φ| < 0.25),
-  as :mod:`odomkit._integrate_numba` does for dead reckoning. This is valid only when
-  the headings satisfy θ_{k+1} = θ_k + Δθ_k, which the caller does not promise. So the
-  kernel also carries the scalar sum θ_a + Σ Δθ from the last anchor a and compares it
-  with θ_k at every step (one subtraction). If they differ by more than
-  ``heading_tolerance(θ_k)``, the vector is re-anchored at that step with a real cos/sin
-  of θ_k. Arbitrary headings thus re-anchor at every step, which is the exact per-step
-  computation (~40 ns a step). A dead-reckoned track (:func:`odomkit.integrate.dead_reckon`
-  sums headings in this same order) matches bit for bit and re-anchors only every
-  ``ANCHOR`` steps, so the rounding of repeated rotations cannot build up.
+  whose sine and cosine come from Taylor polynomials (exact to rounding;
+  :func:`odomkit.angles.sin_cos_sinc`), as :mod:`odomkit._integrate_numba` does for dead
+  reckoning. This is valid only when the headings satisfy θ_{k+1} = θ_k + Δθ_k, which
+  the caller does not promise. So the kernel also carries the scalar sum θ_a + Σ Δθ
+  from the last anchor a and compares it with θ_k at every step (one subtraction). If
+  they differ by more than ``heading_tolerance(θ_k)``, the vector is re-anchored at that
+  step with a real cos/sin of θ_k. Arbitrary headings thus re-anchor at every step,
+  which is the exact per-step computation (~40 ns a step). A dead-reckoned track
+  (:func:`odomkit.integrate.dead_reckon` sums headings in this same order) matches bit
+  for bit and re-anchors only every ``ANCHOR`` steps, so the rounding of repeated
+  rotations cannot build up.
 * The per-wheel input covariance: ``QMODE_WHEEL`` forms Q_k from (d_L, d_R) in the
-  kernel, with the very operations of :func:`odomkit.propagate.inputs.wheel_input_cov`,
+  kernel, with the very operations of :func:`odomkit.noise.wheel.wheel_input_cov`,
   instead of a (n, 2, 2) numpy array per chunk (~8 ns a step).
 * A second pass over an (8, n) term array, and contiguous copies (~10 ns a step).
 
@@ -34,8 +35,8 @@ contract a·b + c into an FMA, which keeps the serial kernel, the parallel kerne
 stored, then the recurrence) and every chunking bit-identical. Contraction would save
 only ~11 % (18.6 -> 16.5 ns a step).
 
-Importing this module imports numba; :mod:`odomkit.propagate.recursion` does so lazily
-and falls back to a numpy loop when numba is missing.
+Importing this module imports numba; :mod:`odomkit.propagate.recursion` loads it lazily
+through :func:`odomkit.jit.load` and falls back to a numpy loop when numba is missing.
 """
 
 from __future__ import annotations
@@ -45,7 +46,14 @@ import math
 import numba
 import numpy as np
 
-from odomkit._sincos import ANCHOR, SHORT_LIMIT, sin_cos_sinc
+from odomkit import angles
+from odomkit.angles import ANCHOR
+from odomkit.jit import njit
+
+__all__ = [
+    "METHOD_CLASSICAL", "METHOD_EULER", "METHOD_EXACT", "METHOD_MIDPOINT", "QMODE_ARRAY", "QMODE_WHEEL",
+    "STATE_SIZE", "heading_tolerance", "recurrence_kernel", "recursion_kernel", "recursion_kernel_parallel"
+]
 
 # Method codes shared with recursion.py.
 METHOD_EXACT = 0
@@ -69,38 +77,19 @@ STATE_SIZE = 5
 _TOL_ABS = 1e-12
 _TOL_REL = 64.0 * np.finfo(float).eps
 
-# Below this |u| = |Δθ/2| the Taylor series of the derivative of sinc(u) = sin(u)/u is
-# used: it avoids the cancellation in (u·cos u − sin u)/u² (at |u| = 0.1 the first
-# omitted terms, u^10/11! and 10·u^9/11!, are below 3e-17 relative).
-_SERIES_BELOW = 0.1
-# The derivative series below uses the short form under SHORT_LIMIT too (φ^8 term):
-# its relative error there, v⁴/(10·28·54·88), is below 4e-18.
-_SHORT_LIMIT = SHORT_LIMIT
+# sin, cos and sinc of the half angle, and the derivative of sinc: the series and the
+# threshold of odomkit.angles, inlined into each kernel.
+sin_cos_sinc = njit(angles.sin_cos_sinc, inline="always")
+sinc_derivative = njit(angles.sinc_derivative_scalar, inline="always")
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def heading_tolerance(theta_k: float) -> float:
     """Largest |carried heading − θ_k| [rad] that keeps the rotated heading vector."""
     return _TOL_ABS + _TOL_REL * abs(theta_k)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _sinc_derivative(u: float, sin_u: float, cos_u: float) -> float:
-    """d/dΔθ of sinc(Δθ/2) at u = Δθ/2 (kinematics.sinc_half_derivative)."""
-    if abs(u) < _SHORT_LIMIT:
-        v = u * u
-        return -0.5 * u * (1.0 / 3.0) * (1.0 - v * (1.0 / 10.0) * (1.0 - v * (1.0 / 28.0) * (
-            1.0 - v * (1.0 / 54.0))))
-    if abs(u) < _SERIES_BELOW:
-        v = u * u
-        # d/du sinc = −u/3 + u³/30 − u⁵/840 + u⁷/45360 − u⁹/3991680
-        df = -u * (1.0 / 3.0) * (1.0 - v * (1.0 / 10.0) * (1.0 - v * (1.0 / 28.0) * (
-            1.0 - v * (1.0 / 54.0) * (1.0 - v * (1.0 / 88.0)))))
-        return 0.5 * df
-    return 0.5 * (u * cos_u - sin_u) / (u * u)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method,
           c, s, th, force_anchor):
     """Terms of step k and the heading state after it.
@@ -141,7 +130,8 @@ def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method
         if method == METHOD_MIDPOINT:
             f, df, w = 1.0, 0.0, 0.5
         else:
-            f, df, w = sinc, _sinc_derivative(u, sp, cp), 0.5
+            # d/dΔθ sinc(Δθ/2) = ½ sinc′(u) (angles.sinc_half_derivative)
+            f, df, w = sinc, 0.5 * sinc_derivative(u, sp, cp), 0.5
     th = th + a
     if qmode == QMODE_WHEEL:
         # inputs.wheel_input_cov, operation for operation: Cov(d_L, d_R) =
@@ -171,7 +161,7 @@ def _step(k, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode, method
             r10 * g10 + r11 * g11, r01, r11, q11, c, s, th, anchored)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def _upper(cov: np.ndarray) -> tuple[float, float, float, float, float, float]:
     """(p00, p01, p02, p11, p12, p22) of a 3×3 covariance, off-diagonals averaged.
 
@@ -184,7 +174,7 @@ def _upper(cov: np.ndarray) -> tuple[float, float, float, float, float, float]:
             cov[1, 1], 0.5 * (cov[1, 2] + cov[2, 1]), cov[2, 2])
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def _advance(p00: float, p01: float, p02: float, p11: float, p12: float, p22: float,
              u0: float, u1: float, b00: float, b01: float, b11: float, b02: float,
              b12: float, b22: float) -> tuple[float, float, float, float, float, float]:
@@ -197,7 +187,7 @@ def _advance(p00: float, p01: float, p02: float, p11: float, p12: float, p22: fl
     return n00 + b00, n01 + b01, n02 + b02, n11 + b11, n12 + b12, p22 + b22
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@njit(inline="always")
 def _store(o: np.ndarray, p00: float, p01: float, p02: float, p11: float, p12: float,
            p22: float) -> None:
     """Write the upper triangle and its mirror into the 3×3 ``o``."""
@@ -212,7 +202,7 @@ def _store(o: np.ndarray, p00: float, p01: float, p02: float, p11: float, p12: f
     o[2, 2] = p22
 
 
-@numba.njit(cache=True, nogil=True)
+@njit
 def recursion_kernel(
     theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
     d_left: np.ndarray, d_right: np.ndarray, wheel: np.ndarray, qmode: int, method: int,
@@ -244,7 +234,7 @@ def recursion_kernel(
     state[4] += anchors
 
 
-@numba.njit(cache=True, nogil=True)
+@njit
 def _terms_range(k0, k1, theta, dd, dtheta, cov_input, d_left, d_right, wheel, qmode,
                  method, start, c, s, th, valid, terms):
     """Terms of steps k0 … k1−1 into ``terms`` (8, n), as :func:`recursion_kernel`
@@ -268,7 +258,7 @@ def _terms_range(k0, k1, theta, dd, dtheta, cov_input, d_left, d_right, wheel, q
     return c, s, th, anchors
 
 
-@numba.njit(cache=True, nogil=True)
+@njit
 def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray) -> None:
     """P_{k+1} = F_k P_k F_k^T + B_k over n steps from terms (8, n); ``out[k]`` receives
     P after step k (the same operations as :func:`recursion_kernel`)."""
@@ -280,7 +270,7 @@ def recurrence_kernel(terms: np.ndarray, cov_start: np.ndarray, out: np.ndarray)
         _store(out[k], p00, p01, p02, p11, p12, p22)
 
 
-@numba.njit(cache=True, nogil=True, parallel=True)
+@njit(parallel=True)
 def recursion_kernel_parallel(
     theta: np.ndarray, dd: np.ndarray, dtheta: np.ndarray, cov_input: np.ndarray,
     d_left: np.ndarray, d_right: np.ndarray, wheel: np.ndarray, qmode: int, method: int,

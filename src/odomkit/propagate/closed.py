@@ -57,6 +57,11 @@ from odomkit.errors import ModelError
 from odomkit.kinematics import step_displacement
 from odomkit.noise import ClassicalNoise, WheelNoise
 
+__all__ = [
+    "INTEGRALS", "SERIES_BELOW", "arc_added_cov_local", "arc_integrals", "chain_cov", "classical_step",
+    "pose_transition", "rotate_cov", "wheel_arc_cov", "wheel_arc_noise"
+]
+
 SERIES_BELOW = 1.0
 """|Δθ| [rad] below which the Taylor series of the arc integrals is used."""
 

@@ -31,6 +31,8 @@ from odomkit.propagate.closed import (
     rotate_cov,
 )
 
+__all__ = ["compass_arc_cov", "gyro_arc_cov"]
+
 
 def gyro_arc_cov(
     segment: KellyArc,

@@ -29,11 +29,21 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
-from odomkit.kinematics import diff_body_jacobian, step_displacement
+from odomkit.kinematics import step_displacement
 from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
-from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
+from odomkit.path import Segment, Straight
+from odomkit.propagate.paths import (
+    PathModel,
+    check_partitions,
+    check_segments,
+    path_model,
+    path_steps,
+    segment_motion,
+)
+from odomkit.propagate.plan import NoiseArg
 from odomkit.propagate.closed import classical_step, wheel_arc_cov
 from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
 
@@ -41,18 +51,6 @@ Engine = Literal["closed", "recursion", "transition"]
 ENGINES: tuple[Engine, ...] = ("closed", "recursion", "transition")
 DEFAULT_PARTITIONS = 1000
 """Steps per segment for the ``recursion`` and ``transition`` engines."""
-
-Model = Literal["wheel", "classical", "gyro", "compass"]
-
-
-def wrap_angle(theta: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles to [−π, π).
-
-    >>> float(wrap_angle(-5.0))
-    1.2831853071795862
-    """
-    theta = np.asarray(theta, dtype=float)
-    return theta - 2.0 * np.pi * np.floor((theta + np.pi) / (2.0 * np.pi))
 
 
 @dataclass(frozen=True)
@@ -99,19 +97,15 @@ class Prediction:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON object of ``odomkit predict --json`` (DESIGN.md): keys ``pose``
-        [x, y, θ wrapped to [−π, π)], ``cov``, ``std``, ``corr`` {xy, xtheta, ytheta}
-        (coefficients; NaN stands for undefined and prints as null), and
-        ``ros_pose_covariance``: the 36 numbers of a ROS ``nav_msgs/Odometry`` pose
-        covariance (:func:`odomkit.propagate.ros.ros_pose_covariance`)."""
-        from odomkit.propagate.ros import ros_pose_covariance
-
+        """The prediction as plain values: keys ``pose`` [x, y, θ wrapped to [−π, π)],
+        ``cov``, ``std``, ``corr`` {xy, xtheta, ytheta} (coefficients; NaN stands for
+        undefined and prints as null), ``model`` and ``engine``. ``odomkit predict --json``
+        adds the ROS layout of ``cov`` (:mod:`odomkit.workflows.predict`)."""
         pose = self.pose.copy()
         pose[2] = wrap_angle(pose[2])
         return {
             "pose": pose.tolist(),
             "cov": self.cov.tolist(),
-            "ros_pose_covariance": ros_pose_covariance(self.cov),
             "std": self.std.tolist(),
             "corr": self.corr,
             "model": self.model,
@@ -144,59 +138,19 @@ def check_covariance(cov: ArrayLike, name: str = "initial covariance") -> NDArra
     return 0.5 * (arr + arr.T)
 
 
-def _resolve_model(noise: Any) -> tuple[Model, tuple[Any, ...]]:
-    parts = tuple(noise) if isinstance(noise, Sequence) else (noise,)
-    kinds = {type(p) for p in parts}
-    if len(parts) == 1 and isinstance(parts[0], WheelNoise):
-        return "wheel", parts
-    if len(parts) == 1 and isinstance(parts[0], ClassicalNoise):
-        return "classical", parts
-    speed = [p for p in parts if isinstance(p, SpeedNoise)]
-    speed_noise = speed[0] if speed else SpeedNoise(0.0)
-    if len(parts) == len(kinds) and kinds <= {SpeedNoise, GyroNoise} and GyroNoise in kinds:
-        gyro = next(p for p in parts if isinstance(p, GyroNoise))
-        return "gyro", (speed_noise, gyro)
-    if len(parts) == len(kinds) and kinds <= {SpeedNoise, CompassNoise} and CompassNoise in kinds:
-        compass = next(p for p in parts if isinstance(p, CompassNoise))
-        return "compass", (speed_noise, compass)
-    names = ", ".join(type(p).__name__ for p in parts)
-    raise ModelError(
-        f"noise ({names}) is not a prediction model; expected WheelNoise, ClassicalNoise, "
-        "(SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise)"
-    )
-
-
-def _check_segments(segments: Iterable[Segment], model: Model) -> list[Segment]:
-    segs = list(segments)
-    kelly = model in ("gyro", "compass")
-    for k, seg in enumerate(segs):
-        ok = isinstance(seg, KellyArc) if kelly else isinstance(seg, Arc | Straight | Spin)
-        if not ok:
-            want = "KellyArc (speed, yaw rate, duration)" if kelly else "Arc, Straight or Spin"
-            raise ModelError(f"segment {k + 1} is {seg!r}; the {model} model needs {want}")
-    return segs
-
-
-def _body_motion(seg: Segment, wheel_base: float) -> tuple[float, float]:
-    """(arc length [m], heading change [rad]) of one segment."""
-    if isinstance(seg, KellyArc):
-        return seg.speed * seg.duration, seg.yaw_rate * seg.duration
-    left, right = seg.wheel_travel(wheel_base)
-    return 0.5 * (left + right), (right - left) / wheel_base  # Chong–Kleeman eq. (14)
-
-
 def discretise_path(
     segments: Iterable[Segment],
-    noise: Any,
+    noise: NoiseArg,
     wheel_base: float | None = None,
     partitions: int = DEFAULT_PARTITIONS,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Cut each segment into ``partitions`` equal exact-arc steps with their input noise.
 
-    Per-wheel noise: each step's wheel travels L/n, R/n have variances k²|L|/n, k²|R|/n
-    (Chong–Kleeman eq. 18), mapped to (Δd, Δθ) by the constant Jacobian of eq. (14).
-    Gyro: var(Δd) = α_ss·|V|·T/n, var(Δθ) = σ_gg·T/n (Kelly Table 1).
+    The steps are :func:`odomkit.propagate.paths.path_steps`; each step's input
+    covariance is the noise models' own (:meth:`odomkit.noise.NoiseSet.input_cov`):
+    per-wheel noise gives each step's wheel travels L/n, R/n variances k²|L|/n, k²|R|/n
+    (Chong–Kleeman eq. 18); gyro var(Δd) = α_ss·|V|·T/n, var(Δθ) = σ_gg·T/n (Kelly Table 1).
 
     Returns
     -------
@@ -208,66 +162,55 @@ def discretise_path(
 
     Examples
     --------
+    >>> from odomkit.noise import WheelNoise
     >>> poses, dd, dth, q = discretise_path([Straight(2.0)], WheelNoise(0.1, 0.1), 0.5, 4)
     >>> dd.tolist(), round(float(q[0, 0, 0]), 15)  # var(Δd) = (k²·0.5 + k²·0.5)/4
     ([0.5, 0.5, 0.5, 0.5], 0.0025)
     """
-    model, parts = _resolve_model(noise)
-    segs = _check_segments(segments, model)
-    n = _check_partitions(partitions)
-    if model == "compass":
+    model = path_model(noise, wheel_base)
+    segs = check_segments(segments, model)
+    if model.robot.measures_heading:
         raise ModelError("the compass model has no step recursion here; use engine 'closed'")
-    b = _wheel_base(wheel_base) if model in ("wheel", "classical") else 1.0
-    dd, dth, cov = [], [], []
-    for seg in segs:
-        d, a = _body_motion(seg, b)
-        if model == "wheel":
-            left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
-            wheel_var = np.diag([parts[0].k_left**2 * abs(left), parts[0].k_right**2 * abs(right)])
-            jac = diff_body_jacobian(b)
-            step_cov = jac @ wheel_var @ jac.T / n
-        elif model == "classical":  # per step, whatever its length (Chong–Kleeman eq. 3)
-            step_cov = np.diag([parts[0].sigma_distance**2, parts[0].sigma_angle**2])
-        else:
-            speed, gyro = parts
-            t = seg.duration  # type: ignore[union-attr]
-            step_cov = np.diag([speed.alpha_ss * abs(seg.speed) * t,  # type: ignore[union-attr]
-                                gyro.psd_gyro * t]) / n
-        dd.append(np.full(n, d / n))
-        dth.append(np.full(n, a / n))
-        cov.append(np.broadcast_to(step_cov, (n, 2, 2)))
-    dd_all = np.concatenate(dd) if dd else np.zeros(0)
-    dth_all = np.concatenate(dth) if dth else np.zeros(0)
-    cov_all = np.concatenate(cov) if cov else np.zeros((0, 2, 2))
-    if model != "classical":
-        return dead_reckon(dd_all, dth_all, pose0, "exact"), dd_all, dth_all, cov_all
+    steps = path_steps(segs, model, partitions)
+    cov = model.noise.input_cov(steps, 0, len(steps))
+    dd, dth = steps.dd, steps.dtheta
+    if model.noise.step_map("exact") == "exact":
+        return dead_reckon(dd, dth, pose0, "exact"), dd, dth, cov
     # Chong–Kleeman eq. (1): rotate by α, then translate D along the new heading.
-    poses = np.empty((dd_all.size + 1, 3))
+    poses = np.empty((dd.size + 1, 3))
     poses[0] = np.asarray(pose0, dtype=float)
-    poses[1:, 2] = poses[0, 2] + np.cumsum(dth_all)
-    poses[1:, 0] = poses[0, 0] + np.cumsum(dd_all * np.cos(poses[1:, 2]))
-    poses[1:, 1] = poses[0, 1] + np.cumsum(dd_all * np.sin(poses[1:, 2]))
-    return poses, dd_all, dth_all, cov_all
+    poses[1:, 2] = poses[0, 2] + np.cumsum(dth)
+    poses[1:, 0] = poses[0, 0] + np.cumsum(dd * np.cos(poses[1:, 2]))
+    poses[1:, 1] = poses[0, 1] + np.cumsum(dd * np.sin(poses[1:, 2]))
+    return poses, dd, dth, cov
 
 
-def _check_partitions(partitions: int) -> int:
-    if isinstance(partitions, bool) or not isinstance(partitions, int | np.integer) \
-            or partitions < 1:
-        raise ModelError(f"partitions must be a positive integer, got {partitions!r}")
-    return int(partitions)
+# --- closed forms, one per family: (pose, cov, segment, model) -> cov at the segment end
+def _wheel_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
+                  model: PathModel) -> NDArray[np.float64]:
+    b = model.robot.wheel_base  # type: ignore[union-attr]
+    left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
+    return wheel_arc_cov(left, right, b, model.noise.get(WheelNoise), pose[2], cov)
 
 
-def _wheel_base(wheel_base: float | None) -> float:
-    if wheel_base is None:
-        raise ModelError("the differential-drive model needs a wheel base (--wheel-base, metres)")
-    if not (isinstance(wheel_base, int | float) and math.isfinite(wheel_base) and wheel_base > 0):
-        raise ModelError(f"wheel base must be a positive number of metres, got {wheel_base!r}")
-    return float(wheel_base)
+def _gyro_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
+                 model: PathModel) -> NDArray[np.float64]:
+    speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
+    return gyro_arc_cov(seg, speed, model.noise.get(GyroNoise), pose[2], cov)  # type: ignore[arg-type]
+
+
+def _compass_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
+                    model: PathModel) -> NDArray[np.float64]:
+    speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
+    return compass_arc_cov(seg, speed, model.noise.get(CompassNoise), pose[2], cov)  # type: ignore[arg-type]
+
+
+_CLOSED_FORMS = {"wheel": _wheel_closed, "gyro": _gyro_closed, "compass": _compass_closed}
 
 
 def predict(
     segments: Iterable[Segment],
-    noise: Any,
+    noise: NoiseArg,
     wheel_base: float | None = None,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
     cov0: ArrayLike | None = None,
@@ -312,24 +255,26 @@ def predict(
     --------
     Chong–Kleeman Table 1 (I): arc L = 3 m, R = 1 m, B = 0.4 m, k = 0.001 m^½.
 
+    >>> from odomkit.noise import WheelNoise
+    >>> from odomkit.path import Arc
     >>> p = predict([Arc(3.0, 1.0)], WheelNoise(0.001, 0.001), wheel_base=0.4)
     >>> [round(v, 6) for v in p.to_dict()["pose"]], [float(f"{s:.5g}") for s in p.std]
     ([-0.38357, -0.286535, 1.283185], [0.0014376, 0.0024666, 0.005])
     """
     if engine not in ENGINES:
         raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
-    model, parts = _resolve_model(noise)
-    segs = _check_segments(segments, model)
+    model = path_model(noise, wheel_base)
+    segs = check_segments(segments, model)
     p0 = np.asarray(pose0, dtype=float).reshape(-1)
     if p0.shape != (3,) or not np.all(np.isfinite(p0)):
         raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
     c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
-    b = _wheel_base(wheel_base) if model in ("wheel", "classical") else 1.0
+    b = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
 
     if engine != "closed":
-        n = DEFAULT_PARTITIONS if partitions is None else _check_partitions(partitions)
-        poses, dd, dth, cov_in = discretise_path(segs, noise, b, n, p0)
-        method = "classical" if model == "classical" else "exact"
+        n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)
+        poses, dd, dth, cov_in = discretise_path(segs, model.noise, wheel_base, n, p0)
+        method = model.noise.step_map("exact")
         if engine == "recursion":
             from odomkit.propagate.recursion import propagate_recursion
 
@@ -339,25 +284,21 @@ def predict(
 
             covs = propagate_transition(poses, dd, dth, cov_in, c0, method=method)
         cov_end = np.asarray(covs[-1], dtype=float)
-        return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model, engine)
+        return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
 
     pose, cov = p0.copy(), c0
-    if model == "classical":
-        pieces = 1 if partitions is None else _check_partitions(partitions)
+    if model.family == "classical":
+        classical = model.noise.get(ClassicalNoise)
+        pieces = 1 if partitions is None else check_partitions(partitions)
         for seg in segs:
-            d, a = _body_motion(seg, b)
+            d, a = segment_motion(seg, b)
             for _ in range(pieces):
-                pose, cov = classical_step(pose, cov, d / pieces, a / pieces, parts[0])
-        return Prediction(pose, cov, model, engine)
+                pose, cov = classical_step(pose, cov, d / pieces, a / pieces, classical)  # type: ignore[arg-type]
+        return Prediction(pose, cov, model.family, engine)
+    closed_form = _CLOSED_FORMS[model.family]
     for seg in segs:
-        if model == "wheel":
-            left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
-            cov = wheel_arc_cov(left, right, b, parts[0], pose[2], cov)
-        elif model == "gyro":
-            cov = gyro_arc_cov(seg, parts[0], parts[1], pose[2], cov)  # type: ignore[arg-type]
-        else:
-            cov = compass_arc_cov(seg, parts[0], parts[1], pose[2], cov)  # type: ignore[arg-type]
-        d, a = _body_motion(seg, b)
+        cov = closed_form(pose, cov, seg, model)
+        d, a = segment_motion(seg, b)
         dx, dy = step_displacement(pose[2], d, a, "exact")
         pose = pose + np.array([float(dx), float(dy), a])
-    return Prediction(pose, cov, model, engine)
+    return Prediction(pose, cov, model.family, engine)

@@ -28,8 +28,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
+from odomkit.kinematics import BodySteps
+from odomkit.noise.wheel import WheelInputs
 from odomkit.propagate.inputs import any_step_jacobians, step_terms
-from odomkit.propagate.plan import NoisePlan, WheelInputs, plan_noise
+from odomkit.propagate.plan import NoiseArg, NoisePlan, plan_noise
 from odomkit.propagate.transition import (
     check_cov3,
     check_cov_input,
@@ -41,6 +43,11 @@ from odomkit.propagate.transition import (
     sensitivity_terms,
     transition_chunk,
 )
+
+__all__ = [
+    "DEFAULT_CHUNK", "iter_track_covariance", "new_heading_state", "propagate_recursion", "recursion_chunk",
+    "track_covariance"
+]
 
 DEFAULT_CHUNK = 1 << 13
 _METHOD_CODES = {"exact": 0, "midpoint": 1, "euler": 2, "classical": 3}
@@ -235,9 +242,9 @@ def _bias_chunk(plan: NoisePlan, theta, dd, dtheta, a: int, b: int, S):
 
 
 def iter_track_covariance(
-    steps: Any,
+    steps: BodySteps,
     poses: ArrayLike,
-    noise: Any,
+    noise: NoiseArg,
     cov0: ArrayLike,
     method: str = "exact",
     engine: str = "recursion",
@@ -281,9 +288,9 @@ def iter_track_covariance(
 
 
 def track_covariance(
-    steps: Any,
+    steps: BodySteps,
     poses: ArrayLike,
-    noise: Any,
+    noise: NoiseArg,
     cov0: ArrayLike,
     method: str = "exact",
     engine: str = "recursion",
@@ -303,8 +310,8 @@ def track_covariance(
         The track dead-reckoned from ``steps`` (headings at the start of each step are
         ``poses[:-1, 2]``; for a compass robot the measured heading).
     noise : noise model or tuple of noise models
-        Any of :mod:`odomkit.noise`; see :func:`odomkit.propagate.plan.plan_noise` for
-        which combine with which robot.
+        Any of :mod:`odomkit.noise`; each model's ``check_robot`` says which robots it
+        applies to.
     cov0 : array_like, shape (3, 3)
         Covariance of the first pose (for a compass robot only its position block is
         used: the heading variance is the compass's).

@@ -34,6 +34,12 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit.errors import ModelError
 from odomkit.propagate.inputs import ENGINE_METHODS, step_terms
 
+__all__ = [
+    "DEFAULT_CHUNK", "check_cov3", "check_cov_input", "check_method", "check_steps", "direct_heading_chunk",
+    "input_terms", "iter_transition", "parameter_sensitivity", "propagate_direct_heading",
+    "propagate_transition", "sensitivity_chunk", "sensitivity_terms", "transition_chunk", "transition_matrix"
+]
+
 DEFAULT_CHUNK = 1 << 15
 
 
@@ -299,7 +305,7 @@ def parameter_sensitivity(
     --------
     A 1 m straight line in 10 steps with a 1 % distance scale error ends 1 cm long:
 
-    >>> from odomkit.propagate.inputs import scale_parameter_jacobian
+    >>> from odomkit.noise.parameters import scale_parameter_jacobian
     >>> dd = np.full(10, 0.1)
     >>> S = parameter_sensitivity(np.zeros(10), dd, np.zeros(10), scale_parameter_jacobian(dd))
     >>> round(float(S[-1, 0, 0] * 0.01), 12)
@@ -378,7 +384,7 @@ def propagate_direct_heading(
         Variance of each Δd [m²] (Kelly: α_ss·|Δd|).
     var_heading : array_like, shape (M + 1,)
         Variance of each heading sample [rad²]
-        (:func:`odomkit.propagate.inputs.direct_heading_variances`).
+        (:func:`odomkit.noise.kelly.direct_heading_variances`).
     cov_xy0 : array_like, shape (2, 2)
         Initial position covariance [m²]; the initial heading is the compass's, with
         variance var_heading[0] and no correlation to the position.

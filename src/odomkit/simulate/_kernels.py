@@ -25,7 +25,15 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from odomkit.kinematics import sinc_half, step_displacement
+from odomkit import jit
+from odomkit.angles import sinc_half
+from odomkit.errors import ModelError
+from odomkit.kinematics import step_displacement
+
+__all__ = [
+    "advance_classical_numpy", "advance_compass_numpy", "advance_numba", "advance_numpy", "have_numba",
+    "new_state", "State"
+]
 
 State = NDArray[np.float64]  # shape (5, B): x, y, θ, cos θ, sin θ
 
@@ -96,24 +104,18 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     state[2] = coef[2] + coef[3] * (first_partition + p - 0.5) + coef[4] * z[-1, 1, :]
 
 
-_NUMBA_KERNEL: Callable[..., None] | None = None
-
-
 def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64], int], None]:
-    """The compiled kernel of :mod:`odomkit.simulate._numba` (imported, and compiled or
-    loaded from numba's cache, on first use; raises ImportError without numba)."""
-    global _NUMBA_KERNEL
-    if _NUMBA_KERNEL is None:
-        from odomkit.simulate._numba import advance_state
-
-        _NUMBA_KERNEL = advance_state
-    return _NUMBA_KERNEL
+    """The compiled kernel of :mod:`odomkit.simulate._numba`, loaded by
+    :func:`odomkit.jit.load` (compiled, or read from numba's cache, on first call);
+    ModelError without numba."""
+    module = jit.load("simulate._numba")
+    if module is None:
+        raise ModelError("engine='numba' needs numba: pip install 'odomkit[fast]'")
+    return module.advance_state  # type: ignore[no-any-return]
 
 
 def have_numba() -> bool:
-    try:
-        import numba  # noqa: F401
-    except ImportError:
-        return False
-    return True
+    """Whether the numba kernel can be loaded (warns once, via :func:`odomkit.jit.load`,
+    when it cannot)."""
+    return jit.load("simulate._numba") is not None
 

@@ -2,9 +2,9 @@
 
 Exact-arc step, as :func:`odomkit.kinematics.step_displacement` with ``method="exact"``,
 but carrying the unit heading vector (cos θ, sin θ) and turning it twice by Δθ/2, with
-sin and cos of the small half angle from their Taylor series: exact to rounding for
-|Δθ/2| < :data:`POLY_BELOW` (first omitted terms u¹²/13! < 1e-17 and u¹⁴/14! < 1e-19).
-The vector is recomputed from the separately summed θ every :data:`RESYNC_EVERY`
+sin and cos of the half angle from their Taylor series
+(:func:`odomkit.angles.sin_cos_sinc_series`, exact to rounding below
+:data:`odomkit.angles.SERIES_BELOW`). The vector is recomputed from the separately summed θ every :data:`RESYNC_EVERY`
 partitions, counted from the start of the path. No fastmath: the arithmetic, and so
 the numbers, cannot depend on vectorisation.
 """
@@ -14,26 +14,20 @@ from __future__ import annotations
 import math
 from typing import Any
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import angles
+from odomkit.jit import njit
+
+__all__ = ["RESYNC_EVERY", "advance_state"]
+
 RESYNC_EVERY = 64
-POLY_BELOW = 0.25
-_S1, _S2, _S3, _S4, _S5 = -1 / 6, 1 / 120, -1 / 5040, 1 / 362880, -1 / 39916800
-_C1, _C2, _C3, _C4, _C5, _C6 = -1 / 2, 1 / 24, -1 / 720, 1 / 40320, -1 / 3628800, 1 / 479001600
+_SERIES_BELOW = angles.SERIES_BELOW
+sin_cos_sinc_series = njit(angles.sin_cos_sinc_series, inline="always")
 
 
-@numba.njit(nogil=True, inline="always", cache=True)
-def _series(u: float) -> tuple[float, float]:
-    """(sin u / u, cos u) for small u."""
-    u2 = u * u
-    sinc = 1.0 + u2 * (_S1 + u2 * (_S2 + u2 * (_S3 + u2 * (_S4 + u2 * _S5))))
-    cu = 1.0 + u2 * (_C1 + u2 * (_C2 + u2 * (_C3 + u2 * (_C4 + u2 * (_C5 + u2 * _C6)))))
-    return sinc, cu
-
-
-@numba.njit(nogil=True, inline="always", cache=True)
+@njit(inline="always")
 def _arc(x: Any, y: Any, th: Any, c: Any, s: Any, r: int, dd: float, dth: float, su: float,
          cu: float, sinc: float) -> None:
     cc = c[r]
@@ -49,7 +43,7 @@ def _arc(x: Any, y: Any, th: Any, c: Any, s: Any, r: int, dd: float, dth: float,
     s[r] = sm * cu + cm * su
 
 
-@numba.njit(nogil=True, cache=True)
+@njit
 def _advance(x: Any, y: Any, th: Any, c: Any, s: Any, z: Any, coef: Any,
              first_partition: int) -> None:
     n_part, _, n_runs = z.shape
@@ -64,22 +58,22 @@ def _advance(x: Any, y: Any, th: Any, c: Any, s: Any, z: Any, coef: Any,
         u_max = 0.0
         for r in range(n_runs):
             u_max = max(u_max, abs(0.5 * (dt0 + at * z0[r] + bt * z1[r])))
-        if u_max < POLY_BELOW:
+        # The full series (not angles.sin_cos_sinc, whose extra branch to the short series
+        # would stop the loop from vectorising), else the direct formulas.
+        if u_max < _SERIES_BELOW:
             # branch-free, vectorised: every run of this partition takes the series
             for r in range(n_runs):
                 dth = dt0 + at * z0[r] + bt * z1[r]
-                u = 0.5 * dth
-                sinc, cu = _series(u)
-                _arc(x, y, th, c, s, r, dd0 + ad * z0[r] + bd * z1[r], dth, u * sinc, cu, sinc)
+                su, cu, sinc = sin_cos_sinc_series(0.5 * dth)
+                _arc(x, y, th, c, s, r, dd0 + ad * z0[r] + bd * z1[r], dth, su, cu, sinc)
         else:
             # per run the same arithmetic as above where |u| is small, so a run's numbers
             # never depend on the other runs of its block
             for r in range(n_runs):
                 dth = dt0 + at * z0[r] + bt * z1[r]
                 u = 0.5 * dth
-                if abs(u) < POLY_BELOW:
-                    sinc, cu = _series(u)
-                    su = u * sinc
+                if abs(u) < _SERIES_BELOW:
+                    su, cu, sinc = sin_cos_sinc_series(u)
                 else:
                     su = math.sin(u)
                     cu = math.cos(u)

@@ -1,6 +1,6 @@
 """Run Monte Carlo blocks on a Dask cluster (optional; ``pip install 'odomkit[dask]'``).
 
-Blocks are the unit of randomness (see :mod:`odomkit.simulate.engine`), so sending tasks
+Blocks are the unit of randomness (see :mod:`odomkit.simulate.blocks`), so sending tasks
 of blocks to Dask workers gives the same numbers as the local thread pool. Dask is only
 imported here, never by a local run.
 """
@@ -10,6 +10,9 @@ from __future__ import annotations
 from typing import Any
 
 from odomkit.errors import ModelError
+from odomkit.simulate.blocks import run_task
+
+__all__ = ["CONNECT_TIMEOUT", "get_client", "run_tasks_dask"]
 
 CONNECT_TIMEOUT = "10s"
 
@@ -37,11 +40,9 @@ def run_tasks_dask(scheduler: Any, plan: Any, seed: int, tasks: list[list[tuple[
     """Run every task on the cluster; results in task order."""
     from dask.distributed import as_completed
 
-    from odomkit.simulate.engine import _run_task
-
     client, owned = get_client(scheduler)
     try:
-        futures = client.map(_run_task, [plan] * len(tasks), [seed] * len(tasks), tasks,
+        futures = client.map(run_task, [plan] * len(tasks), [seed] * len(tasks), tasks,
                              [engine] * len(tasks), [want_ends] * len(tasks), pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         results: list[Any] = [None] * len(tasks)

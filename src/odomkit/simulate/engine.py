@@ -5,17 +5,13 @@ the noise model, and the pose is integrated with the exact arc (see
 :mod:`odomkit.simulate._kernels`). This is the experiment of Chong–Kleeman section 6.1
 (Tables 1–2: 10 000 runs, 10 000 partitions, wheel base 0.4 m).
 
-Reproducibility: runs are grouped into fixed blocks of :data:`BLOCK_RUNS`; block ``b``
-draws from its own stream ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of
-``SeedSequence(seed).spawn``) in a fixed order: 3 normals per run for the initial pose,
-then, partition after partition along the whole path, 2 normals per run. How blocks are
-grouped into chunks, threads or Dask workers therefore never changes a number.
-Memory stays bounded: a block holds at most :data:`PARTITION_CHUNK` partitions of noise.
+Reproducibility: runs are grouped into fixed blocks, each with its own random stream
+(:mod:`odomkit.simulate.blocks`), so how blocks are grouped into chunks, threads or Dask
+workers never changes a number.
 """
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -26,13 +22,15 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.path import Segment
 from odomkit.simulate import _kernels
+from odomkit.simulate.blocks import make_tasks, run_task
 from odomkit.simulate.plan import Plan, SystematicErrors, make_plan
 
-BLOCK_RUNS = 256
-PARTITION_CHUNK = 512
+__all__ = ["Engine", "MonteCarloRuns", "Progress", "simulate_runs"]
+
 Engine = Literal["auto", "numba", "numpy"]
 Progress = Callable[[int], None]
 
@@ -74,69 +72,10 @@ def _pick_engine(engine: Engine) -> str:
     return engine
 
 
-def _block_sizes(runs: int) -> list[int]:
-    return [min(BLOCK_RUNS, runs - start) for start in range(0, runs, BLOCK_RUNS)]
-
-
-def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
-              want_ends: bool, partition_chunk: int = PARTITION_CHUNK,
-              ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
-    """Simulate block ``block`` (``n_runs`` runs): final poses (n, 3), segment ends (n, S, 3).
-
-    ``partition_chunk`` only bounds memory; it never changes the numbers.
-    """
-    rng = np.random.Generator(np.random.SFC64(np.random.SeedSequence(seed, spawn_key=(block,))))
-    z_pose = rng.standard_normal((n_runs, 3))
-    poses = plan.pose0 + z_pose @ plan.factor0.T
-    state = _kernels.new_state(poses)
-    n_seg = plan.coefs.shape[0]
-    ends = np.empty((n_runs, n_seg, 3)) if want_ends else None
-    advance: Callable[[_kernels.State, NDArray[np.float64], NDArray[np.float64], int], None]
-    if plan.kind == "compass":
-        advance = _kernels.advance_compass_numpy
-    elif plan.kind == "classical":
-        advance = _kernels.advance_classical_numpy
-    elif engine == "numba":
-        advance = _kernels.advance_numba()
-    else:
-        advance = _kernels.advance_numpy
-    buf = np.empty((min(partition_chunk, plan.partitions), 2, n_runs))
-    k = plan.partitions
-    for j in range(n_seg):
-        coef = plan.coefs[j]
-        for start in range(0, k, partition_chunk):
-            z = buf[: min(partition_chunk, k - start)]
-            rng.standard_normal(out=z)
-            # the numba kernel resyncs its heading vector at global partition indices
-            first = start if plan.kind == "compass" else j * k + start
-            advance(state, z, coef, first)
-        if ends is not None:
-            ends[:, j, :] = state[:3].T
-    return state[:3].T.copy(), ends
-
-
-def _run_task(plan: Plan, seed: int, blocks: list[tuple[int, int]], engine: str,
-              want_ends: bool) -> list[tuple[NDArray[np.float64], NDArray[np.float64] | None]]:
-    return [run_block(plan, seed, b, n, engine, want_ends) for b, n in blocks]
-
-
-def make_tasks(runs: int, chunk_runs: int | None) -> list[list[tuple[int, int]]]:
-    """Group the blocks (index, size) into tasks of about ``chunk_runs`` runs."""
-    if not isinstance(runs, int | np.integer) or runs < 1:
-        raise ModelError(f"runs must be a positive integer, got {runs!r}")
-    if chunk_runs is not None and (not isinstance(chunk_runs, int | np.integer) or chunk_runs < 1):
-        raise ModelError(f"chunk_runs must be a positive integer, got {chunk_runs!r}")
-    per_task = max(1, math.ceil((chunk_runs or BLOCK_RUNS) / BLOCK_RUNS))
-    blocks = list(enumerate(_block_sizes(int(runs))))
-    return [blocks[i: i + per_task] for i in range(0, len(blocks), per_task)]
-
-
 def _resolve_seed(seed: int | None) -> int:
     if seed is None:
         return int(np.random.SeedSequence().entropy)  # type: ignore[arg-type]
-    if not isinstance(seed, int | np.integer) or seed < 0:
-        raise ModelError(f"seed must be a non-negative integer, got {seed!r}")
-    return int(seed)
+    return validate.non_negative_int(seed, "seed")
 
 
 def simulate_runs(
@@ -236,20 +175,18 @@ def simulate_runs(
 def _run_tasks_local(plan: Plan, seed: int, tasks: list[list[tuple[int, int]]], engine: str,
                      want_ends: bool, workers: int | None, progress: Progress | None,
                      ) -> list[Any]:
-    n_workers = workers if workers is not None else (os.cpu_count() or 1)
-    if not isinstance(n_workers, int) or n_workers < 1:
-        raise ModelError(f"workers must be a positive integer, got {workers!r}")
+    n_workers = (os.cpu_count() or 1) if workers is None else validate.positive_int(workers, "workers")
     if engine == "numba" and plan.kind == "increment":
         _kernels.advance_numba()  # compile once, before the threads race to do it
     results: list[Any] = [None] * len(tasks)
     if n_workers == 1 or len(tasks) == 1:
         for i, task in enumerate(tasks):
-            results[i] = _run_task(plan, seed, task, engine, want_ends)
+            results[i] = run_task(plan, seed, task, engine, want_ends)
             if progress:
                 progress(sum(n for _, n in task))
         return results
     with ThreadPoolExecutor(max_workers=n_workers) as pool:
-        futures = {pool.submit(_run_task, plan, seed, task, engine, want_ends): i
+        futures = {pool.submit(run_task, plan, seed, task, engine, want_ends): i
                    for i, task in enumerate(tasks)}
         for fut in as_completed(futures):
             i = futures[fut]

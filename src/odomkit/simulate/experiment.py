@@ -9,10 +9,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from odomkit.errors import ModelError
+from odomkit.noise import NoiseSet
 from odomkit.path import Segment
 from odomkit.simulate.engine import Engine, Progress, simulate_runs
-from odomkit.simulate.plan import SystematicErrors, resolve_model
-from odomkit.simulate.stats import _corr, compare, wrap_angle
+from odomkit.simulate.plan import SystematicErrors
+from odomkit.simulate.stats import compare, correlations, wrap_angle
+
+__all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
 
 
 def _predicted(path: Sequence[Segment], noise: Any, wheel_base: float | None,
@@ -23,8 +26,7 @@ def _predicted(path: Sequence[Segment], noise: Any, wheel_base: float | None,
 
     # The classical model's answer depends on the number of steps: predict the same
     # K steps per segment that are simulated. The consistent models ignore it.
-    model, _ = resolve_model(noise)
-    pieces = partitions if model == "classical" else None
+    pieces = partitions if NoiseSet.of(noise).family == "classical" else None
     out = predict(path, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0, engine="closed",
                   partitions=pieces)
     return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float), out.to_dict()
@@ -36,7 +38,7 @@ def theory_summary(pose: ArrayLike, cov: ArrayLike) -> dict[str, Any]:
     cov = np.asarray(cov, dtype=float)
     pose[2] = wrap_angle(pose[2])
     return {"pose": pose, "cov": cov, "std": np.sqrt(np.clip(np.diag(cov), 0, None)),
-            "corr": _corr(cov)}
+            "corr": correlations(cov)}
 
 
 def _cov_matrix(cov0: ArrayLike | None) -> np.ndarray | None:

@@ -9,15 +9,17 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+from odomkit.kinematics import BodySteps
+from odomkit.noise import NoiseSet
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-from odomkit.robot import SystematicErrors
+from odomkit.propagate.paths import PathModel, path_model
+from odomkit.propagate.plan import NoiseArg
+from odomkit.robot import DiffDrive, Robot, SystematicErrors
 
 
 @dataclass(frozen=True)
@@ -57,87 +59,73 @@ def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
     return np.asarray(v * np.sqrt(w))
 
 
-def resolve_model(noise: Any) -> tuple[str, tuple[Any, ...]]:
-    """The odometry model a noise argument selects, as in ``predict``.
+def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0) -> PathModel:
+    """The odometry model a noise argument selects, as in ``predict``
+    (:func:`odomkit.propagate.paths.path_model`).
 
-    ``WheelNoise`` -> ``"wheel"``, ``ClassicalNoise`` -> ``"classical"`` (both
-    differential drive), ``(SpeedNoise, GyroNoise)`` -> ``"gyro"``,
-    ``(SpeedNoise, CompassNoise)`` -> ``"compass"`` (SpeedNoise optional, any order).
-
-    >>> resolve_model(WheelNoise(0.001, 0.001))[0]
+    >>> from odomkit.noise import WheelNoise
+    >>> resolve_model(WheelNoise(0.001, 0.001)).family
     'wheel'
     """
-    parts = tuple(p for p in (noise if isinstance(noise, list | tuple) else (noise,))
-                  if p is not None)
-    kinds = [type(p) for p in parts]
-    if kinds == [WheelNoise]:
-        return "wheel", parts
-    if kinds == [ClassicalNoise]:
-        return "classical", parts
-    if len(set(kinds)) == len(kinds):
-        speed = next((p for p in parts if isinstance(p, SpeedNoise)), SpeedNoise(0.0))
-        if set(kinds) in ({GyroNoise}, {SpeedNoise, GyroNoise}):
-            return "gyro", (speed, next(p for p in parts if isinstance(p, GyroNoise)))
-        if set(kinds) in ({CompassNoise}, {SpeedNoise, CompassNoise}):
-            return "compass", (speed, next(p for p in parts if isinstance(p, CompassNoise)))
-    names = ", ".join(k.__name__ for k in kinds) or "nothing"
-    raise ModelError(f"noise ({names}) is not a simulation model; expected WheelNoise, "
-                     "ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise)")
+    return path_model(noise, wheel_base, purpose="simulation")
 
 
-def _diff_coefs(model: Any, wheel_base: float, path: Sequence[Segment], k: int,
-                systematic: SystematicErrors | None) -> NDArray[np.float64]:
-    sys_err = systematic or SystematicErrors()
-    scale_left, scale_right = sys_err.wheel_scales()
-    b = wheel_base * sys_err.E_b
-    coefs = np.empty((len(path), 6))
+def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: Robot,
+                     scales: tuple[float, float]) -> BodySteps:
+    """One partition (1/k) of every segment, as the steps the noise models are asked
+    about: a differential drive's commanded wheel travels (nominal wheel base) scaled by
+    the true wheel sizes, or Kelly's speed·Δt and yaw rate·Δt."""
+    dd, dth, dt, d_left, d_right = (np.empty(len(path)) for _ in range(5))
     for j, seg in enumerate(path):
-        if not isinstance(seg, Arc | Straight | Spin):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
-                             "expected arc:L,R, straight:D or spin:DTHETA")
-        # commanded travels use the nominal wheel base (a spin is commanded with it)
-        left, right = seg.wheel_travel(wheel_base)
-        left, right = scale_left * left / k, scale_right * right / k
-        if isinstance(model, WheelNoise):
-            # Chong–Kleeman eq. (4): each partition's wheel travel has variance k²·|d|
-            sigma_l = model.k_left * math.sqrt(abs(left))
-            sigma_r = model.k_right * math.sqrt(abs(right))
+        if model.diff:
+            left, right = seg.wheel_travel(model.robot.wheel_base)  # type: ignore[union-attr]
+            d_left[j], d_right[j] = scales[0] * left / k, scales[1] * right / k
             # Δd = (d_L + d_R)/2, Δθ = (d_R − d_L)/b, Borenstein–Feng (2.2)–(2.4)
-            coefs[j] = (0.5 * (left + right), 0.5 * sigma_l, 0.5 * sigma_r,
-                        (right - left) / b, -sigma_l / b, sigma_r / b)
+            dd[j] = 0.5 * (d_left[j] + d_right[j])
+            dth[j] = (d_right[j] - d_left[j]) / robot.effective_wheel_base  # type: ignore[union-attr]
+            dt[j] = 0.0
         else:
-            # Chong–Kleeman eq. (1)–(3): fixed σ per step, whatever the step's length
-            coefs[j] = (0.5 * (left + right), model.sigma_distance, 0.0,
-                        (right - left) / b, 0.0, model.sigma_angle)
-    return coefs
+            dt[j] = seg.duration / k  # type: ignore[union-attr]
+            dd[j], dth[j] = seg.speed * dt[j], seg.yaw_rate * dt[j]  # type: ignore[union-attr]
+    inputs = {"d_left": d_left, "d_right": d_right} if model.diff else {}
+    return BodySteps(dd, dth, dt, inputs, robot)
 
 
-def _kelly_coefs(model: str, parts: tuple[Any, ...], path: Sequence[Segment], k: int,
-                 theta0: float) -> NDArray[np.float64]:
-    speed_noise, heading_noise = parts
+def _coefs(model: PathModel, path: Sequence[Segment], k: int,
+           systematic: SystematicErrors | None, theta0: float) -> NDArray[np.float64]:
+    """(S, 6) kernel coefficients: the mean body motion of one partition of each segment
+    and a factor A (A Aᵀ = Q) of its white noise, as the noise models give them
+    (:meth:`odomkit.noise.NoiseSet.input_factor`)."""
+    robot = model.robot
+    scales = (1.0, 1.0)
+    if model.diff:
+        sys_err = systematic or SystematicErrors()
+        scales = sys_err.wheel_scales()
+        robot = DiffDrive(model.robot.wheel_base * sys_err.E_b)  # type: ignore[union-attr]
+    elif systematic is not None:
+        raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
+    steps = _partition_steps(model, path, k, robot, scales)
+    factor = model.noise.input_factor(steps, 0, len(steps))
     coefs = np.empty((len(path), 6))
-    theta_start = theta0
-    for j, seg in enumerate(path):
-        if not isinstance(seg, KellyArc):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
-                             "expected arc:V,OMEGA,T or straight:V,T")
-        dt = seg.duration / k
-        dd0, dth0 = seg.speed * dt, seg.yaw_rate * dt
-        # Kelly Table 1: σ_vv = α_ss·|V|, so a partition's distance has variance α_ss·|Δs|
-        sigma_d = math.sqrt(speed_noise.alpha_ss * abs(dd0))
-        if model == "gyro":
-            # Kelly Table 1: σ_ωω = σ_gg, the integrated heading gains variance σ_gg·Δt
-            coefs[j] = (dd0, sigma_d, 0.0, dth0, 0.0, math.sqrt(heading_noise.psd_gyro * dt))
-        else:
-            # white compass error of density σ_θθ sampled every Δt: variance σ_θθ/Δt
-            # (noise.CompassNoise)
-            sigma_h = math.sqrt(heading_noise.psd_compass / dt) if dt > 0 else 0.0
-            coefs[j] = (dd0, sigma_d, theta_start + 0.5 * dth0, dth0, sigma_h, 0.0)
-        theta_start += seg.yaw_rate * seg.duration
+    coefs[:, 0], coefs[:, 3] = steps.dd, steps.dtheta
+    coefs[:, 1], coefs[:, 2] = factor[:, 0, 0], factor[:, 0, 1]
+    coefs[:, 4], coefs[:, 5] = factor[:, 1, 0], factor[:, 1, 1]
+    if robot.measures_heading:
+        # Direct heading: slot 2 holds the nominal heading at the partition's middle and
+        # slot 4 the σ of each measured heading (white compass error of density psd
+        # sampled every Δt: variance psd/Δt, noise.CompassNoise).
+        theta_start = theta0
+        for j, seg in enumerate(path):
+            coefs[j, 2] = theta_start + 0.5 * steps.dtheta[j]
+            one = BodySteps(steps.dd[j:j + 1], steps.dtheta[j:j + 1], steps.dt[j:j + 1], {}, robot)
+            var_h = model.noise.heading_variances(one) if steps.dt[j] > 0 else None
+            coefs[j, 4] = math.sqrt(var_h[0]) if var_h is not None else 0.0
+            coefs[j, 5] = 0.0
+            theta_start += seg.yaw_rate * seg.duration  # type: ignore[union-attr]
     return coefs
 
 
-def make_plan(path: Sequence[Segment], noise: Any, wheel_base: float | None, partitions: int,
+def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None, partitions: int,
               pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
               systematic: SystematicErrors | None = None) -> Plan:
     """Translate path, noise and robot into per-segment kernel coefficients."""
@@ -150,16 +138,18 @@ def make_plan(path: Sequence[Segment], noise: Any, wheel_base: float | None, par
     if p0.shape != (3,) or not np.all(np.isfinite(p0)):
         raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
     k = int(partitions)
-    model, parts = resolve_model(noise)
-    if model in ("wheel", "classical"):
-        if wheel_base is None or not (math.isfinite(wheel_base) and wheel_base > 0):
-            raise ModelError(f"the {model} model needs a positive wheel_base [m], "
-                             f"got {wheel_base!r}")
-        coefs = _diff_coefs(parts[0], float(wheel_base), path, k, systematic)
-        kind = "classical" if model == "classical" else "increment"
-    else:
-        if systematic is not None:
-            raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
-        coefs = _kelly_coefs(model, parts, path, k, float(p0[2]))
-        kind = "increment" if model == "gyro" else "compass"
+    family = NoiseSet.of(noise).family
+    if family in ("wheel", "classical") and (
+            wheel_base is None or not (math.isfinite(wheel_base) and wheel_base > 0)):
+        raise ModelError(f"the {family} model needs a positive wheel_base [m], got {wheel_base!r}")
+    model = resolve_model(noise, wheel_base)
+    for j, seg in enumerate(path):
+        if model.diff and not isinstance(seg, Arc | Straight | Spin):
+            raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
+                             "expected arc:L,R, straight:D or spin:DTHETA")
+        if not model.diff and not isinstance(seg, KellyArc):
+            raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
+                             "expected arc:V,OMEGA,T or straight:V,T")
+    coefs = _coefs(model, path, k, systematic, float(p0[2]))
+    kind = {"classical": "classical", "compass": "compass"}.get(model.family, "increment")
     return Plan(kind, coefs, k, p0, _cov_factor(cov0))

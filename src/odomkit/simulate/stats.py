@@ -44,7 +44,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats as sps
 
+from odomkit import validate
 from odomkit.errors import ModelError
+
+__all__ = [
+    "BIAS_TOLERANCE", "CORR_PAIRS", "NAMES", "VARIANCE_TOLERANCE", "compare", "correlations", "wrap_angle"
+]
 
 NAMES = ("x", "y", "theta")
 # Chong–Kleeman section 6.1 call the model adequate where the mean is off by an order of
@@ -66,7 +71,14 @@ def wrap_angle(a: ArrayLike) -> NDArray[np.float64]:
     return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
-def _corr(cov: NDArray[np.float64]) -> dict[str, float]:
+def correlations(cov: ArrayLike) -> dict[str, float]:
+    """Correlation coefficients ``xy``, ``xtheta``, ``ytheta`` of a 3×3 (x, y, θ)
+    covariance; NaN where a standard deviation is 0.
+
+    >>> correlations([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
+    {'xy': 0.5, 'xtheta': nan, 'ytheta': nan}
+    """
+    cov = np.asarray(cov, dtype=float)
     sigma = np.sqrt(np.diag(cov))
     out = {}
     for name, i, j in CORR_PAIRS:
@@ -137,11 +149,11 @@ def compare(
     >>> s["verdict"]
     'consistent'
     """
-    final = np.asarray(final, dtype=float)
-    pose = np.asarray(pose, dtype=float).reshape(3)
-    cov_p = np.asarray(cov, dtype=float).reshape(3, 3)
+    final = validate.shape(final, "final poses", ("N", 3))
+    pose = validate.pose(pose, "predicted pose")
+    cov_p = np.asarray(cov, dtype=float).reshape(3, 3)  # may hold NaN: an undefined variance
     n = final.shape[0]
-    if final.ndim != 2 or final.shape[1] != 3 or n < 4:
+    if n < 4:
         raise ModelError(f"need at least 4 runs of shape (N, 3), got {final.shape}")
     err = final - pose
     err[:, 2] = wrap_angle(err[:, 2])
@@ -149,7 +161,7 @@ def compare(
     cov_s = np.cov(err, rowvar=False)
     sigma_s = np.sqrt(np.diag(cov_s))
     sigma_p = np.sqrt(np.clip(np.diag(cov_p), 0.0, None))  # NaN stays NaN
-    corr_s, corr_p = _corr(cov_s), _corr(cov_p)
+    corr_s, corr_p = correlations(cov_s), correlations(cov_p)
 
     se_mean = sigma_s / math.sqrt(n)
     se_std = sigma_s / math.sqrt(2.0 * (n - 1))

@@ -1,7 +1,8 @@
 """Calibration from files: read runs and robot files, calibrate, write what robots use.
 
 The maths lives in :mod:`odomkit.calibrate`; this module is the file side behind
-``odomkit calibrate``, ``odomkit calibrate-noise`` and ``odomkit umbmark --runs``.
+``odomkit calibrate`` and ``odomkit calibrate-noise`` (``odomkit umbmark --runs`` is
+:mod:`odomkit.workflows.umbmark`).
 Nothing existing is overwritten unless ``overwrite=True`` (CLI ``--force``).
 """
 
@@ -12,27 +13,22 @@ from pathlib import Path
 from typing import Any
 
 from odomkit.calibrate.exact import calibrate_exact
-from odomkit.calibrate.export import ros2_diff_drive_yaml
 from odomkit.calibrate.noise_fit import fit_wheel_noise_from_runs
 from odomkit.calibrate.realdata import (
     SquareRow,
-    UmbmarkFromRuns,
     e_max_syst_of_runs,
     square_table,
     umbmark_from_runs,
 )
 from odomkit.errors import InputError, ModelError
-from odomkit.io.files import refuse_overwrite, write_new_text
+from odomkit.io.files import refuse_overwrite
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
+from odomkit.io.ros import write_ros2_yaml
 from odomkit.robot import DiffDrive
-from odomkit.workflows import LogOptions, load_log
+from odomkit.workflows.logs import LogOptions, load_log
 
-
-def write_ros2_yaml(path: str | Path, robot: DiffDrive, wheel_radius: float, *,
-                    overwrite: bool = False, **kwargs: Any) -> Path:
-    """Write :func:`odomkit.calibrate.export.ros2_diff_drive_yaml` to ``path``."""
-    return write_new_text(path, ros2_diff_drive_yaml(robot, wheel_radius, **kwargs), overwrite)
+__all__ = ["calibrate_files", "noise_files", "optiodom_square_table"]
 
 
 def calibrate_files(
@@ -53,15 +49,15 @@ def calibrate_files(
 
     Parameters
     ----------
-    run_paths : log files with ground truth (any format :func:`odomkit.workflows.load_log`
-        reads).
+    run_paths : log files with ground truth (any format
+        :func:`odomkit.workflows.logs.load_log` reads).
     robot_path : robot file (TOML) with the parameters the odometry used.
     method : {"exact", "umbmark"}
     source : {"endpoints", "trajectory"} (exact only)
     side : square side [m] (UMBmark only; required there).
     out_robot, ros_yaml : optional output paths (never overwritten unless ``overwrite``).
     wheel_radius : nominal wheel radius for the ROS snippet [m].
-    log_options : :class:`odomkit.workflows.LogOptions`.
+    log_options : :class:`odomkit.workflows.logs.LogOptions`.
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact`.
 
     Returns
@@ -126,17 +122,6 @@ def noise_files(
             raise InputError("--plot needs matplotlib: pip install 'odomkit[plot]'")
         out["plot"] = str(plot_noise_fit(fit, plot))
     return out
-
-
-def umbmark_from_files(run_paths: Sequence[str | Path], robot_path: str | Path, side: float,
-                       **kwargs: Any) -> UmbmarkFromRuns:
-    """UMBmark (:func:`odomkit.calibrate.realdata.umbmark_from_runs`) from log files and a
-    robot file: what ``odomkit umbmark --runs`` calls."""
-    robot, _ = read_robot(robot_path)
-    if not isinstance(robot, DiffDrive):
-        raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
-                         source=str(robot_path))
-    return umbmark_from_runs([load_log(p, robot) for p in run_paths], robot, side, **kwargs)
 
 
 def optiodom_square_table(data_dir: str | Path, **exact_kwargs: Any) -> list[SquareRow]:

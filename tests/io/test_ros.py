@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from odomkit.errors import ModelError
-from odomkit.propagate.ros import UNOBSERVED_VARIANCE, ros_pose_covariance
+from odomkit.io.ros import UNOBSERVED_VARIANCE, ros_pose_covariance
 
 
 def test_layout_row_major_x_y_z_roll_pitch_yaw():

@@ -4,26 +4,28 @@ MIT licence): dead reckoning with covariance, calibration, and a closed-form pre
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from odomkit.calibrate.exact import calibrate_exact
-from odomkit.calibrate.export import ros2_diff_drive_yaml
 from odomkit.calibrate.realdata import e_max_syst_of_runs, umbmark_from_runs
-from odomkit.cli.output import to_jsonable
+from odomkit.data import builtin_data_path
 from odomkit.evaluate import evaluate_track
-from odomkit.io.files import refuse_overwrite, write_new_text
+from odomkit.io.files import refuse_overwrite
+from odomkit.io.jsonfile import write_json
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, write_robot
+from odomkit.io.ros import write_ros2_yaml
 from odomkit.io.trackio import write_track_csv, write_tum
 from odomkit.path import Spin, Straight
 from odomkit.propagate.predict import predict
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
-from odomkit.workflows import builtin_data_path
+from odomkit.workflows.predict import add_ros_pose_covariance
+
+__all__ = ["run_demo"]
 
 
 def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
@@ -77,21 +79,20 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
         ev = evaluate_track(track.poses, truth, track.cov)
         summary["runs"][stem]["calibrated"] = ev.to_dict()
     write_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
-    write_new_text(out / "diff_drive_controller.yaml",
-                   ros2_diff_drive_yaml(calibrated, wheel_radius=experiment.metadata.wheel_diameters[0] / 2),
-                   overwrite=True)
+    write_ros2_yaml(out / "diff_drive_controller.yaml", calibrated,
+                    wheel_radius=experiment.metadata.wheel_diameters[0] / 2, overwrite=True)
 
     # One clockwise square as planned: four legs and four right turns on the spot.
     square = [seg for _ in range(4) for seg in (Straight(side), Spin(-np.pi / 2))]
     prediction = predict(square, noise[0], wheel_base=robot.effective_wheel_base)
-    summary["prediction_one_square"] = prediction.to_dict()
+    summary["prediction_one_square"] = add_ros_pose_covariance(prediction.to_dict())
 
     from odomkit.plot import have_matplotlib, plot_tracks
 
     # matplotlib is the optional "plot" extra
     summary["figure"] = str(plot_tracks(tracks, out / "demo_tracks.png")) if have_matplotlib() else None
     summary_path = out / "summary.json"
-    summary_path.write_text(json.dumps(to_jsonable(summary), indent=2), encoding="utf-8")
+    write_json(summary_path, summary, overwrite=True)
     summary["summary"] = str(summary_path)
     summary["outputs"] = [str(p) for p in targets if p.exists()]
     return summary

@@ -1,0 +1,40 @@
+"""Noise models: one protocol (:class:`NoiseModel`), one class per source of noise.
+
+==========================  ======  ======================================================
+model                       kind    applies to
+==========================  ======  ======================================================
+:class:`WheelNoise`         white   diff: per-wheel travel error, variance k²·|d|
+:class:`ClassicalNoise`     white   any: fixed σ per step (Chong–Kleeman eq. 1–3)
+:class:`SpeedNoise`         white   any: distance error, variance α_ss·|Δd|
+:class:`GyroNoise`          white   integrated heading: variance psd_gyro·Δt
+:class:`CompassNoise`       white   compass: measured heading, variance psd_compass/Δt
+:class:`TricycleNoise`      white   tricycle: speed, steering and period errors
+:class:`ParameterUncertainty`  bias  wheel base and wheel scales, constant over a run
+                            (or white)
+==========================  ======  ======================================================
+
+Several independent models combine in a :class:`NoiseSet` (a tuple of models is accepted
+wherever a noise argument is).
+"""
+
+from odomkit.noise.base import NOISE_MODELS, NoiseKind, NoiseModel, NoiseSet, noise_fields, register
+from odomkit.noise.kelly import CompassNoise, GyroNoise, SpeedNoise
+from odomkit.noise.parameters import ParameterUncertainty
+from odomkit.noise.tricycle import TricycleNoise
+from odomkit.noise.wheel import ClassicalNoise, WheelNoise
+
+__all__ = [
+    "NoiseModel",
+    "NoiseSet",
+    "NoiseKind",
+    "NOISE_MODELS",
+    "register",
+    "noise_fields",
+    "WheelNoise",
+    "ClassicalNoise",
+    "SpeedNoise",
+    "GyroNoise",
+    "CompassNoise",
+    "TricycleNoise",
+    "ParameterUncertainty",
+]

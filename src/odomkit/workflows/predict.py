@@ -1,0 +1,61 @@
+"""``odomkit predict``: the closed-form prediction of a segment path, as its JSON object.
+
+The core (:func:`odomkit.propagate.predict.predict`) returns the pose and covariance; the
+command's output also carries the covariance in ROS's 6×6 layout
+(:func:`odomkit.io.ros.ros_pose_covariance`), added here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
+
+from numpy.typing import ArrayLike
+
+from odomkit.io.ros import ros_pose_covariance
+from odomkit.path import Segment
+
+if TYPE_CHECKING:
+    from odomkit.propagate.plan import NoiseArg
+
+__all__ = ["add_ros_pose_covariance", "run_predict"]
+
+
+def add_ros_pose_covariance(summary: dict[str, Any]) -> dict[str, Any]:
+    """``summary`` with ``ros_pose_covariance`` (36 numbers, from its ``cov``) right after
+    ``cov``, the order in which the command prints them.
+
+    >>> d = add_ros_pose_covariance({"pose": [0, 0, 0], "cov": [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
+    ...                              "std": [1, 1, 1]})
+    >>> list(d), d["ros_pose_covariance"][35], d["ros_pose_covariance"][14]
+    (['pose', 'cov', 'ros_pose_covariance', 'std'], 1.0, 1000000.0)
+    """
+    out: dict[str, Any] = {}
+    for key, value in summary.items():
+        out[key] = value
+        if key == "cov":
+            out["ros_pose_covariance"] = ros_pose_covariance(value)
+    return out
+
+
+def run_predict(
+    segments: Sequence[Segment],
+    noise: NoiseArg,
+    *,
+    wheel_base: float | None = None,
+    pose0: ArrayLike = (0.0, 0.0, 0.0),
+    cov0: ArrayLike | None = None,
+    engine: str = "closed",
+    partitions: int | None = None,
+) -> dict[str, Any]:
+    """Predict the end pose of ``segments`` and its covariance: the ``--json`` object.
+
+    Parameters are those of :func:`odomkit.propagate.predict.predict`. Returns
+    :meth:`~odomkit.propagate.predict.Prediction.to_dict` plus ``ros_pose_covariance``.
+    """
+    from odomkit.propagate.predict import predict
+
+    result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
+                     engine=engine,  # type: ignore[arg-type]
+                     partitions=partitions)
+    return add_ros_pose_covariance(result.to_dict())

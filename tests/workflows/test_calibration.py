@@ -1,0 +1,130 @@
+"""odomkit.workflows.calibration: runs and a robot file in, corrected robot file and ROS
+YAML out, never over an existing file unless asked."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from odomkit.errors import InputError, ModelError
+from odomkit.integrate import dead_reckon
+from odomkit.io.robotfile import read_robot, robot_to_dict
+from odomkit.kinematics import diff_body_steps
+from odomkit.noise import WheelNoise
+from odomkit.robot import DiffDrive
+from odomkit.workflows.calibration import calibrate_files
+from odomkit.workflows.logs import LogOptions
+
+# The true robot: its wheels roll 0.995 and 1.004 of what the odometry believes, and its
+# effective wheel base is 0.51 m where the odometry assumes 0.5 m.
+TRUE_LEFT, TRUE_RIGHT, TRUE_BASE, NOMINAL_BASE = 0.995, 1.004, 0.51, 0.5
+COLUMNS = "t=t,dist_left=dl,dist_right=dr,gt_x=gx,gt_y=gy,gt_theta=gth"
+ROBOT_TOML = f"""[robot]
+type = "diff"
+wheel_base = {NOMINAL_BASE}
+m_per_tick = 1.0
+
+[noise]
+k_left = 0.001
+k_right = 0.002
+"""
+
+
+def _write_run(path: Path, left: float, right: float, n: int = 200) -> Path:
+    """A constant-curvature run: the odometry counts ``left``/``right`` metres per wheel;
+    the ground truth is what the true robot does with them (exact arcs)."""
+    dl, dr = np.full(n, left / n), np.full(n, right / n)
+    truth = dead_reckon(*diff_body_steps(TRUE_LEFT * dl, TRUE_RIGHT * dr, TRUE_BASE))
+    table = np.column_stack((np.arange(n + 1.0), np.r_[0.0, dl], np.r_[0.0, dr], truth))
+    np.savetxt(path, table, delimiter=",", fmt="%.17g", header="t,dl,dr,gx,gy,gth", comments="")
+    return path
+
+
+@pytest.fixture()
+def files(tmp_path):
+    robot = tmp_path / "robot.toml"
+    robot.write_text(ROBOT_TOML, encoding="utf-8")
+    runs = [_write_run(tmp_path / "left.csv", 2.0, 2.5), _write_run(tmp_path / "right.csv", 2.5, 2.0)]
+    return tmp_path, runs, robot
+
+
+def _calibrate(runs, robot, **kwargs):
+    return calibrate_files(runs, robot, source="trajectory", log_options=LogOptions(columns=COLUMNS),
+                           **kwargs)
+
+
+def test_exact_calibration_recovers_the_true_robot_and_writes_both_files(files):
+    tmp, runs, robot_path = files
+    out_robot, ros_yaml = tmp / "calibrated.toml", tmp / "controller.yaml"
+    summary = _calibrate(runs, robot_path, out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=0.04)
+    assert summary["method"] == "exact"
+    assert summary["outputs"] == {"robot": str(out_robot), "ros_yaml": str(ros_yaml)}
+
+    # the robot file holds the true robot, and the noise of the input file
+    robot, noise = read_robot(out_robot)
+    assert isinstance(robot, DiffDrive)
+    assert robot.scale_left == pytest.approx(TRUE_LEFT, rel=1e-6)
+    assert robot.scale_right == pytest.approx(TRUE_RIGHT, rel=1e-6)
+    assert robot.effective_wheel_base == pytest.approx(TRUE_BASE, rel=1e-6)
+    assert robot.wheel_base == NOMINAL_BASE
+    assert noise == (WheelNoise(0.001, 0.002),)
+    assert summary["robot"] == robot_to_dict(robot)["robot"]
+
+    # diff_drive_controller: wheel travel = radius·multiplier·angle and base =
+    # separation·multiplier, so the multipliers are the true/believed wheel ratios
+    doc = yaml.safe_load(ros_yaml.read_text(encoding="utf-8"))
+    params = doc["diff_drive_controller"]["ros__parameters"]
+    assert params["wheel_radius"] == 0.04
+    assert params["wheel_separation"] * params["wheel_separation_multiplier"] == pytest.approx(
+        TRUE_BASE, rel=1e-6)
+    assert params["left_wheel_radius_multiplier"] == pytest.approx(TRUE_LEFT, rel=1e-6)
+    assert params["right_wheel_radius_multiplier"] == pytest.approx(TRUE_RIGHT, rel=1e-6)
+
+
+def test_the_robot_file_round_trips(files):
+    """What is written reads back as the same robot, bit for bit."""
+    tmp, runs, robot_path = files
+    summary = _calibrate(runs, robot_path, out_robot=tmp / "a.toml")
+    robot, _ = read_robot(tmp / "a.toml")
+    fields = {k: v for k, v in summary["robot"].items() if k != "type"}
+    assert robot == DiffDrive(**fields)
+    # starting from the calibrated robot there is nothing left to correct
+    again = _calibrate(runs, tmp / "a.toml", out_robot=tmp / "b.toml")
+    assert again["outputs"] == {"robot": str(tmp / "b.toml")}
+    twice, _ = read_robot(tmp / "b.toml")
+    assert twice.scale_left == pytest.approx(robot.scale_left, rel=1e-9)
+    assert twice.scale_right == pytest.approx(robot.scale_right, rel=1e-9)
+    assert twice.effective_wheel_base == pytest.approx(robot.effective_wheel_base, rel=1e-9)
+
+
+def test_existing_outputs_are_never_overwritten_without_force(files):
+    tmp, runs, robot_path = files
+    out_robot, ros_yaml = tmp / "calibrated.toml", tmp / "controller.yaml"
+    ros_yaml.write_text("mine\n", encoding="utf-8")
+    with pytest.raises(InputError, match="exists already; pass --force"):
+        _calibrate(runs, robot_path, out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=0.04)
+    # refused before anything was written: nothing half-done, nothing lost
+    assert not out_robot.exists()
+    assert ros_yaml.read_text(encoding="utf-8") == "mine\n"
+    _calibrate(runs, robot_path, out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=0.04,
+               overwrite=True)
+    assert "diff_drive_controller" in ros_yaml.read_text(encoding="utf-8")
+    assert read_robot(out_robot)[0].effective_wheel_base == pytest.approx(TRUE_BASE, rel=1e-6)
+
+
+def test_bad_requests(files):
+    tmp, runs, robot_path = files
+    with pytest.raises(InputError, match="--wheel-radius"):
+        _calibrate(runs, robot_path, ros_yaml=tmp / "c.yaml")
+    assert not (tmp / "c.yaml").exists()
+    with pytest.raises(InputError, match="--side"):
+        _calibrate(runs, robot_path, method="umbmark")
+    with pytest.raises(ModelError, match="--method"):
+        _calibrate(runs, robot_path, method="guess")
+    with pytest.raises(InputError, match="no such file"):
+        _calibrate([tmp / "missing.csv"], robot_path)
+    with pytest.raises(InputError, match="no such robot file"):
+        _calibrate(runs, tmp / "missing.toml")
