@@ -8,7 +8,7 @@
 * the core (everything except ``io/``, ``workflows/``, ``cli/``, ``plot.py``,
   ``report.py``, ``demo.py``) never imports matplotlib, typer, rich, a file-format library
   or any of those edge modules, not even inside a function;
-* no public function has a parameter annotated ``Any``;
+* no public function has a parameter annotated ``Any`` (nor a public dataclass a field);
 * every module has ``__all__``; every name it lists exists, and every public function or
   class a module defines is listed there or is underscored.
 
@@ -314,8 +314,20 @@ def _public_functions(module: Module) -> Iterator[tuple[str, ast.FunctionDef | a
                     yield f"{node.name}.{item.name}", item
 
 
+def _dataclass_fields(module: Module) -> Iterator[tuple[str, ast.ClassDef, list[ast.AnnAssign]]]:
+    """Public dataclasses and their fields: the parameters of their generated ``__init__``."""
+    for node in module.tree.body:
+        if (isinstance(node, ast.ClassDef) and not _private(node.name)
+                and any("dataclass" in ast.unparse(d) for d in node.decorator_list)):
+            fields = [item for item in node.body if isinstance(item, ast.AnnAssign)
+                      and isinstance(item.target, ast.Name)
+                      and "ClassVar" not in ast.unparse(item.annotation)]
+            yield node.name, node, fields
+
+
 def any_violations(modules: Mapping[str, Module]) -> list[str]:
-    """Public functions (and public methods of public classes) of public modules with a
+    """Public functions (and public methods of public classes, and the fields of public
+    dataclasses, which are parameters of their ``__init__``) of public modules with a
     parameter annotated ``Any`` (``*args: Any`` and ``**kwargs: Any`` only forward)."""
     out = []
     for module in modules.values():
@@ -327,6 +339,11 @@ def any_violations(modules: Mapping[str, Module]) -> list[str]:
             if bad:
                 out.append(f"{_where(module, fn.lineno)}: {module.name}.{qualname} has parameter(s) "
                            f"annotated Any: {', '.join(bad)}")
+        for name, cls, fields in _dataclass_fields(module):
+            bad = [f.target.id for f in fields if _is_any(f.annotation)]  # type: ignore[union-attr]
+            if bad:
+                out.append(f"{_where(module, cls.lineno)}: {module.name}.{name} (a dataclass) has "
+                           f"field(s) annotated Any: {', '.join(bad)}")
     return sorted(out)
 
 
@@ -574,10 +591,16 @@ def test_self_any_parameters_are_found():
         class C:
             def __init__(self, x: Any) -> None: ...
             def _p(self, x: Any) -> None: ...
+        @dataclass(frozen=True)
+        class D:
+            kind: ClassVar[Any] = None
+            noise: Any
+            ok: list[Any]
         """, "pkg/_hidden": "from typing import Any\ndef f(x: Any): ...\n"})
     found = any_violations(modules)
     assert sorted(v.split(": ", 1)[1] for v in found) == [
         "pkg.m.C.__init__ has parameter(s) annotated Any: x",
+        "pkg.m.D (a dataclass) has field(s) annotated Any: noise",
         "pkg.m.f has parameter(s) annotated Any: x",
         "pkg.m.g has parameter(s) annotated Any: x",
         "pkg.m.h has parameter(s) annotated Any: x",

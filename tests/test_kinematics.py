@@ -1,4 +1,4 @@
-"""Jacobians by perturbation (manif style) and the safe sinc limits."""
+"""Jacobians by perturbation (manif style); the sinc factor itself: tests/test_angles.py."""
 
 from __future__ import annotations
 
@@ -8,8 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from odomkit.kinematics import (
-    sinc_half,
-    sinc_half_derivative,
     step_displacement,
     step_jacobians,
     tricycle_body_jacobian,
@@ -31,17 +29,6 @@ def test_step_jacobians_match_central_differences(numeric_jacobian, method, thet
     F, G = step_jacobians(theta, dd, dth, method)
     assert np.allclose(F, numeric_jacobian(lambda p: step(p, u, method), pose), atol=1e-8)
     assert np.allclose(G, numeric_jacobian(lambda v: step(pose, v, method), u), atol=1e-8)
-
-
-def test_sinc_half_is_continuous_across_the_series_threshold():
-    x = np.array([1.999e-3, 2.0e-3, 2.001e-3, 0.0, 1e-9])
-    ref_f = np.array([np.sin(v / 2) / (v / 2) if v else 1.0 for v in x])
-    assert np.allclose(sinc_half(x), ref_f, rtol=1e-15, atol=0)
-    # derivative against a high-precision series of d/dx sin(x/2)/(x/2) = −x/12 + x³/480
-    assert np.allclose(sinc_half_derivative(x), -x / 12 + x**3 / 480, rtol=1e-9, atol=1e-20)
-    big = np.array([0.5, 2.0, -3.0])
-    fd = (sinc_half(big + 1e-6) - sinc_half(big - 1e-6)) / 2e-6
-    assert np.allclose(sinc_half_derivative(big), fd, atol=1e-9)
 
 
 def test_tricycle_jacobian_matches_central_differences(numeric_jacobian):

@@ -52,7 +52,6 @@ PENDING: Mapping[str, str] = {
     "io/trackio.py": "issue 9: tested in tests/test_cli_track.py for now",
     "io/umbmark_errors.py": "issue 9: new module; tested through the umbmark CLI for now",
     "jit.py": "issue 9: new module; test module after the refactor",
-    "noise/base.py": "issue 9: the lead writes the noise tests with the new noise package",
     "noise/kelly.py": "issue 9: the lead writes the noise tests with the new noise package",
     "noise/parameters.py": "issue 9: the lead writes the noise tests with the new noise package",
     "noise/tricycle.py": "issue 9: the lead writes the noise tests with the new noise package",

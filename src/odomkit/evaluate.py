@@ -1,7 +1,7 @@
 """Tracks against ground truth: endpoint errors, ATE/RPE in 2-D, drift per distance, NEES.
 
 All functions take poses as ``(N, 3)`` arrays ``[x, y, θ]`` sampled at the same rows;
-heading differences are wrapped to [−π, π).
+heading differences are wrapped to [−π, π) (:func:`odomkit.angles.wrap_angle`).
 """
 
 from __future__ import annotations
@@ -13,21 +13,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from odomkit import validate
+from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 
 __all__ = [
     "ellipse_points", "evaluate_track", "nees", "pose_errors", "relative_pose_errors", "TrackEvaluation",
-    "wrap"
 ]
-
-
-def wrap(angle: ArrayLike) -> NDArray[np.float64]:
-    """Wrap angles to [−π, π).
-
-    >>> float(wrap(3 * np.pi / 2))
-    -1.5707963267948966
-    """
-    return (np.asarray(angle, dtype=float) + np.pi) % (2 * np.pi) - np.pi
 
 
 def pose_errors(estimate: ArrayLike, truth: ArrayLike) -> NDArray[np.float64]:
@@ -35,7 +26,7 @@ def pose_errors(estimate: ArrayLike, truth: ArrayLike) -> NDArray[np.float64]:
     est = validate.shape(estimate, "estimate", ("N", 3))
     ref = validate.shape(truth, "truth", (est.shape[0], 3))
     err = est - ref
-    err[:, 2] = wrap(err[:, 2])
+    err[:, 2] = wrap_angle(err[:, 2])
     return err
 
 
@@ -60,7 +51,7 @@ def relative_pose_errors(estimate: ArrayLike, truth: ArrayLike, distance: float)
                                 p[j, 2] - p[i, 2]))
 
     out = local(est) - local(ref)
-    out[:, 2] = wrap(out[:, 2])
+    out[:, 2] = wrap_angle(out[:, 2])
     return out
 
 

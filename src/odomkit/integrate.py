@@ -7,10 +7,13 @@ Python loop runs per sample.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from odomkit import validate
+from odomkit import jit, validate
+from odomkit.angles import unwrap_angle
 from odomkit.errors import ModelError
 from odomkit.kinematics import METHODS, Method, step_displacement
 
@@ -21,12 +24,10 @@ _METHOD_CODE = {"euler": 0, "midpoint": 1, "exact": 2}
 _NUMBA_FROM = 20_000
 
 
-def _numba_kernel():  # pragma: no cover - trivial import shim
-    try:
-        from odomkit._integrate_numba import dead_reckon_kernel
-    except ImportError:  # numba is the optional "fast" extra
-        return None
-    return dead_reckon_kernel
+def _numba_kernel() -> Callable[..., None] | None:
+    """The compiled dead-reckoning kernel, or None without numba (see :mod:`odomkit.jit`)."""
+    module = jit.load("_integrate_numba", stacklevel=4)
+    return None if module is None else module.dead_reckon_kernel
 
 
 def dead_reckon(
@@ -116,7 +117,7 @@ def dead_reckon_direct_heading(
     xy0 : array_like, shape (2,)
         Initial position [m].
     """
-    heading = np.unwrap(np.asarray(heading, dtype=float))
+    heading = unwrap_angle(np.asarray(heading, dtype=float))
     dd = np.asarray(dd, dtype=float)
     if heading.shape != (dd.size + 1,):
         raise ModelError(f"heading must have one more sample than dd: {heading.shape} vs {dd.shape}")

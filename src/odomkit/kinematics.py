@@ -18,9 +18,9 @@ straight lines (r -> ∞). The factor sinc(Δθ/2) and its derivative come from
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -227,6 +227,41 @@ def _steer_per_step(log: OdometryLog) -> NDArray[np.float64]:
     return 0.5 * (steer[:-1] + steer[1:])
 
 
+def _diff_steps(robot: DiffDrive, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    d_left = _travel(log, robot.scale_left, "left")
+    d_right = _travel(log, robot.scale_right, "right")
+    dd, dtheta = diff_body_steps(d_left, d_right, robot.effective_wheel_base)
+    return BodySteps(dd, dtheta, dt, {"d_left": d_left, "d_right": d_right}, robot)
+
+
+def _tricycle_steps(robot: Tricycle, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    travel = _travel(log, robot.scale)
+    steer = _steer_per_step(log) + robot.steering_offset
+    dd, dtheta = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+    return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
+
+
+def _gyro_steps(robot: GyroOdometry, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    dd = _travel(log, robot.m_per_tick)
+    rate = robot.gyro_scale * (log.channel("yaw_rate")[:-1] - robot.gyro_bias)
+    return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+
+
+def _compass_steps(robot: CompassOdometry, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    dd = _travel(log, robot.m_per_tick)
+    heading = unwrap_angle(log.channel("heading") + robot.heading_offset)
+    return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
+
+
+# One entry per vehicle, keyed by its robot-file type: a new vehicle adds one function here.
+_BODY_STEPS: dict[str, Callable[[Any, OdometryLog, NDArray[np.float64]], BodySteps]] = {
+    "diff": _diff_steps,
+    "tricycle": _tricycle_steps,
+    "gyro": _gyro_steps,
+    "compass": _compass_steps,
+}
+
+
 def body_steps(robot: Robot, log: OdometryLog) -> BodySteps:
     """Convert a log's sensor channels into body motion for ``robot``.
 
@@ -239,23 +274,7 @@ def body_steps(robot: Robot, log: OdometryLog) -> BodySteps:
     -------
     BodySteps with M = N − 1 steps.
     """
-    dt = np.diff(log.t)
-    if isinstance(robot, DiffDrive):
-        d_left = _travel(log, robot.scale_left, "left")
-        d_right = _travel(log, robot.scale_right, "right")
-        dd, dtheta = diff_body_steps(d_left, d_right, robot.effective_wheel_base)
-        return BodySteps(dd, dtheta, dt, {"d_left": d_left, "d_right": d_right}, robot)
-    if isinstance(robot, Tricycle):
-        travel = _travel(log, robot.scale)
-        steer = _steer_per_step(log) + robot.steering_offset
-        dd, dtheta = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
-        return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
-    if isinstance(robot, GyroOdometry):
-        dd = _travel(log, robot.m_per_tick)
-        rate = robot.gyro_scale * (log.channel("yaw_rate")[:-1] - robot.gyro_bias)
-        return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
-    if isinstance(robot, CompassOdometry):
-        dd = _travel(log, robot.m_per_tick)
-        heading = unwrap_angle(log.channel("heading") + robot.heading_offset)
-        return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
-    raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
+    convert = _BODY_STEPS.get(getattr(robot, "type_name", ""))
+    if convert is None:
+        raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
+    return convert(robot, log, np.diff(log.t))

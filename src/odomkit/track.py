@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -12,7 +13,10 @@ from odomkit.errors import InputError
 from odomkit.integrate import dead_reckon, path_length
 from odomkit.kinematics import BodySteps, Method, body_steps
 from odomkit.log import OdometryLog
-from odomkit.robot import CompassOdometry, Robot
+from odomkit.robot import Robot
+
+if TYPE_CHECKING:
+    from odomkit.propagate.plan import NoiseArg
 
 __all__ = ["dead_reckon_log", "initial_pose", "Track"]
 
@@ -63,7 +67,7 @@ def dead_reckon_log(
     robot: Robot,
     method: Method = "exact",
     pose0: ArrayLike | None = None,
-    noise: object | None = None,
+    noise: NoiseArg | None = None,
     cov0: ArrayLike | None = None,
     engine: str = "recursion",
 ) -> Track:
@@ -93,7 +97,7 @@ def dead_reckon_log(
         raise InputError("the log is empty: no rows to dead-reckon", source=log.source)
     steps = body_steps(robot, log)
     p0 = initial_pose(log, pose0)
-    if isinstance(robot, CompassOdometry):
+    if robot.measures_heading:
         # Direct heading: the measured heading replaces the integrated one.
         heading = steps.inputs["heading"]
         p0 = np.array([p0[0], p0[1], heading[0]])

@@ -255,23 +255,3 @@ def test_step_terms_are_the_step_jacobians(method):
     assert np.allclose(np.stack([-dy, dx, g00, g01, g10, g11]),
                        np.stack([F[:, 0, 2], F[:, 1, 2], G[:, 0, 0], G[:, 0, 1], G[:, 1, 0],
                                  G[:, 1, 1]]), rtol=1e-13, atol=1e-16)
-
-
-def test_sinc_half_pair_against_exact_rational_series():
-    """Both branches (series below |Δθ/2| = 0.1, direct above) against a 15-term Taylor
-    series evaluated in exact rational arithmetic."""
-    from fractions import Fraction
-    from math import factorial
-
-    from odomkit.propagate.inputs import sinc_half_pair
-
-    x = np.concatenate([np.linspace(-0.6, 0.6, 601), [0.2 - 1e-12, 0.2 + 1e-12, 1e-9, 0.0]])
-    f, df = sinc_half_pair(x)
-    for xi, fi, dfi in zip(x, f, df, strict=True):
-        u = Fraction(float(xi)) / 2
-        terms = [Fraction((-1) ** n, factorial(2 * n + 1)) for n in range(15)]
-        f_ref = float(sum(c * u ** (2 * n) for n, c in enumerate(terms)))
-        df_ref = float(sum(c * n * u ** (2 * n - 1) for n, c in enumerate(terms) if n))
-        assert fi == pytest.approx(f_ref, rel=1e-15, abs=0)
-        # the direct branch's derivative loses ~eps/u² to cancellation near |u| = 0.1
-        assert dfi == pytest.approx(df_ref, rel=5e-14, abs=1e-300)

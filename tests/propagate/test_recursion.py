@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from odomkit import jit
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import BodySteps, diff_body_steps, tricycle_body_steps
@@ -88,7 +89,7 @@ def test_numpy_fallback_equals_kernel(monkeypatch):
 
 def test_missing_numba_warns_and_still_works(monkeypatch):
     monkeypatch.setitem(sys.modules, "odomkit.propagate._numba", None)  # import fails
-    monkeypatch.setattr(recursion, "_kernel_cache", [])
+    monkeypatch.setattr(jit, "_cache", {})  # forget the loaded kernels (restored after)
     q = np.tile(np.diag([1e-4, 1e-4]), (3, 1, 1))
     with pytest.warns(UserWarning, match="numba is not installed"):
         cov = propagate_recursion(np.zeros(3), np.ones(3), np.zeros(3), q, np.zeros((3, 3)))

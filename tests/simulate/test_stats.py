@@ -9,18 +9,10 @@ import pytest
 
 from odomkit.noise import WheelNoise
 from odomkit.path import Arc
-from odomkit.simulate import compare, monte_carlo, wrap_angle
+from odomkit.simulate import compare, monte_carlo
 
 COV = np.array([[4e-4, 1.2e-4, -3e-4], [1.2e-4, 9e-4, 2e-4], [-3e-4, 2e-4, 1e-3]])
 POSE = np.array([1.0, -2.0, 3.0])
-
-
-def test_wrap_angle_range():
-    a = np.array([-3 * np.pi, -np.pi, 0.0, np.pi, 3 * np.pi, 7.0])
-    w = wrap_angle(a)
-    assert np.all(w > -np.pi) and np.all(w <= np.pi)
-    np.testing.assert_allclose(np.cos(w), np.cos(a), atol=1e-12)
-    np.testing.assert_allclose(np.sin(w), np.sin(a), atol=1e-12)
 
 
 def test_standard_errors_match_replication():

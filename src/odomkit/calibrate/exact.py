@@ -55,6 +55,7 @@ from odomkit.calibrate.residuals import (
 from odomkit.errors import InputError, ModelError
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
+from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive, Tricycle
 
 __all__ = ["SCALE_OBSERVABLE_BELOW", "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source"]
@@ -182,7 +183,7 @@ def calibrate_exact(
     *,
     heading_weight: float | None = 0.0,
     fix_scale: bool | None = None,
-    noise: Any = None,
+    noise: NoiseArg | None = None,
     every: int = 1,
     method: Method = "exact",
 ) -> ExactCalibration:

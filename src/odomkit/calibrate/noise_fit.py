@@ -37,10 +37,13 @@ from scipy.optimize import brentq, minimize, minimize_scalar
 from scipy.special import ndtri
 
 from odomkit import validate
+from odomkit.angles import wrap_angle
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import ellipse_points
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import Method, diff_body_jacobian, diff_body_steps, step_jacobians
+from odomkit.log import OdometryLog
+from odomkit.robot import DiffDrive
 
 __all__ = ["fit_wheel_noise", "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
 
@@ -314,7 +317,7 @@ def fit_wheel_noise(
     )
 
 
-def fit_wheel_noise_from_runs(runs: Sequence[Any], robot: Any, **kwargs: Any) -> WheelNoiseFit:
+def fit_wheel_noise_from_runs(runs: Sequence[OdometryLog], robot: DiffDrive, **kwargs: Any) -> WheelNoiseFit:
     """:func:`fit_wheel_noise` on logs with ground truth: each run's end error (truth minus
     odometry, start frame) and its bases along its own odometry path.
 
@@ -339,7 +342,7 @@ def fit_wheel_noise_from_runs(runs: Sequence[Any], robot: Any, **kwargs: Any) ->
             raise InputError("run has no ground truth", source=log.source)
         track = dead_reckon_log(log, robot)
         err = log.ground_truth[-1] - track.poses[-1]
-        err[2] = (err[2] + np.pi) % (2 * np.pi) - np.pi
+        err[2] = wrap_angle(err[2])
         errors.append(err)
         steps = body_steps(robot, log)
         a, b = wheel_noise_basis(steps.inputs["d_left"], steps.inputs["d_right"],

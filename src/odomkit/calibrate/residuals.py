@@ -27,6 +27,7 @@ from typing import TypeAlias
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.kinematics import Method, body_steps, step_jacobians
 from odomkit.log import OdometryLog
@@ -35,10 +36,6 @@ from odomkit.track import initial_pose
 
 __all__ = ["CalibrationModel", "DiffCalibrationModel", "ResidualProblem", "TricycleCalibrationModel",
            "calibration_model", "endpoint_whitening", "integrate_with_sensitivity"]
-
-
-def _wrap(angle: NDArray[np.float64]) -> NDArray[np.float64]:
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
 
 
 def integrate_with_sensitivity(
@@ -208,7 +205,7 @@ class ResidualProblem:
         poses, dposes = integrate_with_sensitivity(dd, dth, ddd, ddt, self.pose0[i], self.method)
         rows, gt = self.truth[i]
         res = poses[rows] - gt
-        res[:, 2] = _wrap(res[:, 2])
+        res[:, 2] = wrap_angle(res[:, 2])
         jac = dposes[rows]
         if self.whiten is not None:
             # Endpoint GLS: r ← L⁻¹ r with C = L Lᵀ the predicted end-pose covariance.

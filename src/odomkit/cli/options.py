@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
@@ -13,6 +13,7 @@ from odomkit.errors import ModelError
 
 if TYPE_CHECKING:
     from odomkit.path import Segment
+    from odomkit.propagate.plan import NoiseArg
 
 __all__ = [
     "MODEL_FLAGS", "GyroNoiseOption", "HeadingNoiseOption", "InitialCovMatrixOption", "InitialCovOption",
@@ -86,7 +87,7 @@ def _non_negative(flag: str, value: float | None, unit: str) -> float:
     return value
 
 
-def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> Any:
+def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> NoiseArg:
     """The noise model(s) the flags describe (see :func:`odomkit.propagate.predict.predict`)."""
     from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
 
@@ -110,7 +111,7 @@ class PathProblem:
     """A parsed path problem: what ``predict`` and ``simulate`` both take."""
 
     segments: list[Segment]
-    noise: Any
+    noise: NoiseArg
     wheel_base: float | None
     pose0: list[float]
     cov0: list[list[float]] | None

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from odomkit import validate
+from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.io.table import cumulative_to_increments, order_by_time, read_numeric, unwrap_counter
 from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
@@ -99,5 +100,5 @@ def read_csv_log(
         if len(gt_keys) != 3:
             raise InputError("ground truth needs all of gt_x, gt_y, gt_theta", source=str(path))
         truth = np.column_stack([data[:, index[k]] for k in GROUND_TRUTH_FIELDS])
-        truth[:, 2] = np.unwrap(truth[:, 2])
+        truth[:, 2] = unwrap_angle(truth[:, 2])
     return OdometryLog(t, channels, truth, str(path), {"format": "csv"})

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from odomkit import validate
+from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.io.table import cumulative_to_increments, read_numeric, unwrap_counter
 from odomkit.log import OdometryLog
@@ -53,5 +54,5 @@ def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> Odometry
     data = read_numeric(path, 5)
     t = np.arange(data.shape[0], dtype=float) * period
     channels = {"speed": data[:, 0] / 1000.0, "steer": data[:, 1].copy()}
-    truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, np.unwrap(data[:, 4])))
+    truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, unwrap_angle(data[:, 4])))
     return OdometryLog(t, channels, truth, str(path), {"format": "snowhite"})

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.io.table import read_numeric
 from odomkit.log import OdometryLog
@@ -115,7 +116,7 @@ def read_run(path: str | Path, platform: str = "diff") -> OdometryLog:
     """
     data = read_numeric(path, 6, delimiter=",")
     t = data[:, 0]
-    truth = np.column_stack((data[:, 1], data[:, 2], np.unwrap(data[:, 3])))
+    truth = np.column_stack((data[:, 1], data[:, 2], unwrap_angle(data[:, 3])))
     if platform == "diff":
         channels = {"ticks_right": data[:, 4].copy(), "ticks_left": data[:, 5].copy()}
     elif platform == "tricyc":

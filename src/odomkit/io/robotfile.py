@@ -30,9 +30,9 @@ from typing import Any
 
 import tomli_w
 
-from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import refuse_overwrite
+from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
 from odomkit.robot import (
     CompassOdometry,
     DiffDrive,
@@ -214,9 +214,9 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = ()) -> dict[str,
         noise_table: dict[str, Any] = {}
         for model in noise:
             if model.toml_table.startswith("noise."):
-                noise_table[model.toml_table.split(".", 1)[1]] = asdict(model)
+                noise_table[model.toml_table.split(".", 1)[1]] = model.to_dict()
             else:
-                noise_table.update(asdict(model))
+                noise_table.update(model.to_dict())
         doc["noise"] = noise_table
     return doc
 

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from odomkit.angles import wrap_angle
 from odomkit.io.files import refuse_overwrite
 from odomkit.io.table import polars_module
 from odomkit.track import Track
@@ -67,7 +68,7 @@ def write_tum(path: str | Path, track: Track, overwrite: bool = False) -> Path:
     """
     path = Path(path)
     refuse_overwrite(path, overwrite=overwrite)
-    theta = (track.poses[:, 2] + np.pi) % (2 * np.pi) - np.pi
+    theta = wrap_angle(track.poses[:, 2])
     n = theta.size
     table = np.column_stack((track.t, track.poses[:, 0], track.poses[:, 1], np.zeros(n),
                              np.zeros(n), np.zeros(n), np.sin(theta / 2), np.cos(theta / 2)))

@@ -28,7 +28,6 @@ construction: nothing is ambiguous between σ and σ².
 
 from __future__ import annotations
 
-import math
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass, fields
@@ -37,6 +36,7 @@ from typing import TYPE_CHECKING, ClassVar, Literal, TypeVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.robot import ROBOT_TYPES
 
@@ -54,6 +54,7 @@ __all__ = [
     "noise_fields",
     "sym2",
     "require_non_negative",
+    "steps_input",
 ]
 
 NoiseKind = Literal["white", "bias"]
@@ -65,11 +66,8 @@ def require_non_negative(obj: object) -> None:
     owner = type(obj).__name__
     for f in fields(obj):  # type: ignore[arg-type]
         value = getattr(obj, f.name)
-        if isinstance(value, str):
-            continue
-        if not (isinstance(value, int | float) and not isinstance(value, bool)
-                and math.isfinite(value) and value >= 0):
-            raise ModelError(f"{owner}.{f.name} must be a non-negative finite number, got {value!r}")
+        if not isinstance(value, str):
+            validate.non_negative(value, f"{owner}.{f.name}")
 
 
 def sym2(q00: ArrayLike, q01: ArrayLike, q11: ArrayLike) -> NDArray[np.float64]:
@@ -158,6 +156,12 @@ class NoiseModel(ABC):
         """∂(Δd, Δθ)/∂(bias parameters) of steps a … b−1, shape (b − a, 2, p)."""
         return np.zeros((b - a, 2, 0))
 
+    def to_dict(self) -> dict[str, float | str]:
+        """The model's parameters by field name (a robot file's ``[noise]`` keys)."""
+        from dataclasses import asdict
+
+        return asdict(self)  # type: ignore[call-overload, no-any-return]
+
     def compiled_inputs(self, steps: BodySteps) -> WheelInputs | None:
         """What a compiled engine needs to form Q_k itself, or None (the engine then
         takes :meth:`input_cov` chunk by chunk)."""
@@ -225,6 +229,13 @@ class NoiseSet:
         if isinstance(noise, Sequence) and not isinstance(noise, str):
             return cls(tuple(m for m in noise if m is not None))
         return cls((noise,))  # type: ignore[arg-type]
+
+    def require(self, cls: type[N]) -> N:
+        """The model of exactly class ``cls`` in the set; ModelError if there is none."""
+        model = self.get(cls)
+        if model is None:
+            raise ModelError(f"the noise needs a {cls.__name__}")
+        return model
 
     def get(self, cls: type[N]) -> N | None:
         """The model of exactly class ``cls`` in the set, or None."""

@@ -17,13 +17,13 @@ noise                              family      vehicle   segments
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise import NoiseModel, NoiseSet
@@ -77,19 +77,14 @@ class PathModel:
 
 def check_partitions(partitions: int) -> int:
     """A positive whole number of steps per segment."""
-    if isinstance(partitions, bool) or not isinstance(partitions, int | np.integer) \
-            or partitions < 1:
-        raise ModelError(f"partitions must be a positive integer, got {partitions!r}")
-    return int(partitions)
+    return validate.positive_int(partitions, "partitions")
 
 
 def check_wheel_base(wheel_base: float | None) -> float:
     """The differential-drive models' wheel base, a positive number of metres."""
     if wheel_base is None:
         raise ModelError("the differential-drive model needs a wheel base (--wheel-base, metres)")
-    if not (isinstance(wheel_base, int | float) and math.isfinite(wheel_base) and wheel_base > 0):
-        raise ModelError(f"wheel base must be a positive number of metres, got {wheel_base!r}")
-    return float(wheel_base)
+    return validate.positive(wheel_base, "wheel base", unit="m")
 
 
 def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,

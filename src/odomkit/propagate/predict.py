@@ -22,19 +22,22 @@ shrink, which is how the closed forms are cross-checked.
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
 from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import step_displacement
 from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
-from odomkit.path import Segment, Straight
+from odomkit.path import Segment
+from odomkit.propagate.closed import classical_step, wheel_arc_cov
+from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
 from odomkit.propagate.paths import (
     PathModel,
     check_partitions,
@@ -44,8 +47,16 @@ from odomkit.propagate.paths import (
     segment_motion,
 )
 from odomkit.propagate.plan import NoiseArg
-from odomkit.propagate.closed import classical_step, wheel_arc_cov
-from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
+
+__all__ = [
+    "Engine",
+    "ENGINES",
+    "DEFAULT_PARTITIONS",
+    "Prediction",
+    "check_covariance",
+    "discretise_path",
+    "predict",
+]
 
 Engine = Literal["closed", "recursion", "transition"]
 ENGINES: tuple[Engine, ...] = ("closed", "recursion", "transition")
@@ -121,21 +132,7 @@ def check_covariance(cov: ArrayLike, name: str = "initial covariance") -> NDArra
     >>> check_covariance(np.diag([1.0, 1.0, 0.1])).shape
     (3, 3)
     """
-    try:
-        arr = np.asarray(cov, dtype=float)
-    except (TypeError, ValueError):
-        raise ModelError(f"{name} must be a 3x3 matrix of numbers, got {cov!r}") from None
-    if arr.shape != (3, 3):
-        raise ModelError(f"{name} must be 3x3 (x, y, theta), got shape {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ModelError(f"{name} must hold finite numbers")
-    scale = max(float(np.max(np.abs(arr))), np.finfo(float).tiny)
-    if not np.allclose(arr, arr.T, rtol=0.0, atol=1e-12 * scale):
-        raise ModelError(f"{name} must be symmetric, got {arr.tolist()}")
-    if float(np.min(np.linalg.eigvalsh(arr))) < -1e-12 * scale:
-        raise ModelError(f"{name} must be positive semi-definite (no negative variance "
-                         f"along any direction), got {arr.tolist()}")
-    return 0.5 * (arr + arr.T)
+    return validate.covariance(cov, name)
 
 
 def discretise_path(
@@ -163,6 +160,7 @@ def discretise_path(
     Examples
     --------
     >>> from odomkit.noise import WheelNoise
+    >>> from odomkit.path import Straight
     >>> poses, dd, dth, q = discretise_path([Straight(2.0)], WheelNoise(0.1, 0.1), 0.5, 4)
     >>> dd.tolist(), round(float(q[0, 0, 0]), 15)  # var(Δd) = (k²·0.5 + k²·0.5)/4
     ([0.5, 0.5, 0.5, 0.5], 0.0025)
@@ -190,19 +188,19 @@ def _wheel_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segm
                   model: PathModel) -> NDArray[np.float64]:
     b = model.robot.wheel_base  # type: ignore[union-attr]
     left, right = seg.wheel_travel(b)  # type: ignore[union-attr]
-    return wheel_arc_cov(left, right, b, model.noise.get(WheelNoise), pose[2], cov)
+    return wheel_arc_cov(left, right, b, model.noise.require(WheelNoise), pose[2], cov)
 
 
 def _gyro_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
                  model: PathModel) -> NDArray[np.float64]:
     speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
-    return gyro_arc_cov(seg, speed, model.noise.get(GyroNoise), pose[2], cov)  # type: ignore[arg-type]
+    return gyro_arc_cov(seg, speed, model.noise.require(GyroNoise), pose[2], cov)  # type: ignore[arg-type]
 
 
 def _compass_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
                     model: PathModel) -> NDArray[np.float64]:
     speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
-    return compass_arc_cov(seg, speed, model.noise.get(CompassNoise), pose[2], cov)  # type: ignore[arg-type]
+    return compass_arc_cov(seg, speed, model.noise.require(CompassNoise), pose[2], cov)  # type: ignore[arg-type]
 
 
 _CLOSED_FORMS = {"wheel": _wheel_closed, "gyro": _gyro_closed, "compass": _compass_closed}
@@ -265,9 +263,7 @@ def predict(
         raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
     model = path_model(noise, wheel_base)
     segs = check_segments(segments, model)
-    p0 = np.asarray(pose0, dtype=float).reshape(-1)
-    if p0.shape != (3,) or not np.all(np.isfinite(p0)):
-        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
+    p0 = validate.pose(pose0)
     c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
     b = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
 
@@ -288,7 +284,7 @@ def predict(
 
     pose, cov = p0.copy(), c0
     if model.family == "classical":
-        classical = model.noise.get(ClassicalNoise)
+        classical = model.noise.require(ClassicalNoise)
         pieces = 1 if partitions is None else check_partitions(partitions)
         for seg in segs:
             d, a = segment_motion(seg, b)

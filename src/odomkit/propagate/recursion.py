@@ -19,14 +19,12 @@ noise model (or a tuple of them) in, the covariance of every pose out.
 
 from __future__ import annotations
 
-import importlib
-import warnings
 from collections.abc import Callable, Iterator
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import jit
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise.wheel import WheelInputs
@@ -51,20 +49,12 @@ __all__ = [
 
 DEFAULT_CHUNK = 1 << 13
 _METHOD_CODES = {"exact": 0, "midpoint": 1, "euler": 2, "classical": 3}
-_kernel_cache: list[Any] = []
 
 
 def _load_kernel(parallel: bool = False) -> Callable[..., None] | None:
-    """The numba kernel, or None (with a one-time warning) when numba is missing."""
-    if not _kernel_cache:
-        try:
-            kernels = importlib.import_module("odomkit.propagate._numba")
-        except ImportError:  # numba is the optional extra odomkit[fast]
-            warnings.warn("numba is not installed: the covariance recursion runs as a numpy "
-                          "loop, about 100x slower (pip install odomkit[fast])", stacklevel=3)
-            kernels = None
-        _kernel_cache.append(kernels)
-    module = _kernel_cache[0]
+    """The numba kernel, or None (with a one-time warning, :func:`odomkit.jit.load`) when
+    numba is missing: then a numpy loop runs, about 100x slower."""
+    module = jit.load("propagate._numba", stacklevel=4)
     if module is None:
         return None
     return module.recursion_kernel_parallel if parallel else module.recursion_kernel

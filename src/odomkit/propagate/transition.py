@@ -31,6 +31,7 @@ from collections.abc import Iterator
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.propagate.inputs import ENGINE_METHODS, step_terms
 
@@ -50,13 +51,8 @@ def check_method(method: str) -> None:
 
 
 def check_cov3(cov0: ArrayLike, name: str = "cov0") -> NDArray[np.float64]:
-    """A finite symmetric (3, 3) matrix, or ModelError."""
-    c = np.asarray(cov0, dtype=float)
-    if c.shape != (3, 3) or not np.all(np.isfinite(c)):
-        raise ModelError(f"{name} must be a finite 3x3 covariance, got shape {c.shape}")
-    if not np.allclose(c, c.T, rtol=1e-9, atol=0.0):
-        raise ModelError(f"{name} must be symmetric")
-    return 0.5 * (c + c.T)
+    """A finite symmetric PSD (3, 3) matrix (:func:`odomkit.validate.covariance`)."""
+    return validate.covariance(cov0, name)
 
 
 def check_steps(

@@ -12,7 +12,7 @@ Dask (``scheduler=...``) is imported only when asked for.
 from odomkit.simulate.engine import MonteCarloRuns, simulate_runs
 from odomkit.simulate.experiment import monte_carlo, simulate_sweep, theory_summary
 from odomkit.simulate.plan import SystematicErrors
-from odomkit.simulate.stats import compare, wrap_angle
+from odomkit.simulate.stats import compare
 
 __all__ = ["MonteCarloRuns", "SystematicErrors", "compare", "monte_carlo", "simulate_runs",
-           "simulate_sweep", "theory_summary", "wrap_angle"]
+           "simulate_sweep", "theory_summary"]

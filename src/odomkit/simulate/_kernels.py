@@ -111,7 +111,7 @@ def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64]
     module = jit.load("simulate._numba")
     if module is None:
         raise ModelError("engine='numba' needs numba: pip install 'odomkit[fast]'")
-    return module.advance_state  # type: ignore[no-any-return]
+    return module.advance_state
 
 
 def have_numba() -> bool:

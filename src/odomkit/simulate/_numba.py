@@ -4,9 +4,10 @@ Exact-arc step, as :func:`odomkit.kinematics.step_displacement` with ``method="e
 but carrying the unit heading vector (cos θ, sin θ) and turning it twice by Δθ/2, with
 sin and cos of the half angle from their Taylor series
 (:func:`odomkit.angles.sin_cos_sinc_series`, exact to rounding below
-:data:`odomkit.angles.SERIES_BELOW`). The vector is recomputed from the separately summed θ every :data:`RESYNC_EVERY`
-partitions, counted from the start of the path. No fastmath: the arithmetic, and so
-the numbers, cannot depend on vectorisation.
+:data:`odomkit.angles.SERIES_BELOW`). The vector is recomputed from the separately
+summed θ every :data:`RESYNC_EVERY` partitions, counted from the start of the path. No
+fastmath: the arithmetic, and so the numbers, cannot depend on vectorisation. Loaded by
+:func:`odomkit.jit.load` (through :func:`odomkit.simulate._kernels.advance_numba`).
 """
 
 from __future__ import annotations

@@ -7,17 +7,25 @@ imported here, never by a local run.
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from odomkit.errors import ModelError
 from odomkit.simulate.blocks import run_task
 
-__all__ = ["CONNECT_TIMEOUT", "get_client", "run_tasks_dask"]
+__all__ = ["CONNECT_TIMEOUT", "Scheduler", "get_client", "run_tasks_dask"]
+
+if TYPE_CHECKING:
+    from odomkit.simulate.plan import Plan
+
+Scheduler = str | object | None
+"""A Dask scheduler address (``tcp://host:8786``), a ``dask.distributed.Client``, or None
+(run locally). Typed loosely so that dask stays an optional import."""
 
 CONNECT_TIMEOUT = "10s"
 
 
-def get_client(scheduler: Any) -> tuple[Any, bool]:
+def get_client(scheduler: Scheduler) -> tuple[Any, bool]:
     """A ``dask.distributed.Client`` for an address or an existing client, and whether we
     opened it (and so must close it)."""
     try:
@@ -35,8 +43,9 @@ def get_client(scheduler: Any) -> tuple[Any, bool]:
         raise ModelError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
 
 
-def run_tasks_dask(scheduler: Any, plan: Any, seed: int, tasks: list[list[tuple[int, int]]],
-                   engine: str, want_ends: bool, progress: Any = None) -> list[Any]:
+def run_tasks_dask(scheduler: Scheduler, plan: Plan, seed: int, tasks: list[list[tuple[int, int]]],
+                   engine: str, want_ends: bool,
+                   progress: Callable[[int], None] | None = None) -> list[Any]:
     """Run every task on the cluster; results in task order."""
     from dask.distributed import as_completed
 

@@ -25,8 +25,10 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.path import Segment
+from odomkit.propagate.plan import NoiseArg
 from odomkit.simulate import _kernels
 from odomkit.simulate.blocks import make_tasks, run_task
+from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.plan import Plan, SystematicErrors, make_plan
 
 __all__ = ["Engine", "MonteCarloRuns", "Progress", "simulate_runs"]
@@ -80,7 +82,7 @@ def _resolve_seed(seed: int | None) -> int:
 
 def simulate_runs(
     path: Sequence[Segment],
-    noise: Any,
+    noise: NoiseArg,
     wheel_base: float | None = None,
     *,
     runs: int = 10_000,
@@ -92,7 +94,7 @@ def simulate_runs(
     segment_ends: bool = False,
     workers: int | None = None,
     chunk_runs: int | None = None,
-    scheduler: Any = None,
+    scheduler: Scheduler = None,
     engine: Engine = "auto",
     progress: Progress | None = None,
 ) -> MonteCarloRuns:

@@ -8,17 +8,20 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.noise import NoiseSet
 from odomkit.path import Segment
+from odomkit.propagate.plan import NoiseArg
+from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.engine import Engine, Progress, simulate_runs
 from odomkit.simulate.plan import SystematicErrors
-from odomkit.simulate.stats import compare, correlations, wrap_angle
+from odomkit.simulate.stats import compare, correlations
 
 __all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
 
 
-def _predicted(path: Sequence[Segment], noise: Any, wheel_base: float | None,
+def _predicted(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
                pose0: ArrayLike, cov0: ArrayLike | None, partitions: int,
                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`."""
@@ -50,7 +53,7 @@ def _cov_matrix(cov0: ArrayLike | None) -> np.ndarray | None:
 
 def monte_carlo(
     path: Sequence[Segment],
-    noise: Any,
+    noise: NoiseArg,
     wheel_base: float | None = None,
     *,
     runs: int = 10_000,
@@ -63,7 +66,7 @@ def monte_carlo(
     alpha: float = 0.01,
     workers: int | None = None,
     chunk_runs: int | None = None,
-    scheduler: Any = None,
+    scheduler: Scheduler = None,
     engine: Engine = "auto",
     progress: Progress | None = None,
 ) -> dict[str, Any]:
@@ -132,7 +135,7 @@ def _theory_arrays(theory: Any) -> tuple[np.ndarray, np.ndarray]:
     return pose, cov
 
 
-def simulate_sweep(settings: Sequence[Mapping[str, Any]], *, scheduler: Any = None,
+def simulate_sweep(settings: Sequence[Mapping[str, Any]], *, scheduler: Scheduler = None,
                    **common: Any) -> list[dict[str, Any]]:
     """Run :func:`monte_carlo` for every setting of a grid.
 

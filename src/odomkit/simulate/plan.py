@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise import NoiseSet
@@ -20,6 +21,8 @@ from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
 from odomkit.propagate.paths import PathModel, path_model
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive, Robot, SystematicErrors
+
+__all__ = ["Plan", "resolve_model", "make_plan"]
 
 
 @dataclass(frozen=True)
@@ -42,18 +45,8 @@ def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
     """A with A·Aᵀ = cov0, from the eigen-decomposition so a singular PSD cov0 works."""
     if cov0 is None:
         return np.zeros((3, 3))
-    cov = np.asarray(cov0, dtype=float)
-    if cov.shape == (3,):
-        cov = np.diag(cov)
-    if cov.shape != (3, 3) or not np.all(np.isfinite(cov)):
-        raise ModelError(f"initial covariance must be 3 variances or a 3x3 matrix, got {cov0!r}")
-    if not np.allclose(cov, cov.T, rtol=1e-9, atol=1e-15):
-        raise ModelError("initial covariance must be symmetric")
-    w, v = np.linalg.eigh(0.5 * (cov + cov.T))
-    # eigenvalues a few ulps below zero are rounding of a PSD matrix, not negative variance
-    tol = 1e-12 * max(1.0, float(np.max(np.abs(w))))
-    if np.min(w) < -tol:
-        raise ModelError(f"initial covariance must be positive semi-definite; eigenvalues {w}")
+    cov = validate.covariance(cov0, "initial covariance", variances=True)
+    w, v = np.linalg.eigh(cov)
     # directions with rounding-level variance are the null space: sample nothing there
     w = np.where(w > 1e-14 * max(float(np.max(w)), 0.0), w, 0.0)
     return np.asarray(v * np.sqrt(w))
@@ -129,14 +122,11 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
               pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
               systematic: SystematicErrors | None = None) -> Plan:
     """Translate path, noise and robot into per-segment kernel coefficients."""
-    if not isinstance(partitions, int | np.integer) or partitions < 1:
-        raise ModelError(f"partitions must be a positive integer, got {partitions!r}")
+    validate.positive_int(partitions, "partitions")
     path = list(path)
     if len(path) == 0:
         raise ModelError("the path needs at least one segment")
-    p0 = np.asarray(pose0, dtype=float).reshape(-1)
-    if p0.shape != (3,) or not np.all(np.isfinite(p0)):
-        raise ModelError(f"initial pose must be three finite numbers x, y, theta; got {pose0!r}")
+    p0 = validate.pose(pose0)
     k = int(partitions)
     family = NoiseSet.of(noise).family
     if family in ("wheel", "classical") and (

@@ -30,7 +30,7 @@ bias is at most ``bias_tolerance`` predicted σ (Mahalanobis length) and every v
 ratio (eigenvalue of P⁻¹S) lies in ``variance_tolerance``; otherwise
 ``"linear model breaks down: ..."`` with the failed checks and effect sizes.
 
-θ errors are wrapped to (−π, π] before anything is computed, so a run that ends a full
+θ errors are wrapped to [−π, π) before anything is computed, so a run that ends a full
 turn away from the nominal heading is not counted as 2π off. When P is singular (e.g. no
 heading noise) the checks work in the span of P; errors outside it are reported.
 """
@@ -45,10 +45,11 @@ from numpy.typing import ArrayLike, NDArray
 from scipy import stats as sps
 
 from odomkit import validate
+from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 
 __all__ = [
-    "BIAS_TOLERANCE", "CORR_PAIRS", "NAMES", "VARIANCE_TOLERANCE", "compare", "correlations", "wrap_angle"
+    "BIAS_TOLERANCE", "CORR_PAIRS", "NAMES", "VARIANCE_TOLERANCE", "compare", "correlations"
 ]
 
 NAMES = ("x", "y", "theta")
@@ -59,16 +60,6 @@ NAMES = ("x", "y", "theta")
 BIAS_TOLERANCE = 0.25
 VARIANCE_TOLERANCE = (0.8, 1.25)
 CORR_PAIRS = (("xy", 0, 1), ("xtheta", 0, 2), ("ytheta", 1, 2))
-
-
-def wrap_angle(a: ArrayLike) -> NDArray[np.float64]:
-    """Wrap to (−π, π].
-
-    >>> wrap_angle([np.pi, -np.pi, 3 * np.pi / 2]).round(6).tolist()
-    [3.141593, 3.141593, -1.570796]
-    """
-    a = np.asarray(a, dtype=float)
-    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
 
 
 def correlations(cov: ArrayLike) -> dict[str, float]:

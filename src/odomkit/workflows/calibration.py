@@ -111,6 +111,9 @@ def noise_files(
     With ``plot``, also draw the runs' errors with the fitted and empirical 95 % ellipses
     (needs matplotlib)."""
     robot, _ = read_robot(robot_path)
+    if not isinstance(robot, DiffDrive):
+        raise InputError(f"calibrate-noise fits the wheel noise k_L, k_R of a differential drive; "
+                         f"the robot file describes a {robot.type_name!r} robot", source=str(robot_path))
     refuse_overwrite(plot, overwrite=overwrite)
     runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
     fit = fit_wheel_noise_from_runs(runs, robot, **kwargs)

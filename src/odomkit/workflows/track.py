@@ -6,7 +6,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from odomkit.evaluate import evaluate_track, wrap
+from odomkit.angles import wrap_angle
+from odomkit.evaluate import evaluate_track
 from odomkit.io.files import refuse_overwrite
 from odomkit.io.robotfile import read_robot
 from odomkit.io.ros import ros_pose_covariance
@@ -34,7 +35,7 @@ class TrackRun:
         final = self.track.poses[-1]
         out: dict[str, Any] = {
             "samples": int(self.track.poses.shape[0]),
-            "pose": [float(final[0]), float(final[1]), float(wrap(final[2]))],
+            "pose": [float(final[0]), float(final[1]), float(wrap_angle(final[2]))],
             "theta_unwrapped": float(final[2]),
             "cov": None if self.track.cov is None else self.track.cov[-1],
             "ros_pose_covariance": (None if self.track.cov is None
