@@ -234,6 +234,8 @@ def test_numba_scalar_versions_give_the_python_values():
     want = _scalar_table((sin_cos_sinc, sinc_derivative_scalar))
     series = np.abs(U) < SERIES_BELOW
     np.testing.assert_array_equal(got[series], want[series])  # no FMA contraction by default
+    np.testing.assert_array_equal(got[series, 0], sinc(U)[series])  # and so numpy's bits
+    np.testing.assert_array_equal(got[series, 1], sinc_derivative(U)[series])
     np.testing.assert_allclose(got, want, rtol=2 * EPS, atol=0)
     series_fn = jit.njit(angles.sin_cos_sinc_series)
     for u in U[series]:

@@ -38,7 +38,6 @@ EXEMPT: Mapping[str, str] = {
 #: Modules that still lack a test module while issue 9's refactor moves code around; the
 #: lead closes each gap (then the entry must go).
 PENDING: Mapping[str, str] = {
-    "angles.py": "issue 9: new numerics home; test module after the refactor",
     "calibrate/residuals.py": "issue 9: tested through tests/calibrate/test_exact.py for now",
     "calibrate/virtual.py": "issue 9: tested in tests/calibrate/test_virtual_umbmark.py "
                             "(rename it test_virtual.py)",
@@ -51,7 +50,6 @@ PENDING: Mapping[str, str] = {
     "io/table.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/trackio.py": "issue 9: tested in tests/test_cli_track.py for now",
     "io/umbmark_errors.py": "issue 9: new module; tested through the umbmark CLI for now",
-    "jit.py": "issue 9: new module; test module after the refactor",
     "noise/kelly.py": "issue 9: the lead writes the noise tests with the new noise package",
     "noise/parameters.py": "issue 9: the lead writes the noise tests with the new noise package",
     "noise/tricycle.py": "issue 9: the lead writes the noise tests with the new noise package",

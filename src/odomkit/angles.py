@@ -28,8 +28,9 @@ Series and the one threshold
     u²⁰/20! ≈ 4e-19 (7.6e-19 relative) for cos and 22·u²¹/23! ≈ 9e-22 (3e-21 relative
     to |sinc′(1)| = 0.30) for sinc′, all under ε/100; the alternating terms fall fast,
     so Horner's rule adds only a few roundings. (With n terms each, sinc′'s relative
-    truncation is 3/(2n+3) times sinc's.) (Where sinc′ itself vanishes, at |u| ≈ 4.4934, no formula in u
-    keeps its relative accuracy; the absolute error stays ~ε·(|u cos u| + |sin u|)/u².)
+    truncation is 3/(2n+3) times sinc's.) Where sinc′ itself vanishes, at |u| ≈ 4.4934,
+    no formula in u keeps its relative accuracy; the absolute error stays
+    ~ε·(|u cos u| + |sin u|)/u² there.
 
     Small steps are the common case (|Δθ/2| < 0.015 on 99.99 % of a 100 Hz log), and
     there :data:`SHORT_TERMS` = 5 terms of the same tables suffice: below

@@ -1,5 +1,7 @@
-"""Noise models -> input covariances: every Jacobian by finite differences, and the
-difference between a constant (bias) and a white parameter error."""
+"""Step maps of the engines (:mod:`odomkit.propagate.inputs`): the classical
+rotate-then-translate map's Jacobians by finite differences, and the lean per-step terms
+against the full Jacobians. (What each noise model contributes per step is tested in
+tests/noise/.)"""
 
 from __future__ import annotations
 
@@ -8,75 +10,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from odomkit.integrate import dead_reckon
-from odomkit.kinematics import BodySteps, diff_body_steps, tricycle_body_steps
-from odomkit.noise import (
-    ClassicalNoise,
-    GyroNoise,
-    ParameterUncertainty,
-    SpeedNoise,
-    TricycleNoise,
-    WheelNoise,
+from odomkit.errors import ModelError
+from odomkit.propagate.inputs import (
+    any_step_displacement,
+    any_step_jacobians,
+    classical_step_displacement,
+    classical_step_jacobians,
+    step_terms,
 )
-from odomkit.noise.kelly import speed_gyro_input_cov
-from odomkit.noise.parameters import (
-    diff_parameter_jacobian,
-    scale_parameter_jacobian,
-    tricycle_parameter_jacobian,
-    white_parameter_cov,
-)
-from odomkit.noise.tricycle import tricycle_input_cov, tricycle_input_jacobian
-from odomkit.noise.wheel import wheel_input_cov
-from odomkit.propagate.inputs import classical_step_displacement, classical_step_jacobians
-from odomkit.propagate.recursion import track_covariance
-from odomkit.propagate.transition import parameter_sensitivity
-from odomkit.robot import DiffDrive, GyroOdometry, Tricycle
 
 finite = dict(allow_nan=False, allow_infinity=False)
-
-
-@settings(max_examples=40, deadline=None)
-@given(s=st.floats(-0.5, 0.5, **finite), a=st.floats(-1.2, 1.2, **finite),
-       t=st.floats(0.01, 0.2, **finite))
-def test_tricycle_input_jacobian(numeric_jacobian, s, a, t):
-    length = 0.8
-
-    def body(x):  # (v, α, T) -> (Δd, Δθ), Sun–Gao Snowhite model
-        return np.array(tricycle_body_steps(x[0] * x[2], x[1], length))
-
-    got = tricycle_input_jacobian(s, a, t, length)
-    assert np.allclose(got, numeric_jacobian(body, [s / t, a, t], 1e-7), atol=1e-7)
-
-
-@settings(max_examples=40, deadline=None)
-@given(dl=st.floats(-0.3, 0.3, **finite), dr=st.floats(-0.3, 0.3, **finite))
-def test_diff_parameter_jacobian(numeric_jacobian, dl, dr):
-    base = 0.35
-
-    def body(p):  # (b, ε_L, ε_R) -> (Δd, Δθ)
-        return np.array(diff_body_steps(dl * (1 + p[1]), dr * (1 + p[2]), p[0]))
-
-    got = diff_parameter_jacobian(dl, dr, base)
-    assert np.allclose(got, numeric_jacobian(body, [base, 0.0, 0.0]), atol=1e-8)
-
-
-@settings(max_examples=40, deadline=None)
-@given(s=st.floats(-0.5, 0.5, **finite), a=st.floats(-1.2, 1.2, **finite))
-def test_tricycle_parameter_jacobian(numeric_jacobian, s, a):
-    length = 0.8
-
-    def body(p):  # (L, ε) -> (Δd, Δθ)
-        return np.array(tricycle_body_steps(s * (1 + p[1]), a, p[0]))
-
-    got = tricycle_parameter_jacobian(s, a, length)
-    assert np.allclose(got, numeric_jacobian(body, [length, 0.0]), atol=1e-8)
-
-
-def test_scale_parameter_jacobian(numeric_jacobian):
-    got = scale_parameter_jacobian([0.3, -0.2])
-    num = numeric_jacobian(lambda p: np.array([0.3 * (1 + p[0]), 0.0]), [0.0])
-    assert np.allclose(got[0], num)
-    assert got[1, 0, 0] == -0.2 and got[1, 1, 0] == 0.0
 
 
 @settings(max_examples=40, deadline=None)
@@ -95,158 +38,18 @@ def test_classical_step_jacobians(numeric_jacobian, theta, d, a):
     assert np.allclose(G, numeric_jacobian(lambda v: step(pose, v), u), atol=1e-8)
 
 
-def test_wheel_input_cov_maps_wheel_variances(numeric_jacobian):
-    """Cov(Δd, Δθ) = J diag(k²|d|) J^T with J by finite differences; the off-diagonal
-    (σR² − σL²)/(2b) is what the Sun–Gao exercise drops, and θθ adds the variances."""
-    dl, dr, base, noise = np.array([0.1, -0.2]), np.array([0.3, 0.05]), 0.5, WheelNoise(0.01, 0.03)
-    for i in range(2):
-        jac = numeric_jacobian(lambda w: np.array(diff_body_steps(w[0], w[1], base)),
-                               [dl[i], dr[i]])
-        want = jac @ np.diag([1e-4 * abs(dl[i]), 9e-4 * abs(dr[i])]) @ jac.T
-        assert np.allclose(wheel_input_cov(dl, dr, base, noise)[i], want, rtol=1e-8)
-    q = wheel_input_cov([1.0], [1.0], base, noise)[0]
-    assert q[0, 1] == pytest.approx((9e-4 - 1e-4) / (2 * base))
-    assert q[1, 1] == pytest.approx((9e-4 + 1e-4) / base**2)
-
-
-def test_speed_gyro_and_tricycle_input_cov_values():
-    q = speed_gyro_input_cov([-0.4, 0.2], [0.1, 0.3], SpeedNoise(0.01), GyroNoise(2e-3))
-    assert np.allclose(q[:, 0, 0], [0.004, 0.002]) and np.allclose(q[:, 1, 1], [2e-4, 6e-4])
-    assert not q[:, 0, 1].any()
-    assert not speed_gyro_input_cov([0.4], [0.1]).any()
-    # straight ahead: Δd = vT; var = T²σv² + v²σT² (speed and sample-period noise)
-    q = tricycle_input_cov([0.2], [0.0], [0.1], 1.0, TricycleNoise(0.05, 0.01, 0.001))[0]
-    assert q[0, 0] == pytest.approx(0.1**2 * 0.05**2 + 2.0**2 * 0.001**2)
-    assert q[1, 1] == pytest.approx((0.2 * 0.01) ** 2)  # Δθ = s·α/L near α = 0
-
-
-# --- parameter uncertainty: bias (constant) versus white (fresh every step) -----------
-
-def straight_diff(m, dist=10.0, base=0.4):
-    d = np.full(m, dist / m)
-    dd, dth = diff_body_steps(d, d, base)
-    return BodySteps(dd, dth, np.full(m, 0.1), {"d_left": d, "d_right": d}, DiffDrive(base))
-
-
-def test_scale_bias_on_a_long_straight_line_matches_the_closed_form():
-    """D = 10 m in M = 1000 steps, wheel scales ε_L, ε_R ~ σ each, constant.
-
-    Bias (derived by hand): δx = D(ε_L+ε_R)/2, δθ = D(ε_R−ε_L)/b, δy = ∫δθ(s)ds
-    = D²(ε_R−ε_L)/(2b) -> var x = D²σ²/2, var θ = 2D²σ²/b², var y = D⁴σ²/(2b²).
-    White: every step draws fresh ε, so var x = M·(D/M)²σ²/2 = D²σ²/(2M): M times less.
-    """
-    m, dist, base, sigma = 1000, 10.0, 0.4, 1e-3
-    steps = straight_diff(m, dist, base)
-    poses = dead_reckon(steps.dd, steps.dtheta)
-    zero = np.zeros((3, 3))
-    bias = track_covariance(steps, poses, ParameterUncertainty(0.0, sigma, sigma, "bias"), zero)
-    white = track_covariance(steps, poses, ParameterUncertainty(0.0, sigma, sigma, "white"), zero)
-    b = bias[-1]
-    assert b[0, 0] == pytest.approx(dist**2 * sigma**2 / 2, rel=1e-12)
-    assert b[2, 2] == pytest.approx(2 * dist**2 * sigma**2 / base**2, rel=1e-12)
-    # exact-arc lever: step k's error acts from its midpoint -> Σ(D−(k+½)D/M)·D/M = D²/2
-    assert b[1, 1] == pytest.approx(dist**4 * sigma**2 / (2 * base**2), rel=1e-12)
-    assert white[-1, 0, 0] == pytest.approx(dist**2 * sigma**2 / (2 * m), rel=1e-12)
-    assert white[-1, 1, 1] < b[1, 1] / 100
-
-
-@pytest.mark.parametrize("engine", ["recursion", "transition"])
-def test_wheel_base_bias_on_a_circle_is_the_sensitivity_outer_product(numeric_jacobian, engine):
-    """Bias mode must equal s·s^T σ² with s = ∂pose_M/∂b by finite differences of the
-    whole dead reckoning, plus the independent wheel noise."""
-    m, base, sigma_b = 400, 0.4, 0.005
-    d_l, d_r = np.full(m, 0.02), np.full(m, 0.025)  # circle, 1.5 turns
-    dd, dth = diff_body_steps(d_l, d_r, base)
-    steps = BodySteps(dd, dth, np.full(m, 0.1), {"d_left": d_l, "d_right": d_r}, DiffDrive(base))
-    poses = dead_reckon(dd, dth)
-    pu = ParameterUncertainty(sigma_wheel_base=sigma_b)
-    cov = track_covariance(steps, poses, pu, np.zeros((3, 3)), engine=engine, chunk_size=64)
-    sens = numeric_jacobian(lambda b: dead_reckon(*diff_body_steps(d_l, d_r, b[0]))[-1],
-                            [base], 1e-7)
-    assert np.allclose(cov[-1], sigma_b**2 * sens @ sens.T, rtol=1e-6, atol=1e-14)
-    wheel = WheelNoise(0.01, 0.01)
-    both = track_covariance(steps, poses, (wheel, pu), np.zeros((3, 3)), engine=engine)
-    alone = track_covariance(steps, poses, wheel, np.zeros((3, 3)), engine=engine)
-    assert np.allclose(both, alone + cov, rtol=1e-12, atol=1e-18)
-    white = track_covariance(steps, poses, ParameterUncertainty(sigma_b, mode="white"),
-                             np.zeros((3, 3)), engine=engine)
-    assert white[-1, 1, 1] < cov[-1, 1, 1] / 10
-
-
-def test_bias_mode_matches_monte_carlo_and_white_mode_does_not():
-    """2000 runs, each with one constant wheel-base error b ~ N(b0, σ_b²).
-
-    The sample variance of the final y has relative standard error √(2/(n−1)) = 3.2 %;
-    4 of those (13 %) is the tolerance. The white prediction is about 1/M of it."""
-    rng = np.random.default_rng(12)
-    m, base, sigma_b, runs = 200, 0.4, 0.002, 2000
-    d_l, d_r = np.full(m, 0.01), np.full(m, 0.012)
-    dd, dth = diff_body_steps(d_l, d_r, base)
-    steps = BodySteps(dd, dth, np.full(m, 0.1), {"d_left": d_l, "d_right": d_r}, DiffDrive(base))
-    poses = dead_reckon(dd, dth)
-    ends = np.array([dead_reckon(*diff_body_steps(d_l, d_r, b))[-1]
-                     for b in base + sigma_b * rng.standard_normal(runs)])
-    var_mc = ends.var(axis=0, ddof=1)
-    tol = 4 * np.sqrt(2 / (runs - 1))
-    for mode, ok in (("bias", True), ("white", False)):
-        cov = track_covariance(steps, poses, ParameterUncertainty(sigma_b, mode=mode),
-                               np.zeros((3, 3)))[-1]
-        close = abs(cov[1, 1] / var_mc[1] - 1) < tol and abs(cov[2, 2] / var_mc[2] - 1) < tol
-        assert close == ok, (mode, cov.diagonal(), var_mc)
-
-
-def test_tricycle_and_gyro_parameter_bias_are_sensitivities(numeric_jacobian):
-    rng = np.random.default_rng(13)
-    m, length = 100, 0.7
-    travel, steer = rng.uniform(0.0, 0.05, m), rng.normal(0.2, 0.2, m)
-    dd, dth = tricycle_body_steps(travel, steer, length)
-    steps = BodySteps(dd, dth, np.full(m, 0.1), {"travel": travel, "steer": steer},
-                      Tricycle(length))
-    poses = dead_reckon(dd, dth)
-    pu = ParameterUncertainty(sigma_wheel_base=0.01, sigma_scale_left=0.02)
-    cov = track_covariance(steps, poses, pu, np.zeros((3, 3)))[-1]
-    sens = numeric_jacobian(
-        lambda p: dead_reckon(*tricycle_body_steps(travel * (1 + p[1]), steer, p[0]))[-1],
-        [length, 0.0], 1e-7)
-    assert np.allclose(cov, sens @ np.diag([1e-4, 4e-4]) @ sens.T, rtol=1e-6, atol=1e-14)
-
-    gsteps = BodySteps(dd, dth, np.full(m, 0.1), {"yaw_rate": dth / 0.1}, GyroOdometry())
-    cov = track_covariance(gsteps, poses, ParameterUncertainty(sigma_scale_left=0.02),
-                           np.zeros((3, 3)), engine="transition")[-1]
-    sens = numeric_jacobian(lambda p: dead_reckon(dd * (1 + p[0]), dth)[-1], [0.0], 1e-7)
-    assert np.allclose(cov, 4e-4 * sens @ sens.T, rtol=1e-6, atol=1e-14)
-
-
-def test_parameter_sensitivity_function_and_white_cov(numeric_jacobian):
-    rng = np.random.default_rng(14)
-    d_l, d_r = rng.uniform(0, 0.05, 50), rng.uniform(0, 0.05, 50)
-    dd, dth = diff_body_steps(d_l, d_r, 0.4)
-    poses = dead_reckon(dd, dth)
-    sens = parameter_sensitivity(poses[:-1, 2], dd, dth, diff_parameter_jacobian(d_l, d_r, 0.4))
-
-    def end(p):
-        return dead_reckon(*diff_body_steps(d_l * (1 + p[1]), d_r * (1 + p[2]), p[0]))[-1]
-
-    assert np.allclose(sens[-1], numeric_jacobian(end, [0.4, 0.0, 0.0], 1e-7), atol=1e-7)
-    k = diff_parameter_jacobian(d_l, d_r, 0.4)
-    q = white_parameter_cov(k, [1e-4, 0.0, 0.0])
-    assert np.allclose(q[:, 1, 1], 1e-4 * k[:, 1, 0] ** 2) and not q[:, 0, 0].any()
-
-
-def test_classical_noise_ignores_the_robot_and_uses_its_own_step_map():
-    steps = straight_diff(4, dist=2.0)
-    poses = dead_reckon(steps.dd, steps.dtheta)
-    cov = track_covariance(steps, poses, ClassicalNoise(0.01, 0.02), np.zeros((3, 3)))[-1]
-    # 4 steps of D = 0.5 with the rotation first: y lever arms 2.0, 1.5, 1.0, 0.5
-    assert cov[1, 1] == pytest.approx(0.02**2 * (4 + 2.25 + 1 + 0.25))
-    assert cov[0, 0] == pytest.approx(4 * 0.01**2)
+def test_classical_step_rotates_first():
+    """A quarter turn and 1 m: the classical map ends at (0, 1) (the rotation acts before
+    the translation), the exact arc on the quarter circle of radius 2/π."""
+    dx, dy = any_step_displacement(0.0, 1.0, np.pi / 2, "classical")
+    assert (dx, dy) == pytest.approx((0.0, 1.0), abs=1e-15)
+    r = 1.0 / (np.pi / 2)
+    assert any_step_displacement(0.0, 1.0, np.pi / 2, "exact") == pytest.approx((r, r), rel=1e-14)
 
 
 @pytest.mark.parametrize("method", ["exact", "midpoint", "euler", "classical"])
 def test_step_terms_are_the_step_jacobians(method):
     """The engines' lean per-step terms equal the (n, 3, 3) Jacobians entry by entry."""
-    from odomkit.propagate.inputs import any_step_jacobians, step_terms
-
     rng = np.random.default_rng(15)
     theta, dd = rng.normal(0, 3, 500), rng.uniform(-0.5, 0.5, 500)
     dtheta = np.concatenate([rng.normal(0, 1e-4, 250), rng.normal(0, 1.0, 250)])
@@ -255,3 +58,8 @@ def test_step_terms_are_the_step_jacobians(method):
     assert np.allclose(np.stack([-dy, dx, g00, g01, g10, g11]),
                        np.stack([F[:, 0, 2], F[:, 1, 2], G[:, 0, 0], G[:, 0, 1], G[:, 1, 0],
                                  G[:, 1, 1]]), rtol=1e-13, atol=1e-16)
+
+
+def test_step_terms_reject_an_unknown_method():
+    with pytest.raises(ModelError, match="unknown method 'rk4'"):
+        step_terms(np.zeros(2), np.ones(2), np.zeros(2), "rk4")

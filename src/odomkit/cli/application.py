@@ -17,4 +17,7 @@ app = typer.Typer(
     no_args_is_help=True,
     add_completion=False,
     pretty_exceptions_enable=False,
+    # Plain click help: rich's help renderer costs ~70 ms of imports at every --help
+    # (benchmarks/startup.py) and reads "[m]" in a help string as markup and drops it.
+    rich_markup_mode=None,
 )
