@@ -174,7 +174,8 @@ def test_bias_sensitivity_matches_finite_differences(numeric_jacobian):
         jac = model.bias_jacobian(steps, 0, M)
         assert jac.shape[2] == model.bias_variances(steps.robot).size
         for k in (0, 11):
-            fd = numeric_jacobian(lambda u, k=k: motion(steps, k, u), np.zeros(jac.shape[2]), eps=1e-7)
+            fd = numeric_jacobian(lambda u, k=k, g=motion, s=steps: g(s, k, u), np.zeros(jac.shape[2]),
+                                  eps=1e-7)
             assert np.allclose(jac[k], fd, rtol=1e-6, atol=1e-9)
 
 
