@@ -79,3 +79,20 @@ def test_compass_noise_adds_nothing_to_the_integrated_motion():
     assert model.input_variances(steps, 0, 3).shape == (3, 0)
     assert not model.input_cov(steps, 0, 3).any()
     assert GyroNoise(1e-3).heading_variances(steps) is None
+
+
+def test_sampled_compass_variance_and_sample_count():
+    """A compass read every T: one reading's variance is psd/T (the white error averaged
+    over T), which is what direct_heading_variances gives a log sampled every T; a path
+    segment must last a whole number of periods (to 1e-9 relative, so float durations
+    such as 0.3 s at 0.1 s pass)."""
+    from odomkit.noise.kelly import compass_sample_count, direct_heading_variances
+
+    noise = CompassNoise(2e-4)
+    assert noise.sample_variance(0.05) == pytest.approx(4e-3, rel=1e-15)
+    assert np.allclose(direct_heading_variances(np.full(5, 0.05), noise), noise.sample_variance(0.05))
+    assert compass_sample_count(0.3, 0.1) == 3 and compass_sample_count(0.0, 0.1) == 0
+    with pytest.raises(ModelError, match="segment 2 lasts 0.25 s"):
+        compass_sample_count(0.25, 0.1, 2)
+    with pytest.raises(ModelError, match="compass_period"):
+        noise.sample_variance(0.0)

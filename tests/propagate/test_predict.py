@@ -91,17 +91,23 @@ def test_classical_closed_equals_step_engines(engine):
     assert np.allclose(steps.pose, closed.pose, rtol=0, atol=1e-13)
 
 
-def test_compass_path_adds_segment_covariances_in_xy():
-    segs = [KellyArc(1.0, 0.2, 4.0), KellyArc(1.0, 0.0, 2.0)]
+def test_compass_path_chains_segments_through_the_shared_reading():
+    """A compass path's position covariance is the sum of its segments' own terms (Φ = I,
+    Kelly 3.1) plus, at each junction, the cross term of the reading both segments
+    share: with the cross-covariance carried in cov[:2, 2], cutting a segment in two
+    changes nothing."""
     noise = (SpeedNoise(1e-3), CompassNoise(2e-4))
-    p = predict(segs, noise, cov0=COV0)
-    # memoryless (Kelly 3.1): no transition, so a path adds the segments' own terms
-    first = predict(segs[:1], noise)
-    second = predict(segs[1:], noise, pose0=(0, 0, 0.8))
-    assert rel_err(p.cov[:2, :2], COV0[:2, :2] + first.cov[:2, :2] + second.cov[:2, :2]) < 1e-14
-    d = p.to_dict()
-    assert d["std"][2] is None or math.isnan(d["std"][2])
-    assert math.isnan(d["corr"]["xtheta"])
+    whole = predict([KellyArc(1.0, 0.2, 4.0)], noise, cov0=COV0, compass_period=0.1)
+    cut = predict([KellyArc(1.0, 0.2, 1.5), KellyArc(1.0, 0.2, 2.5)], noise, cov0=COV0,
+                  compass_period=0.1)
+    assert rel_err(cut.cov, whole.cov) < 1e-13
+    # the θ row and column of cov0 give way to the first reading: no trace of them
+    other = predict([KellyArc(1.0, 0.2, 4.0)], noise, cov0=np.diag([1e-4, 3e-4, 9.0]),
+                    compass_period=0.1)
+    assert other.cov[2, 2] == pytest.approx(2e-3, rel=1e-12)
+    d = whole.to_dict()
+    assert d["std"][2] == pytest.approx(math.sqrt(2e-3), rel=1e-12)
+    assert all(math.isfinite(v) for v in d["corr"].values())
 
 
 def test_to_dict_wraps_heading_and_reports_coefficients():
@@ -153,5 +159,5 @@ def test_segments_must_fit_the_model():
         predict([KellyArc(1, 0, 1), Straight(1)], (SpeedNoise(0), GyroNoise(1e-3)))
     with pytest.raises(ModelError, match="not a prediction model"):
         predict([KellyArc(1, 0, 1)], SpeedNoise(1e-3))
-    with pytest.raises(ModelError, match="closed"):
-        predict([KellyArc(1, 0, 1)], (SpeedNoise(0), CompassNoise(1e-3)), engine="recursion")
+    with pytest.raises(ModelError, match="compass samples"):
+        discretise_path([KellyArc(1, 0, 1)], (SpeedNoise(0), CompassNoise(1e-3)))

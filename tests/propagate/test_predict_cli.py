@@ -68,10 +68,14 @@ def test_gyro_and_compass_straight_match_kelly_eq13(capsys):
     assert gyro["cov"][0][0] == pytest.approx(1e-3 * 6, rel=1e-13)
     assert gyro["cov"][1][1] == pytest.approx(2e-4 * 36 * 3 / 3, rel=1e-13)
     assert gyro["cov"][2][2] == pytest.approx(2e-4 * 3, rel=1e-13)
+    # compass read every T = 0.1 s (default): Kelly's |V|σ_θθ·s less a quarter of a reading
+    # at each end, V²σ_θθ(t − T/2); the end heading is one reading, variance σ_θθ/T
     compass = run_json(capsys, "--model", "compass", "--speed-noise", "1e-3",
                        "--heading-noise", "2e-4", "--segment", "straight:2,3")
-    assert compass["cov"][1][1] == pytest.approx(2 * 2e-4 * 6, rel=1e-13)
-    assert compass["std"][2] is None
+    assert compass["cov"][0][0] == pytest.approx(1e-3 * 6, rel=1e-13)
+    assert compass["cov"][1][1] == pytest.approx(4 * 2e-4 * (3 - 0.05), rel=1e-13)
+    assert compass["cov"][2][2] == pytest.approx(2e-4 / 0.1, rel=1e-13)
+    assert compass["cov"][1][2] == pytest.approx(2e-4 / 0.1 * 2 * 0.1 / 2, rel=1e-13)
 
 
 def test_initial_covariance_forms_agree(capsys):

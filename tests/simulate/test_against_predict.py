@@ -37,7 +37,7 @@ def test_simulation_agrees_with_closed_form_prediction(model):
     r = monte_carlo(path, noise, wheel_base, runs=10_000, partitions=200, seed=31, **kw)
     z = np.array(r["z"]["std"] + list(r["z"]["corr"].values()), dtype=float)
     known = z[np.isfinite(z)]
-    assert known.size == (6 if model != "compass" else 3)  # compass θ is undefined
+    assert known.size == 6
     assert np.all(np.abs(known) <= 4.5), z
     assert r["linear_model_ok"], r["verdict"]
     # predict's pose is the nominal end pose: the simulated mean is within sampling error

@@ -36,17 +36,18 @@ def test_json_contract_and_theory_equals_predict(capsys):
     std = np.array(out["simulation"]["std"])
     np.testing.assert_allclose(std**2, np.diag(cov), rtol=1e-12)
     assert out["simulation"]["corr"]["xy"] == pytest.approx(cov[0, 1] / (std[0] * std[1]))
-    # θ of the simulated mean in the theory's wrapped frame (−5 rad -> 1.28319)
-    assert out["simulation"]["mean"][2] == pytest.approx(out["theory"]["pose"][2], abs=5e-3)
+    # the theory's θ is wrapped for display (−5 rad -> 1.28319); the simulated mean θ is
+    # continuous (DESIGN: θ continuous in every statistic)
+    assert out["theory"]["pose"][2] == pytest.approx(-5 + 2 * math.pi, abs=1e-12)
+    assert out["simulation"]["mean"][2] == pytest.approx(-5.0, abs=5e-3)
     assert all(-1 <= v <= 1 for v in out["simulation"]["corr"].values())
 
 
 def test_zero_noise_simulation_is_the_nominal_pose(capsys):
     out = _json(capsys, BASE + ["--k-left", "0", "--k-right", "0", "--runs", "10",
                                 "--partitions", "1000"])
-    np.testing.assert_allclose(out["simulation"]["mean"], [-0.38357, -0.286535, -5 + 2 * math.pi],
-                               atol=6e-6)
-    np.testing.assert_allclose(out["simulation"]["mean"], out["theory"]["pose"], atol=1e-12)
+    np.testing.assert_allclose(out["simulation"]["mean"], [-0.38357, -0.286535, -5.0], atol=6e-6)
+    np.testing.assert_allclose(out["simulation"]["mean_error"], 0.0, atol=1e-12)
     assert out["verdict"] == "consistent"
 
 
@@ -78,9 +79,9 @@ def test_gyro_and_compass_models(capsys):
     compass = _json(capsys, ["simulate", "--model", "compass", "--speed-noise", "1e-4",
                              "--heading-noise", "1e-6", "--segment", "arc:0.5,0.1,20",
                              "--runs", "2000", "--partitions", "100"])
-    # predict leaves the compass θ variance undefined (null); the checks use x, y only
-    assert compass["theory"]["std"][2] is None
-    assert compass["checks"]["components"] == ["x", "y"]
+    # the compass θ variance is one reading's σ_θθ/T (T = 0.1 s by default): all three checked
+    assert compass["theory"]["std"][2] == pytest.approx(math.sqrt(1e-6 / 0.1), rel=1e-12)
+    assert compass["checks"]["components"] == ["x", "y", "theta"]
     assert compass["verdict"] == "consistent"
 
 

@@ -218,19 +218,28 @@ def test_gyro_model_on_a_straight_line_matches_kelly_eq13():
 
 
 def test_compass_model_on_a_straight_line_matches_kelly_eq13():
-    """Kelly eq. (13), direct heading: σxx = α_ss·s, σyy = |V|·σ_θθ·s; the final θ is one
-    compass reading, variance σ_θθ/Δt with Δt = t/K (noise.CompassNoise). The mean x is
-    exactly s·E[cos ε] = s·exp(−σ_θθ/(2Δt)) for Gaussian compass errors ε. The last
-    reading also steered the last partition, so Cov(y, θ) = Δs·E[ε·sin ε] =
-    Δs·σ²·exp(−σ²/2) with σ² = σ_θθ/Δt (a term Kelly's continuous model does not have)."""
-    v, t, alpha, psd, k = 0.5, 20.0, 1e-4, 1e-5, 400
-    s, dt = v * t, t / k
+    """Kelly eq. (13), direct heading, with the compass read every T: σxx = α_ss·s and
+    σyy = V²σ_θθ·(t − T/2) (the first and last readings enter one step each: Kelly's
+    |V|σ_θθ·s less a quarter reading at each end); the final θ is one reading, variance
+    σ² = σ_θθ/T, and Cov(y, θ) = σ²·V·T/2 (it steered half the last step); the initial θ
+    variance gives way to the first reading. The mean x is exact: between readings e_k,
+    e_{k+1} the arc's chord is d·sinc(Δ/2)·cos(m) with Δ = e_{k+1} − e_k ~ N(0, 2σ²)
+    independent of m = (e_k + e_{k+1})/2 ~ N(0, σ²/2), and E[sin u/u] = ∫₀¹ e^{−τ²v/2} dτ
+    for u ~ N(0, v); so E[x] = s·e^{−σ²/4}·√(π/σ²)·erf(σ/2), 30 standard errors short of
+    s. K = 500 partitions: two steps per reading (the q steps make up the same arc)."""
+    from math import erf, pi, sqrt
+
+    v, t, alpha, psd, period, k = 0.5, 20.0, 1e-4, 1e-4, 0.05, 500
+    s, sigma2 = v * t, psd / period
     mc = simulate_runs([KellyArc(v, 0.0, t)], (SpeedNoise(alpha), CompassNoise(psd)),
-                       runs=20_000, partitions=k, seed=12,
-                       cov0=[0.0, 0.0, 1.0])  # initial θ variance has no effect on a compass
-    cov = np.diag([alpha * s, v * psd * s, psd / dt])
-    cov[1, 2] = cov[2, 1] = s / k * psd / dt * np.exp(-psd / dt / 2)
-    _sample_cov_ok(mc.final, np.array([s * np.exp(-psd / dt / 2), 0.0, 0.0]), cov)
+                       runs=20_000, partitions=k, seed=12, compass_period=period,
+                       cov0=[0.0, 0.0, 1.0])
+    assert mc.partitions == 800
+    cov = np.diag([alpha * s, v * v * psd * (t - period / 2), sigma2])
+    cov[1, 2] = cov[2, 1] = sigma2 * v * period / 2
+    mean_x = s * np.exp(-sigma2 / 4) * sqrt(pi / sigma2) * erf(sqrt(sigma2) / 2)
+    assert s - mean_x > 25 * sqrt(alpha * s / 20_000)  # the nonlinearity is detectable
+    _sample_cov_ok(mc.final, np.array([mean_x, 0.0, 0.0]), cov)
 
 
 def test_classical_noise_depends_on_the_partition_count():

@@ -16,7 +16,8 @@ if TYPE_CHECKING:
     from odomkit.propagate.plan import NoiseArg
 
 __all__ = [
-    "MODEL_FLAGS", "GyroNoiseOption", "HeadingNoiseOption", "InitialCovMatrixOption", "InitialCovOption",
+    "MODEL_FLAGS", "CompassPeriodOption", "GyroNoiseOption", "HeadingNoiseOption",
+    "InitialCovMatrixOption", "InitialCovOption",
     "InitialPoseOption", "JsonOption", "KLeftOption", "KRightOption", "ModelOption", "noise_from_flags",
     "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "SegmentOption",
     "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption", "WheelBaseOption"
@@ -27,7 +28,7 @@ Opt = typer.Option
 MODEL_FLAGS = {
     "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle"},
     "gyro": {"--speed-noise", "--gyro-noise"},
-    "compass": {"--speed-noise", "--heading-noise"},
+    "compass": {"--speed-noise", "--heading-noise", "--compass-period"},
 }
 
 SegmentOption = Annotated[list[str], Opt("--segment", help=(
@@ -48,6 +49,11 @@ GyroNoiseOption = Annotated[float | None, Opt(
     "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s].")]
 HeadingNoiseOption = Annotated[float | None, Opt(
     "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s].")]
+CompassPeriodOption = Annotated[float | None, Opt(
+    "--compass-period", help=(
+        "Compass model: sample period T of the compass [s] (default 0.1). Each reading has "
+        "an independent error of variance σ_θθ/T (the end θ variance, as track uses for a "
+        "compass log); every segment must last a whole number of periods."))]
 InitialPoseOption = Annotated[str, Opt("--initial-pose", help="x,y,θ [m, m, rad].")]
 InitialCovOption = Annotated[str | None, Opt(
     "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal).")]
@@ -87,6 +93,12 @@ def _non_negative(flag: str, value: float | None, unit: str) -> float:
     return value
 
 
+def _positive_or_none(flag: str, value: float | None, unit: str) -> float | None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise ModelError(f"{flag} must be a positive number ({unit}), got {value!r}")
+    return value
+
+
 def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> NoiseArg:
     """The noise model(s) the flags describe (see :func:`odomkit.propagate.predict.predict`)."""
     from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
@@ -115,6 +127,7 @@ class PathProblem:
     wheel_base: float | None
     pose0: list[float]
     cov0: list[list[float]] | None
+    compass_period: float | None = None
 
 
 def path_problem(
@@ -152,4 +165,5 @@ def path_problem(
         wheel_base=wheel_base,
         pose0=parse_numbers(initial_pose, "--initial-pose", 3),
         cov0=cov0,
+        compass_period=_positive_or_none("--compass-period", given.get("--compass-period"), "s"),
     )

@@ -7,6 +7,7 @@ from typing import Annotated, Any
 
 from odomkit.cli.application import app
 from odomkit.cli.options import (
+    CompassPeriodOption,
     GyroNoiseOption,
     HeadingNoiseOption,
     InitialCovMatrixOption,
@@ -61,12 +62,16 @@ def predict_command(
     speed_noise: SpeedNoiseOption = None,
     gyro_noise: GyroNoiseOption = None,
     heading_noise: HeadingNoiseOption = None,
+    compass_period: CompassPeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
     initial_cov_matrix: InitialCovMatrixOption = None,
-    engine: Annotated[str, Opt("--engine", help="closed | recursion | transition")] = "closed",
+    engine: Annotated[str, Opt("--engine", help=(
+        "closed | recursion | transition (the step engines, a cross-check; for a compass "
+        "the track's direct-heading engines on its samples)."))] = "closed",
     partitions: Annotated[int | None, Opt(
-        "--partitions", help="Steps per segment (recursion engines; classical pieces).")] = None,
+        "--partitions", help=("Steps per segment (recursion engines; classical pieces). A "
+                              "compass ignores it: its steps are its samples."))] = None,
     json_out: JsonOption = False,
 ) -> None:
     """Predict the end pose and its covariance for a path of segments (closed form)."""
@@ -81,11 +86,11 @@ def predict_command(
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
-         "--heading-noise": heading_noise},
+         "--heading-noise": heading_noise, "--compass-period": compass_period},
         initial_pose, initial_cov, initial_cov_matrix)
     result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
                          pose0=problem.pose0, cov0=problem.cov0, engine=engine,
-                         partitions=partitions)
+                         partitions=partitions, compass_period=problem.compass_period)
     if json_out:
         print_json(result)
     else:

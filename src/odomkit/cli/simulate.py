@@ -19,6 +19,7 @@ from typing import Annotated, Any
 
 from odomkit.cli.application import app
 from odomkit.cli.options import (
+    CompassPeriodOption,
     GyroNoiseOption,
     HeadingNoiseOption,
     InitialCovMatrixOption,
@@ -73,8 +74,11 @@ def _print_table(r: dict[str, Any]) -> None:
     for col in ("", "theory", "simulation", "± s.e.", "z"):
         table.add_column(col, justify="right")
     names = ("x (m)", "y (m)", "θ (rad)")
+    # display only: the theory's θ is shown wrapped, so the simulated mean θ (continuous
+    # in the JSON) is shown the same whole turns away, i.e. theory + mean error
+    shown = [sim["mean"][0], sim["mean"][1], th["pose"][2] + sim["mean_error"][2]]
     for i, name in enumerate(names):
-        table.add_row(f"mean {name}", _fmt(th["pose"][i], 6), _fmt(sim["mean"][i], 6),
+        table.add_row(f"mean {name}", _fmt(th["pose"][i], 6), _fmt(shown[i], 6),
                       _fmt(se["mean"][i], 2), _fmt(z["mean"][i], 2))
     for i, name in enumerate(names):
         table.add_row(f"std {name}", _fmt(th["std"][i]), _fmt(sim["std"][i]),
@@ -112,12 +116,17 @@ def simulate_command(
     speed_noise: SpeedNoiseOption = None,
     gyro_noise: GyroNoiseOption = None,
     heading_noise: HeadingNoiseOption = None,
+    compass_period: CompassPeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
     initial_cov_matrix: InitialCovMatrixOption = None,
     runs: Annotated[int, Opt("--runs", help="Number of Monte Carlo runs N.")] = 10_000,
     partitions: Annotated[int, Opt(
-        "--partitions", help="Partitions K of each segment (fresh noise in each).")] = 1000,
+        "--partitions", help=(
+            "Partitions K of each segment: the numerical resolution (speed, wheel and gyro "
+            "noise are split over them). A compass draws one heading error per compass "
+            "sample (--compass-period), and K is rounded up to whole steps per sample; the "
+            "output reports the K used."))] = 1000,
     seed: Annotated[int, Opt("--seed", help="Random seed (same seed, same numbers).")] = 0,
     workers: Annotated[int | None, Opt(
         "--workers", help="Threads for a local run (default: CPU count).")] = None,
@@ -140,7 +149,7 @@ def simulate_command(
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
-         "--heading-noise": heading_noise},
+         "--heading-noise": heading_noise, "--compass-period": compass_period},
         initial_pose, initial_cov, initial_cov_matrix)
     sys_err = None
     if systematic is not None:
@@ -157,7 +166,7 @@ def simulate_command(
             runs=runs, partitions=partitions, seed=seed,
             pose0=problem.pose0, cov0=problem.cov0,
             systematic=sys_err, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
-            scheduler=scheduler, progress=progress,
+            scheduler=scheduler, progress=progress, compass_period=problem.compass_period,
         )
     if json_out:
         print_json(result)

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.noise.base import NoiseModel, register, require_non_negative, sym2
 
@@ -29,9 +30,16 @@ __all__ = [
     "SpeedNoise",
     "GyroNoise",
     "CompassNoise",
+    "DEFAULT_COMPASS_PERIOD",
+    "compass_sample_count",
     "speed_gyro_input_cov",
     "direct_heading_variances",
 ]
+
+DEFAULT_COMPASS_PERIOD = 0.1
+"""Sample period [s] of the compass of a planned path (``odomkit predict`` and
+``simulate``, ``--compass-period``) when none is given: a 10 Hz heading output. A log
+needs none: its rows are the samples."""
 
 
 @register
@@ -106,7 +114,12 @@ class CompassNoise(NoiseModel):
 
     In Kelly's continuous-time model the heading error is white with spectral density
     ``psd_compass``; the position error it causes grows as ``V²·psd_compass·t``
-    (Kelly eq. 13). For a sampled compass, ``var_heading = psd_compass / Δt`` per sample.
+    (Kelly eq. 13), but the heading itself has no finite variance. A real compass is
+    sampled: read every T seconds (averaging the white error over T), each reading has an
+    independent error of variance ``psd_compass / T`` (:meth:`sample_variance`). That is
+    odomkit's one convention: ``track`` takes T from the log's time stamps
+    (:func:`direct_heading_variances`), ``predict`` and ``simulate`` from their compass
+    period (:data:`DEFAULT_COMPASS_PERIOD` unless given).
 
     Parameters
     ----------
@@ -133,6 +146,31 @@ class CompassNoise(NoiseModel):
     def heading_variances(self, steps: BodySteps) -> NDArray[np.float64]:
         """:func:`direct_heading_variances` of the steps' durations."""
         return direct_heading_variances(steps.dt, self)
+
+    def sample_variance(self, period: float) -> float:
+        """Variance of one compass reading taken every ``period`` [s]: psd/T [rad²].
+
+        >>> CompassNoise(1e-5).sample_variance(0.1)
+        0.0001
+        """
+        return self.psd_compass / validate.positive(period, "compass_period", unit="s")
+
+
+def compass_sample_count(duration: float, period: float, segment: int | None = None) -> int:
+    """How many compass periods a segment of ``duration`` [s] lasts; a ModelError unless
+    it is a whole number (to 1e-9 relative), so that every segment starts and ends on a
+    compass sample.
+
+    >>> compass_sample_count(2.5, 0.1)
+    25
+    """
+    period = validate.positive(period, "compass_period", unit="s")
+    n = round(duration / period)
+    if abs(n * period - duration) > 1e-9 * max(duration, period):
+        which = f"segment {segment} " if segment is not None else "a segment "
+        raise ModelError(f"{which}lasts {duration:g} s, not a whole number of compass periods "
+                         f"({period:g} s); change the duration or the compass period")
+    return int(n)
 
 
 def speed_gyro_input_cov(

@@ -13,10 +13,15 @@ noise                              family      vehicle   segments
 ``(SpeedNoise, GyroNoise)``        gyro        gyro      KellyArc
 ``(SpeedNoise, CompassNoise)``     compass     compass   KellyArc
 =================================  ==========  ========  ==============================
+
+A compass path also needs the compass's sample period T (``compass_period``, default
+:data:`odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`): its steps are the compass samples,
+each reading with an error of variance σ_θθ/T, as a compass log's rows are in ``track``.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 
@@ -26,7 +31,8 @@ from numpy.typing import NDArray
 from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
-from odomkit.noise import NoiseModel, NoiseSet
+from odomkit.noise import CompassNoise, NoiseModel, NoiseSet
+from odomkit.noise.kelly import DEFAULT_COMPASS_PERIOD, compass_sample_count
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
 from odomkit.robot import ROBOT_TYPES, DiffDrive, Robot
 
@@ -35,6 +41,7 @@ __all__ = [
     "path_model",
     "segment_motion",
     "path_steps",
+    "compass_samples",
     "check_segments",
     "check_partitions",
     "check_wheel_base",
@@ -63,11 +70,21 @@ class PathModel:
     robot : Robot
         The vehicle: ``DiffDrive(wheel_base)`` for the differential-drive families, a
         nominal ``GyroOdometry``/``CompassOdometry`` for Kelly's.
+    compass_period : float or None
+        Compass family: the compass's sample period T [s]; None for the others.
     """
 
     family: str
     noise: NoiseSet
     robot: Robot
+    compass_period: float | None = None
+
+    @property
+    def var_heading(self) -> float:
+        """Compass family: variance of one compass reading, σ_θθ/T [rad²]."""
+        if self.compass_period is None:
+            raise ModelError(f"the {self.family} model has no compass")
+        return self.noise.require(CompassNoise).sample_variance(self.compass_period)
 
     @property
     def diff(self) -> bool:
@@ -88,7 +105,8 @@ def check_wheel_base(wheel_base: float | None) -> float:
 
 
 def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
-               wheel_base: float | None = None, purpose: str = "prediction") -> PathModel:
+               wheel_base: float | None = None, purpose: str = "prediction",
+               compass_period: float | None = None) -> PathModel:
     """Validate a noise argument for a path and pick its family and vehicle.
 
     Parameters
@@ -99,6 +117,9 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
         B [m], required by the differential-drive families.
     purpose : str
         Named in the error message (``"prediction"`` or ``"simulation"``).
+    compass_period : float, optional
+        Compass family: the sample period T [s] of the compass (default
+        :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); an error for the others.
 
     >>> from odomkit.noise import WheelNoise
     >>> path_model(WheelNoise(0.001, 0.001), 0.4).family
@@ -114,18 +135,44 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
     robot: Robot = (DiffDrive(check_wheel_base(wheel_base)) if vehicle == "diff"
                     else ROBOT_TYPES[vehicle]())
     models.check_robot(robot)
+    if family == "compass":
+        period = DEFAULT_COMPASS_PERIOD if compass_period is None else compass_period
+        return PathModel(family, models, robot,
+                         validate.positive(period, "compass_period", unit="s"))
+    if compass_period is not None:
+        raise ModelError(f"compass_period applies to the compass model, not the {family} model")
     return PathModel(family, models, robot)
 
 
 def check_segments(segments: Iterable[Segment], model: PathModel) -> list[Segment]:
-    """The segments as a list, each of the kind the model's vehicle drives."""
+    """The segments as a list, each of the kind the model's vehicle drives (and, for a
+    compass, lasting a whole number of compass periods: :func:`compass_samples`)."""
     segs = list(segments)
     for k, seg in enumerate(segs):
         ok = isinstance(seg, Arc | Straight | Spin) if model.diff else isinstance(seg, KellyArc)
         if not ok:
             want = "Arc, Straight or Spin" if model.diff else "KellyArc (speed, yaw rate, duration)"
             raise ModelError(f"segment {k + 1} is {seg!r}; the {model.family} model needs {want}")
+    if model.compass_period is not None:
+        compass_samples(segs, model.compass_period)
+        for k, seg in enumerate(segs):
+            turn = abs(seg.yaw_rate) * model.compass_period  # type: ignore[union-attr]
+            if not turn < math.pi:
+                # two readings half a turn apart cannot tell which way the robot turned
+                raise ModelError(f"segment {k + 1} turns by {turn:.3g} rad between compass "
+                                 "readings (|yaw rate| × compass period); it must be below π")
     return segs
+
+
+def compass_samples(segments: Sequence[Segment], period: float) -> list[int]:
+    """Compass samples (steps) of each KellyArc segment: duration/period, which must be a
+    whole number (:func:`odomkit.noise.kelly.compass_sample_count`).
+
+    >>> compass_samples([KellyArc(1.0, 0.0, 2.0), KellyArc(1.0, 0.5, 0.5)], 0.1)
+    [20, 5]
+    """
+    return [compass_sample_count(seg.duration, period, k + 1)  # type: ignore[union-attr]
+            for k, seg in enumerate(segments)]
 
 
 def segment_motion(seg: Segment, wheel_base: float) -> tuple[float, float]:
@@ -137,7 +184,8 @@ def segment_motion(seg: Segment, wheel_base: float) -> tuple[float, float]:
 
 
 def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
-               robot: Robot | None = None, scales: tuple[float, float] = (1.0, 1.0)) -> BodySteps:
+               robot: Robot | None = None, scales: tuple[float, float] = (1.0, 1.0),
+               theta0: float = 0.0) -> BodySteps:
     """Cut each segment into ``partitions`` equal steps of the model's vehicle.
 
     Parameters
@@ -145,21 +193,34 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     segments : sequence of Segment, length S
     model : PathModel
     partitions : int
-        Steps per segment, n.
+        Steps per segment, n. The compass family ignores it: its steps are the compass
+        samples (:func:`compass_samples`), as the rows of a compass log are.
     robot : Robot, optional
         The vehicle that drives the path (default ``model.robot``); a Monte Carlo of a
         robot with systematic errors drives the commanded wheel travels with its true
         wheel base.
     scales : (float, float)
         True/nominal distance per tick of the left and right wheel (systematic errors).
+    theta0 : float
+        Start heading [rad]; the compass family's measured headings start there.
 
     Returns
     -------
     BodySteps
         S·n steps: ``dd``, ``dtheta``, ``dt`` (Kelly segments; zero for wheel segments)
         and the raw inputs the noise models ask for (``d_left``/``d_right`` [m] of a
-        differential drive).
+        differential drive; ``heading`` (M + 1,) [rad] of a compass).
+
+    Examples
+    --------
+    >>> from odomkit.noise import CompassNoise
+    >>> model = path_model(CompassNoise(1e-4), compass_period=0.5)
+    >>> steps = path_steps([KellyArc(1.0, 0.2, 1.0)], model, 100)
+    >>> steps.dt.tolist(), steps.inputs["heading"].tolist()
+    ([0.5, 0.5], [0.0, 0.1, 0.2])
     """
+    if model.compass_period is not None:
+        return _compass_steps(segments, model, float(theta0))
     n = check_partitions(partitions)
     robot = model.robot if robot is None else robot
     dd, dth, dt, d_left, d_right = [], [], [], [], []
@@ -184,3 +245,17 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
 
     inputs = {"d_left": cat(d_left), "d_right": cat(d_right)} if model.diff else {}
     return BodySteps(cat(dd), cat(dth), cat(dt), inputs, robot)
+
+
+def _compass_steps(segments: Sequence[Segment], model: PathModel, theta0: float) -> BodySteps:
+    """One step per compass sample: Δd = V·T, Δθ = ω·T, dt = T; the nominal headings
+    measured at the samples as the ``heading`` input."""
+    period = model.compass_period
+    assert period is not None
+    counts = compass_samples(segments, period)
+    speed = np.repeat([seg.speed for seg in segments], counts)  # type: ignore[union-attr]
+    rate = np.repeat([seg.yaw_rate for seg in segments], counts)  # type: ignore[union-attr]
+    dtheta = rate * period
+    heading = theta0 + np.concatenate([[0.0], np.cumsum(dtheta)])
+    return BodySteps(speed * period, dtheta, np.full(speed.size, period), {"heading": heading},
+                     model.robot)

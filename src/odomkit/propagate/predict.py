@@ -9,7 +9,8 @@ noise                              segments     closed form
 ``WheelNoise``                     Arc, ...     Chong–Kleeman eq. (23), (25)
 ``ClassicalNoise``                 Arc, ...     Chong–Kleeman eq. (1)–(3), per piece
 ``(SpeedNoise, GyroNoise)``        KellyArc     Kelly eq. (11), (13), (15)
-``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10), (13), (14)
+``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10) sampled every T (see
+                                               :func:`~odomkit.propagate.closed_kelly.compass_arc_cov`)
 =================================  ===========  ========================================
 
 Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` and
@@ -17,6 +18,13 @@ Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` 
 step recursion (:mod:`odomkit.propagate.recursion`) or Kelly's transition-matrix
 solution (:mod:`odomkit.propagate.transition`). They converge to ``closed`` as the steps
 shrink, which is how the closed forms are cross-checked.
+
+A compass is predicted as ``odomkit track`` propagates a compass log: read every
+``compass_period`` T [s], each reading with an independent error of variance σ_θθ/T
+(:class:`~odomkit.noise.CompassNoise`), so the end heading has that finite variance. Its
+steps are the compass samples whatever ``partitions`` says; the ``recursion`` and
+``transition`` engines run the track's direct-heading engines on them and agree with
+``closed`` to rounding (the closed form is the exact sum, not a limit).
 """
 
 from __future__ import annotations
@@ -74,7 +82,7 @@ class Prediction:
         [x (m), y (m), θ (rad)], θ continuous (not wrapped).
     cov : ndarray, shape (3, 3)
         Covariance in the order x, y, θ [m², m·rad, rad²]. For compass odometry the θ
-        variance is NaN (see :func:`odomkit.propagate.closed_kelly.compass_arc_cov`).
+        variance is that of the last compass reading, σ_θθ/T.
     model : str
         ``wheel``, ``classical``, ``gyro`` or ``compass``.
     engine : str
@@ -168,7 +176,8 @@ def discretise_path(
     model = path_model(noise, wheel_base)
     segs = check_segments(segments, model)
     if model.robot.measures_heading:
-        raise ModelError("the compass model has no step recursion here; use engine 'closed'")
+        raise ModelError("a compass path's steps are its compass samples, with no per-step "
+                         "input covariance: use predict(..., engine='recursion') instead")
     steps = path_steps(segs, model, partitions)
     cov = model.noise.input_cov(steps, 0, len(steps))
     dd, dth = steps.dd, steps.dtheta
@@ -200,7 +209,45 @@ def _gyro_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segme
 def _compass_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
                     model: PathModel) -> NDArray[np.float64]:
     speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
-    return compass_arc_cov(seg, speed, model.noise.require(CompassNoise), pose[2], cov)  # type: ignore[arg-type]
+    return compass_arc_cov(seg, speed, model.noise.require(CompassNoise), pose[2], cov,  # type: ignore[arg-type]
+                           period=model.compass_period)
+
+
+def _compass_start(cov0: NDArray[np.float64], model: PathModel) -> NDArray[np.float64]:
+    """The start covariance of a compass path: the heading is the first compass reading,
+    whose error (variance σ_θθ/T) is independent of the start position; the θ row and
+    column of ``cov0`` give way to it (as in ``track``)."""
+    cov = np.zeros((3, 3))
+    cov[:2, :2] = cov0[:2, :2]
+    cov[2, 2] = model.var_heading
+    return cov
+
+
+def _compass_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float64],
+                     c0: NDArray[np.float64], engine: str) -> Prediction:
+    """The track's direct-heading engines on the compass samples of the path."""
+    from odomkit.propagate.plan import plan_noise
+
+    steps = path_steps(segs, model, 1, theta0=float(p0[2]))
+    poses = dead_reckon(steps.dd, steps.dtheta, p0, "exact")
+    if len(steps) == 0:  # no reading after the first: the start is the end
+        return Prediction(poses[-1].copy(), c0, model.family, engine)
+    if engine == "recursion":
+        from odomkit.propagate.recursion import iter_track_covariance
+
+        cov_end = c0
+        for _, chunk in iter_track_covariance(steps, poses, model.noise, c0, "exact", engine):
+            cov_end = chunk[-1]
+    else:
+        from odomkit.propagate.transition import propagate_direct_heading
+
+        plan = plan_noise(steps, model.noise, "exact")
+        assert plan.var_heading is not None
+        cov_end = propagate_direct_heading(poses[:-1, 2], steps.dd, steps.dtheta,
+                                           plan.var_dd(0, len(steps)), plan.var_heading,
+                                           c0[:2, :2])[-1]
+    cov_end = np.asarray(cov_end, dtype=float)
+    return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
 
 
 _CLOSED_FORMS = {"wheel": _wheel_closed, "gyro": _gyro_closed, "compass": _compass_closed}
@@ -214,6 +261,7 @@ def predict(
     cov0: ArrayLike | None = None,
     engine: Engine = "closed",
     partitions: int | None = None,
+    compass_period: float | None = None,
 ) -> Prediction:
     """Predict the end pose of a path of segments and its covariance.
 
@@ -236,7 +284,12 @@ def predict(
         classical model the number of eq. (1) steps per segment (default 1), which
         changes its answer. ``recursion``/``transition``: steps per segment (default
         :data:`DEFAULT_PARTITIONS`; the classical model then takes that many steps).
-        The compass model is ``closed`` only.
+        The compass model ignores it: its steps are its samples.
+    compass_period : float, optional
+        Compass model only: the compass's sample period T [s] (default
+        :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
+        whole number of periods. Each reading has an error of variance σ_θθ/T, which is
+        the end heading's variance; the θ row and column of ``cov0`` give way to it.
 
     Returns
     -------
@@ -261,11 +314,15 @@ def predict(
     """
     if engine not in ENGINES:
         raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
-    model = path_model(noise, wheel_base)
+    model = path_model(noise, wheel_base, compass_period=compass_period)
     segs = check_segments(segments, model)
     p0 = validate.pose(pose0)
     c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
     b = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
+    if model.compass_period is not None:
+        c0 = _compass_start(c0, model)
+        if engine != "closed":
+            return _compass_engines(segs, model, p0, c0, engine)
 
     if engine != "closed":
         n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)

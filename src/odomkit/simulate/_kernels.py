@@ -26,7 +26,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit import jit
-from odomkit.angles import sinc_half
 from odomkit.errors import ModelError
 from odomkit.kinematics import step_displacement
 
@@ -84,24 +83,55 @@ def advance_classical_numpy(state: State, z: NDArray[np.float64], coef: NDArray[
 
 def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
                           first_partition: int) -> None:
-    """Direct heading (compass): the heading of partition i is the nominal heading at its
-    middle plus white error ``sigma·z1`` (not integrated, Kelly section 3.1).
+    """Direct heading (compass) sampled every T: one heading error per compass reading,
+    not per partition (Kelly section 3.1; ``track``'s model of a compass log).
 
-    ``coef`` is ``[dd0, sigma_d, theta_mid_0, dθ0, sigma_heading, 0]`` with theta_mid_0
-    the nominal heading at the middle of the segment's first partition;
-    ``first_partition`` counts from the start of the segment. ``state[2]`` becomes the
-    last *measured* heading (the compass error is not integrated).
+    ``coef`` is ``[dd, σ_d, θ_start, dθ, σ_h, q, m]`` (:mod:`odomkit.simulate.plan`):
+    the segment's kernel steps g = 0 … m−1 are q per compass interval; step g runs from
+    the nominal heading θ_start + g·dθ plus the measured heading's error, linear between
+    the errors e_j, e_{j+1} of the interval's two readings (so the q steps make up the
+    exact arc from one reading to the next), over a distance dd + σ_d·z0. The error of the
+    reading that ends an interval, σ_h·z1, is drawn at the interval's first step (z1 of
+    the other steps is unused); the segment's first reading is the one the previous
+    segment (or the start pose) ended on: e_0 = θ − θ_start. Steps g >= m do nothing
+    (another segment needs more). ``state[2]`` is the measured heading (the compass error
+    is not integrated); between calls ``state[3:5]`` carry the errors of the current
+    interval's readings (the kernel state's cos/sin slots, unused by this kernel).
+    ``first_partition`` counts from the start of the segment.
     """
-    p = z.shape[0]
-    dd = coef[0] + coef[1] * z[:, 0, :]
-    theta_mid = coef[2] + coef[3] * (first_partition + np.arange(p))[:, None]
-    heading = theta_mid + coef[4] * z[:, 1, :]
-    length = dd * sinc_half(coef[3])
-    state[0] += (length * np.cos(heading)).sum(axis=0)
-    state[1] += (length * np.sin(heading)).sum(axis=0)
-    # The measured heading at the end of the stretch: nominal end heading plus the last
-    # partition's compass error.
-    state[2] = coef[2] + coef[3] * (first_partition + p - 0.5) + coef[4] * z[-1, 1, :]
+    dd0, sigma_d, theta_start, dth0, sigma_h = coef[:5]
+    q, m = int(coef[5]), int(coef[6])
+    act = max(0, min(z.shape[0], m - first_partition))
+    if act == 0:
+        return
+    g = first_partition + np.arange(act)
+    sub = g % q
+    new = sub == 0  # steps that open an interval and draw its end reading's error
+    aligned = first_partition % q == 0
+    if first_partition == 0:
+        base = [state[2] - theta_start]  # the reading the segment starts on
+    elif aligned:
+        base = [state[3]]
+    else:
+        base = [state[3], state[4]]
+    errs = np.concatenate([np.asarray(base), sigma_h * z[:act, 1, :][new]])
+    idx = np.cumsum(new) - (1 if aligned else 0)
+    e_lo, e_hi = errs[idx], errs[idx + 1]  # (act, B): the interval's two readings
+    w0 = (sub / q)[:, None]
+    w1 = ((sub + 1) / q)[:, None]
+    err0 = e_lo + (e_hi - e_lo) * w0
+    err1 = e_lo + (e_hi - e_lo) * w1
+    heading = theta_start + dth0 * g[:, None] + err0
+    dx, dy = step_displacement(heading, dd0 + sigma_d * z[:act, 0, :], dth0 + (err1 - err0),
+                               "exact")
+    state[0] += dx.sum(axis=0)
+    state[1] += dy.sum(axis=0)
+    end = first_partition + act
+    state[2] = theta_start + dth0 * end + err1[-1]
+    if end % q == 0:
+        state[3] = e_hi[-1]  # on a reading: the next call opens a new interval
+    else:
+        state[3], state[4] = e_lo[-1], e_hi[-1]
 
 
 def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64], int], None]:

@@ -97,6 +97,7 @@ def simulate_runs(
     scheduler: Scheduler = None,
     engine: Engine = "auto",
     progress: Progress | None = None,
+    compass_period: float | None = None,
 ) -> MonteCarloRuns:
     """Simulate ``runs`` noisy runs of ``path`` and return their poses.
 
@@ -109,14 +110,16 @@ def simulate_runs(
         :class:`~odomkit.noise.WheelNoise` (variance k²·|d| per partition and wheel);
         :class:`~odomkit.noise.ClassicalNoise` (fixed σ of D and α per partition, each
         partition a rotation α then a translation D, Chong–Kleeman eq. 1, so K = 1 is one
-        step per segment); (SpeedNoise, GyroNoise); (SpeedNoise, CompassNoise): the
-        heading of each partition is the nominal one plus white error of variance
-        ``psd_compass/Δt``, not integrated; the final θ is the last such reading, so its
-        variance grows with K and the initial θ variance has no effect.
+        step per segment); (SpeedNoise, GyroNoise); (SpeedNoise, CompassNoise): a compass
+        read every ``compass_period`` T, each reading with its own error of variance
+        ``psd_compass/T`` (not integrated), exact arcs between readings; the final θ is
+        the last reading, and the first reading replaces the initial θ variance.
     wheel_base : float, optional
         Nominal wheel base B [m] of a differential drive (required for those models).
     runs, partitions : int
-        Number N of runs; number K of partitions of *each* segment.
+        Number N of runs; number K of partitions of *each* segment: the numerical
+        resolution. A compass segment is cut into a whole number of steps per compass
+        reading, at least K (``MonteCarloRuns.partitions`` gives the largest count).
     seed : int, optional
         Same seed, same numbers, whatever ``workers``, ``chunk_runs`` or ``scheduler``.
     pose0 : array_like, shape (3,)
@@ -136,6 +139,10 @@ def simulate_runs(
     engine : {"auto", "numba", "numpy"}
     progress : callable, optional
         Called with the number of runs just finished, after each task.
+    compass_period : float, optional
+        Compass model only: sample period T [s] of the compass (default
+        :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
+        whole number of periods.
 
     Returns
     -------
@@ -153,7 +160,7 @@ def simulate_runs(
     [-0.38357, -0.286535, -5.0]
     """
     start = time.perf_counter()
-    plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic)
+    plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic, compass_period)
     seed_used = _resolve_seed(seed)
     engine_used = _pick_engine(engine)
     if plan.kind != "increment":

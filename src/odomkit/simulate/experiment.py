@@ -8,14 +8,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from odomkit.angles import wrap_angle
+from odomkit.angles import TWO_PI, wrap_angle
 from odomkit.errors import ModelError
 from odomkit.noise import NoiseSet
 from odomkit.path import Segment
 from odomkit.propagate.plan import NoiseArg
 from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.engine import Engine, Progress, simulate_runs
-from odomkit.simulate.plan import SystematicErrors
+from odomkit.simulate.plan import SystematicErrors, resolve_model
 from odomkit.simulate.stats import compare, correlations
 
 __all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
@@ -23,6 +23,7 @@ __all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
 
 def _predicted(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
                pose0: ArrayLike, cov0: ArrayLike | None, partitions: int,
+               compass_period: float | None,
                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`."""
     from odomkit.propagate.predict import predict
@@ -31,7 +32,7 @@ def _predicted(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | Non
     # K steps per segment that are simulated. The consistent models ignore it.
     pieces = partitions if NoiseSet.of(noise).family == "classical" else None
     out = predict(path, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0, engine="closed",
-                  partitions=pieces)
+                  partitions=pieces, compass_period=compass_period)
     return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float), out.to_dict()
 
 
@@ -69,6 +70,7 @@ def monte_carlo(
     scheduler: Scheduler = None,
     engine: Engine = "auto",
     progress: Progress | None = None,
+    compass_period: float | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` runs of ``path`` and check them against the linear prediction.
 
@@ -77,15 +79,17 @@ def monte_carlo(
     theory : (pose, cov), optional
         Predicted final pose (3,) and covariance (3, 3); by default the closed form of
         :func:`odomkit.propagate.predict.predict` for the same path, noise and start.
-        The predicted mean is the nominal (noise-free) end pose.
+        The predicted mean is the nominal (noise-free) end pose. A given heading may be
+        wrapped: it is moved by whole turns onto the branch of the nominal continuous end
+        heading (θ0 plus the segments' turns).
     alpha : float
         Level of each consistency check (see :mod:`odomkit.simulate.stats`).
 
     Returns
     -------
     dict
-        ``theory`` {pose (θ wrapped to [−π, π)), cov, std, corr}, ``simulation`` {mean
-        (θ in the theory's wrapped frame), mean_error, cov, std, corr, se}, ``z``,
+        ``theory`` {pose (θ wrapped to [−π, π) for display), cov, std, corr},
+        ``simulation`` {mean (θ continuous), mean_error, cov, std, corr, se}, ``z``,
         ``checks``, ``verdict``, ``consistent``, ``linear_model_ok`` (see
         :func:`odomkit.simulate.compare`), ``runs``, ``partitions``, ``seed``, ``seconds``,
         ``engine``.
@@ -107,22 +111,36 @@ def monte_carlo(
     """
     cov0 = _cov_matrix(cov0)
     if theory is None:
-        pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions)
+        pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions,
+                                            compass_period)
     else:
         pose_p, cov_p = _theory_arrays(theory)
+        pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period)
         summary = theory_summary(pose_p, cov_p)
     mc = simulate_runs(path, noise, wheel_base, runs=runs, partitions=partitions, seed=seed,
                        pose0=pose0, cov0=cov0, systematic=systematic, workers=workers,
                        chunk_runs=chunk_runs, scheduler=scheduler, engine=engine,
-                       progress=progress)
+                       progress=progress, compass_period=compass_period)
+    # θ continuous in every statistic (DESIGN): the simulated mean θ stays continuous;
+    # only the theory's pose is shown wrapped
     result = compare(mc.final, pose_p, cov_p, alpha)
-    # report the simulated mean θ in the theory's wrapped frame, so the two read alike
-    result["simulation"]["mean"][2] = summary["pose"][2] + result["simulation"]["mean_error"][2]
     head = {"theory": summary, "simulation": result.pop("simulation"), "z": result.pop("z"),
             "verdict": result.pop("verdict")}
     tail = {"runs": mc.runs, "partitions": mc.partitions, "seed": mc.seed,
             "seconds": mc.seconds, "engine": mc.engine}
     return {**head, **result, **tail}
+
+
+def _nominal_branch(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
+                    pose0: ArrayLike, theta: float, compass_period: float | None) -> float:
+    """``theta`` moved by whole turns onto the branch of the path's nominal, continuous
+    end heading θ0 + ΣΔθ: a theory may give its heading wrapped, the runs are continuous."""
+    from odomkit.propagate.paths import segment_motion
+
+    model = resolve_model(noise, wheel_base, compass_period)
+    base = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
+    end = float(np.asarray(pose0, dtype=float)[2]) + sum(segment_motion(s, base)[1] for s in path)
+    return float(theta + TWO_PI * round((end - theta) / TWO_PI))
 
 
 def _theory_arrays(theory: Any) -> tuple[np.ndarray, np.ndarray]:

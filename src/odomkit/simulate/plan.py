@@ -18,7 +18,7 @@ from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise import NoiseSet
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-from odomkit.propagate.paths import PathModel, path_model
+from odomkit.propagate.paths import PathModel, compass_samples, path_model
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive, Robot, SystematicErrors
 
@@ -31,11 +31,13 @@ class Plan:
 
     ``coefs[j]`` maps two standard normals to the body motion of one partition of segment
     j (see :mod:`odomkit.simulate._kernels`); ``kind`` is ``"increment"`` (exact arc),
-    ``"classical"`` (rotate, then translate) or ``"compass"``.
+    ``"classical"`` (rotate, then translate) or ``"compass"`` (7 coefficients, see
+    :func:`odomkit.simulate._kernels.advance_compass_numpy`). ``partitions`` is the number
+    of kernel steps per segment (a compass segment may use fewer: its ``m``).
     """
 
     kind: str
-    coefs: NDArray[np.float64]  # (S, 6)
+    coefs: NDArray[np.float64]  # (S, 6); (S, 7) for a compass
     partitions: int
     pose0: NDArray[np.float64]  # (3,)
     factor0: NDArray[np.float64]  # (3, 3): initial pose = pose0 + factor0 @ z
@@ -52,7 +54,8 @@ def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
     return np.asarray(v * np.sqrt(w))
 
 
-def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0) -> PathModel:
+def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
+                  compass_period: float | None = None) -> PathModel:
     """The odometry model a noise argument selects, as in ``predict``
     (:func:`odomkit.propagate.paths.path_model`).
 
@@ -60,7 +63,7 @@ def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0) -> PathModel:
     >>> resolve_model(WheelNoise(0.001, 0.001)).family
     'wheel'
     """
-    return path_model(noise, wheel_base, purpose="simulation")
+    return path_model(noise, wheel_base, purpose="simulation", compass_period=compass_period)
 
 
 def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: Robot,
@@ -85,7 +88,7 @@ def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: R
 
 
 def _coefs(model: PathModel, path: Sequence[Segment], k: int,
-           systematic: SystematicErrors | None, theta0: float) -> NDArray[np.float64]:
+           systematic: SystematicErrors | None) -> NDArray[np.float64]:
     """(S, 6) kernel coefficients: the mean body motion of one partition of each segment
     and a factor A (A Aᵀ = Q) of its white noise, as the noise models give them
     (:meth:`odomkit.noise.NoiseSet.input_factor`)."""
@@ -103,25 +106,49 @@ def _coefs(model: PathModel, path: Sequence[Segment], k: int,
     coefs[:, 0], coefs[:, 3] = steps.dd, steps.dtheta
     coefs[:, 1], coefs[:, 2] = factor[:, 0, 0], factor[:, 0, 1]
     coefs[:, 4], coefs[:, 5] = factor[:, 1, 0], factor[:, 1, 1]
-    if robot.measures_heading:
-        # Direct heading: slot 2 holds the nominal heading at the partition's middle and
-        # slot 4 the σ of each measured heading (white compass error of density psd
-        # sampled every Δt: variance psd/Δt, noise.CompassNoise).
-        theta_start = theta0
-        for j, seg in enumerate(path):
-            coefs[j, 2] = theta_start + 0.5 * steps.dtheta[j]
-            one = BodySteps(steps.dd[j:j + 1], steps.dtheta[j:j + 1], steps.dt[j:j + 1], {}, robot)
-            var_h = model.noise.heading_variances(one) if steps.dt[j] > 0 else None
-            coefs[j, 4] = math.sqrt(var_h[0]) if var_h is not None else 0.0
-            coefs[j, 5] = 0.0
-            theta_start += seg.yaw_rate * seg.duration  # type: ignore[union-attr]
+    return coefs
+
+
+def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: float
+                   ) -> NDArray[np.float64]:
+    """(S, 7) compass kernel coefficients ``[dd, σ_d, θ_start, dθ, σ_h, q, m]``.
+
+    The compass is read every T = ``model.compass_period``; segment j lasts n_j readings
+    and is cut into q_j = ⌈K/n_j⌉ kernel steps per reading, m_j = q_j·n_j in all, so
+    every reading falls on a step boundary whatever K. The steps divide each exact arc
+    between two readings into q_j equal arcs (the same arc: K only splits the speed
+    noise). Each step: distance dd + σ_d·z0 (the speed noise of T/q_j), nominal heading
+    change dθ; σ_h = √(σ_θθ/T) is the σ of each reading's error (one z1 per reading).
+    """
+    period = model.compass_period
+    assert period is not None
+    counts = compass_samples(path, period)
+    q = np.array([max(1, math.ceil(k / n)) if n else 1 for n in counts], dtype=float)
+    dt = period / q
+    speed = np.array([seg.speed for seg in path])  # type: ignore[union-attr]
+    rate = np.array([seg.yaw_rate for seg in path])  # type: ignore[union-attr]
+    steps = BodySteps(speed * dt, rate * dt, dt, {}, model.robot)
+    sigma_d = model.noise.input_factor(steps, 0, len(steps))[:, 0, 0]
+    turns = rate * period * np.asarray(counts, dtype=float)
+    coefs = np.empty((len(path), 7))
+    coefs[:, 0], coefs[:, 1], coefs[:, 3] = steps.dd, sigma_d, steps.dtheta
+    coefs[:, 2] = theta0 + np.concatenate([[0.0], np.cumsum(turns)[:-1]])
+    coefs[:, 4] = math.sqrt(model.var_heading)
+    coefs[:, 5], coefs[:, 6] = q, q * np.asarray(counts, dtype=float)
     return coefs
 
 
 def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None, partitions: int,
               pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
-              systematic: SystematicErrors | None = None) -> Plan:
-    """Translate path, noise and robot into per-segment kernel coefficients."""
+              systematic: SystematicErrors | None = None,
+              compass_period: float | None = None) -> Plan:
+    """Translate path, noise and robot into per-segment kernel coefficients.
+
+    A compass (``compass_period`` T [s], default
+    :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`) starts from its first reading:
+    the θ row and column of ``cov0`` give way to that reading's error, variance σ_θθ/T,
+    independent of the start position (as in ``predict`` and ``track``).
+    """
     validate.positive_int(partitions, "partitions")
     path = list(path)
     if len(path) == 0:
@@ -132,7 +159,7 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
     if family in ("wheel", "classical") and (
             wheel_base is None or not (math.isfinite(wheel_base) and wheel_base > 0)):
         raise ModelError(f"the {family} model needs a positive wheel_base [m], got {wheel_base!r}")
-    model = resolve_model(noise, wheel_base)
+    model = resolve_model(noise, wheel_base, compass_period)
     for j, seg in enumerate(path):
         if model.diff and not isinstance(seg, Arc | Straight | Spin):
             raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
@@ -140,6 +167,15 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
         if not model.diff and not isinstance(seg, KellyArc):
             raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
                              "expected arc:V,OMEGA,T or straight:V,T")
-    coefs = _coefs(model, path, k, systematic, float(p0[2]))
-    kind = {"classical": "classical", "compass": "compass"}.get(model.family, "increment")
+    if model.compass_period is not None:
+        if systematic is not None:
+            raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
+        coefs = _compass_coefs(model, path, k, float(p0[2]))
+        start = np.zeros((3, 3))
+        if cov0 is not None:
+            start[:2, :2] = validate.covariance(cov0, "initial covariance", variances=True)[:2, :2]
+        start[2, 2] = model.var_heading
+        return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start))
+    coefs = _coefs(model, path, k, systematic)
+    kind = "classical" if model.family == "classical" else "increment"
     return Plan(kind, coefs, k, p0, _cov_factor(cov0))

@@ -47,6 +47,7 @@ def run_predict(
     cov0: ArrayLike | None = None,
     engine: str = "closed",
     partitions: int | None = None,
+    compass_period: float | None = None,
 ) -> dict[str, Any]:
     """Predict the end pose of ``segments`` and its covariance: the ``--json`` object.
 
@@ -57,5 +58,5 @@ def run_predict(
 
     result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
                      engine=engine,  # type: ignore[arg-type]
-                     partitions=partitions)
+                     partitions=partitions, compass_period=compass_period)
     return add_ros_pose_covariance(result.to_dict())

@@ -38,6 +38,7 @@ def run_simulate(
     chunk_runs: int | None = None,
     scheduler: str | object | None = None,
     progress: Callable[[int], None] | None = None,
+    compass_period: float | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` noisy runs of ``segments`` and check them against the closed-form
     prediction: the ``--json`` object.
@@ -53,7 +54,7 @@ def run_simulate(
         segments, noise, wheel_base,
         runs=runs, partitions=partitions, seed=seed, pose0=pose0, cov0=cov0,
         systematic=systematic, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
-        scheduler=scheduler, progress=progress,
+        scheduler=scheduler, progress=progress, compass_period=compass_period,
     )
     result["theory"] = add_ros_pose_covariance(result["theory"])
     return result
