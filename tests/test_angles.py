@@ -242,6 +242,25 @@ def test_numba_scalar_versions_give_the_python_values():
         assert series_fn(float(u)) == sin_cos_sinc_series(float(u))
 
 
+def test_branch_free_short_series_give_the_dispatchers_bits_below_short_below():
+    """sin_cos_sinc_short / sinc_derivative_short are what the vectorised kernel lanes
+    use where every angle is below SHORT_BELOW: there they must be the dispatchers' bits
+    (which the tests above check against mpmath), in Python and compiled alike."""
+    u = np.concatenate([np.random.default_rng(5).uniform(-SHORT_BELOW, SHORT_BELOW, 2000),
+                        [0.0, -0.0, 1e-300, np.nextafter(SHORT_BELOW, 0.0)]])
+    fns = [(angles.sin_cos_sinc_short, angles.sinc_derivative_short)]
+    try:
+        from odomkit import jit
+
+        fns.append((jit.njit(angles.sin_cos_sinc_short), jit.njit(angles.sinc_derivative_short)))
+    except ImportError:  # numba is optional
+        pass
+    for trio, deriv in fns:
+        for x in u.tolist():
+            assert trio(x) == sin_cos_sinc(x)
+            assert deriv(x) == sinc_derivative_scalar(x, 0.0, 0.0)
+
+
 def test_angles_does_not_import_numba():
     code = "import sys, odomkit.angles; assert 'numba' not in sys.modules"
     subprocess.run([sys.executable, "-c", code], check=True)

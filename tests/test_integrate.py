@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import quad
 
 from odomkit.errors import ModelError
-from odomkit.integrate import dead_reckon, dead_reckon_direct_heading, path_length
+from odomkit.integrate import dead_reckon, dead_reckon_direct_heading, dead_reckon_wheels, path_length
 from odomkit.kinematics import diff_body_steps
 
 METHODS = ("exact", "midpoint", "euler")
@@ -129,3 +129,94 @@ def test_nan_step_is_rejected_with_its_index():
     dd = np.array([0.1, np.nan, 0.1])
     with pytest.raises(ModelError, match=r"dd\[1\] is nan"):
         dead_reckon(dd, np.zeros(3))
+
+
+# --- the compiled pass (numba): its stages, tiers, streaming stores and checks ----------
+
+def regime_steps(rng, per_chunk=1024):
+    """Steps whose turns need each tier of the kernel in turn, chunk by chunk: small
+    (|Δθ/2| < 0.04: short series), medium (< 1: full series), huge (libm); the last chunk
+    is partial."""
+    small = rng.normal(0.0, 0.01, per_chunk)
+    medium = rng.uniform(-0.6, 0.6, per_chunk)
+    huge = rng.normal(0.0, 0.05, per_chunk)
+    huge[::50] = rng.choice([-3.0, 2.5], huge[::50].size)
+    dth = np.concatenate([small, medium, huge, small[:300]])
+    dd = rng.normal(0.01, 0.02, dth.size)
+    return dd, dth
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_every_kernel_tier_agrees_with_numpy(method):
+    pytest.importorskip("numba")
+    dd, dth = regime_steps(np.random.default_rng(4))
+    a = dead_reckon(dd, dth, (0.3, -0.2, 1.0), method, engine="numpy")
+    b = dead_reckon(dd, dth, (0.3, -0.2, 1.0), method, engine="numba")
+    assert np.allclose(a, b, rtol=0, atol=dd.size * 1e-15)
+    assert np.array_equal(a[:, 2], b[:, 2])
+
+
+@pytest.mark.parametrize("engine", ["numpy", "numba"])
+def test_wheels_equal_body_steps_then_dead_reckon(engine):
+    """The fused pass forms (Δd, Δθ) as kinematics.diff_body_steps does: the same
+    headings bit for bit, positions to rounding; ticks with a scale give the same as
+    metres."""
+    if engine == "numba":
+        pytest.importorskip("numba")
+    rng = np.random.default_rng(5)
+    ticks_l = rng.integers(-5, 60, 3000).astype(float)
+    ticks_r = rng.integers(-5, 60, 3000).astype(float)
+    scale_l, scale_r, base = 2.1e-4, 1.9e-4, 0.37
+    dd, dth = diff_body_steps(ticks_l * scale_l, ticks_r * scale_r, base)
+    want = dead_reckon(dd, dth, (1.0, 2.0, -0.5), "exact", engine="numpy")
+    got = dead_reckon_wheels(ticks_l, ticks_r, base, (1.0, 2.0, -0.5), "exact", engine,
+                             scale_left=scale_l, scale_right=scale_r)
+    assert np.array_equal(got[:, 2], want[:, 2])
+    assert np.allclose(got, want, rtol=0, atol=3000 * 1e-15)
+    metres = dead_reckon_wheels(ticks_l * scale_l, ticks_r * scale_r, base, (1.0, 2.0, -0.5),
+                                "exact", engine)
+    assert np.array_equal(metres[:, 2], want[:, 2])
+
+
+def test_long_log_with_streaming_stores_closes_the_circle():
+    """Above STREAM_FROM the poses are written with non-temporal stores: a constant-
+    curvature log must still land on the circle's closed form, into ``out`` in place."""
+    pytest.importorskip("numba")
+    from odomkit._integrate_numba import STREAM_FROM
+
+    n = STREAM_FROM + 777
+    left, right = np.full(n, 1e-3), np.full(n, 1.2e-3)
+    out = np.full((n + 1, 3), np.nan)
+    got = dead_reckon_wheels(left, right, 0.5, (0.0, 0.0, 0.0), "exact", "numba", out=out)
+    assert got is out
+    travel, turn = n * 1.1e-3, n * 0.2e-3 / 0.5
+    # n·ε of rounding in the sums, times the size of the coordinates (~r = 5.5 m)
+    assert np.allclose(out[-1], arc_end((0.0, 0.0, 0.0), travel, turn), rtol=0, atol=n * 1e-14)
+    k = np.arange(0, n + 1, 9973)
+    radius = travel / turn
+    assert np.allclose(np.hypot(out[k, 0], out[k, 1] - radius), radius, rtol=0, atol=n * 1e-14)
+
+
+def test_kernel_path_names_the_non_finite_input():
+    """The kernel path checks the inputs only when the last pose is not finite; it must
+    still name the first bad element, and a finite log that overflows is no error."""
+    pytest.importorskip("numba")
+    dd, dth = np.full(30_000, 0.01), np.zeros(30_000)
+    dd[12_345] = np.nan
+    with pytest.raises(ModelError, match=r"dd\[12345\] is nan"):
+        dead_reckon(dd, dth, engine="numba")
+    right = np.full(30_000, 0.01)
+    right[29_999] = -np.inf
+    with pytest.raises(ModelError, match=r"d_right\[29999\] is -inf"):
+        dead_reckon_wheels(np.full(30_000, 0.01), right, 0.4, engine="numba")
+    huge = dead_reckon(np.full(30_000, 1e305), np.zeros(30_000), engine="numba")
+    assert np.isinf(huge[-1, 0])
+
+
+def test_out_must_match():
+    with pytest.raises(ModelError, match="out must be"):
+        dead_reckon(np.ones(5), np.zeros(5), out=np.empty((5, 3)))
+    with pytest.raises(ModelError, match="out must be"):
+        dead_reckon_wheels(np.ones(5), np.ones(5), 0.4, out=np.empty((6, 3), dtype=np.float32))
+    with pytest.raises(ModelError, match="wheel_base"):
+        dead_reckon_wheels(np.ones(5), np.ones(5), 0.0)

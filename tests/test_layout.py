@@ -46,8 +46,6 @@ PENDING: Mapping[str, str] = {
     "io/halmstad.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/jsonfile.py": "issue 9: new module; test module after the refactor",
     "io/optiodom.py": "issue 9: tested in tests/io/test_readers.py for now",
-    "io/robotfile.py": "issue 9: tested in tests/io/test_readers.py for now",
-    "io/table.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/trackio.py": "issue 9: tested in tests/test_cli_track.py for now",
     "io/umbmark_errors.py": "issue 9: new module; tested through the umbmark CLI for now",
     "plot.py": "issue 9: needs matplotlib; test module after the refactor",
@@ -56,7 +54,6 @@ PENDING: Mapping[str, str] = {
     "simulate/experiment.py": "issue 9: tested in tests/simulate/test_against_predict.py for now",
     "simulate/plan.py": "issue 9: tested through tests/simulate/test_engine.py for now",
     "workflows/demo.py": "issue 9: new module; test module after the refactor",
-    "workflows/logs.py": "issue 9: new module; tested through the CLI tests for now",
 }
 
 

@@ -41,9 +41,12 @@ Series and the one threshold
     arithmetic and the values against mpmath at 50 digits.
 
 Scalar versions for numba
-    :func:`sin_cos_sinc`, :func:`sin_cos_sinc_series` and :func:`sinc_derivative_scalar`
-    are plain Python on floats, with the same tables, threshold and Horner order as the
-    array functions (so the same bits where both run without FMA contraction). This
+    :func:`sin_cos_sinc` and :func:`sinc_derivative_scalar` are plain Python on floats,
+    with the same tables, threshold and Horner order as the array functions (so the same
+    bits where both run without FMA contraction). Their branch-free parts,
+    :func:`sin_cos_sinc_series`, :func:`sin_cos_sinc_short` and
+    :func:`sinc_derivative_short`, let a kernel's loop vectorise where it knows the
+    range of its angles. This
     module never imports numba; the kernels compile these functions with
     :func:`odomkit.jit.njit` (``inline="always"``).
 """
@@ -68,9 +71,11 @@ __all__ = [
     "TWO_PI",
     "sin_cos_sinc",
     "sin_cos_sinc_series",
+    "sin_cos_sinc_short",
     "sinc",
     "sinc_derivative",
     "sinc_derivative_scalar",
+    "sinc_derivative_short",
     "sinc_half",
     "sinc_half_derivative",
     "sinc_half_pair",
@@ -326,6 +331,31 @@ def sin_cos_sinc_series(phi: float) -> tuple[float, float, float]:
     for a in _COS_FULL[1:]:
         c = c * p2 + a
     return phi * s, c, s
+
+
+def sin_cos_sinc_short(phi: float) -> tuple[float, float, float]:
+    """sin φ, cos φ, sin φ/φ from the :data:`SHORT_TERMS` series terms; only for
+    |φ| < :data:`SHORT_BELOW`, where it gives the bits of :func:`sin_cos_sinc`.
+    Branch-free, so a loop over it vectorises (the kernels check the range per block)."""
+    p2 = phi * phi
+    s = _SINC_SHORT[0]
+    for a in _SINC_SHORT[1:]:
+        s = s * p2 + a
+    c = _COS_SHORT[0]
+    for a in _COS_SHORT[1:]:
+        c = c * p2 + a
+    return phi * s, c, s
+
+
+def sinc_derivative_short(u: float) -> float:
+    """d/du sin(u)/u from the :data:`SHORT_TERMS` series terms; only for
+    |u| < :data:`SHORT_BELOW`, where it gives the bits of :func:`sinc_derivative_scalar`.
+    Branch-free, like :func:`sin_cos_sinc_short`."""
+    v = u * u
+    d = _DSINC_SHORT[0]
+    for a in _DSINC_SHORT[1:]:
+        d = d * v + a
+    return u * d
 
 
 def sin_cos_sinc(phi: float) -> tuple[float, float, float]:

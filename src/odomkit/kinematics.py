@@ -203,15 +203,23 @@ class BodySteps:
         return int(self.dd.shape[0])
 
 
-def _travel(log: OdometryLog, scale: float, prefix: str = "") -> NDArray[np.float64]:
-    """Per-step distance [m] from ``ticks``/``dist`` increments or a ``speed`` rate."""
+def _travel(log: OdometryLog, m_per_tick: float, correction: float = 1.0,
+            prefix: str = "") -> NDArray[np.float64]:
+    """Per-step distance [m] from ``ticks``/``dist`` increments or a ``speed`` rate.
+
+    Only tick counts are converted by ``m_per_tick`` [m/tick]; ``dist`` [m] and ``speed``
+    [m/s] are metres already, whatever encoder the robot describes (issue 10: a metre log
+    read with a robot file that has an encoder resolution was scaled by ~1e-4). The
+    dimensionless calibration ``correction`` (c_left, c_right, c_scale;
+    Borenstein–Feng eq. 4.30–4.31) applies to every form: it corrects the wheel, not the unit.
+    """
     suffix = f"_{prefix}" if prefix else ""
     if f"ticks{suffix}" in log.channels:
-        return log.channels[f"ticks{suffix}"][1:] * scale
+        return log.channels[f"ticks{suffix}"][1:] * (correction * m_per_tick)
     if f"dist{suffix}" in log.channels:
-        return log.channels[f"dist{suffix}"][1:] * scale
+        return log.channels[f"dist{suffix}"][1:] * correction
     if not prefix and "speed" in log.channels:
-        return log.channels["speed"][:-1] * np.diff(log.t) * scale
+        return log.channels["speed"][:-1] * np.diff(log.t) * correction
     wanted = f"ticks{suffix} or dist{suffix}" + ("" if prefix else " or speed")
     raise InputError(f"log has no {wanted} channel (it has {sorted(log.channels)})",
                      source=log.source)
@@ -228,14 +236,14 @@ def _steer_per_step(log: OdometryLog) -> NDArray[np.float64]:
 
 
 def _diff_steps(robot: DiffDrive, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
-    d_left = _travel(log, robot.scale_left, "left")
-    d_right = _travel(log, robot.scale_right, "right")
+    d_left = _travel(log, robot.m_per_tick_left, robot.c_left, "left")
+    d_right = _travel(log, robot.m_per_tick_right, robot.c_right, "right")
     dd, dtheta = diff_body_steps(d_left, d_right, robot.effective_wheel_base)
     return BodySteps(dd, dtheta, dt, {"d_left": d_left, "d_right": d_right}, robot)
 
 
 def _tricycle_steps(robot: Tricycle, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
-    travel = _travel(log, robot.scale)
+    travel = _travel(log, robot.m_per_tick, robot.c_scale)
     steer = _steer_per_step(log) + robot.steering_offset
     dd, dtheta = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
     return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)

@@ -85,7 +85,9 @@ class OdometryLog:
         every = validate.positive_int(every, "decimation", error=partial(InputError, source=self.source))
         if every == 1:
             return self
-        keep = np.arange(0, len(self), every)
+        # Beyond the log's length every step keeps row 0 alone; capping keeps the index an
+        # int64 (np.arange with a Python int above 2**63 makes an object array).
+        keep = np.arange(0, len(self), min(every, max(len(self), 1)))
         channels = {}
         for name, values in self.channels.items():
             if name in INCREMENT_CHANNELS:

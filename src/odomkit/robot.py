@@ -10,11 +10,14 @@ robot                      channels
 =========================  ======================================================
 :class:`DiffDrive`         ``ticks_left``, ``ticks_right`` (increments), or
                            ``dist_left``, ``dist_right`` (m increments)
-:class:`Tricycle`          ``ticks`` (traction-wheel increments) or ``speed`` (m/s),
+:class:`Tricycle`          ``ticks``/``dist`` (traction-wheel increments) or ``speed`` (m/s),
                            plus ``steer`` (rad, positive = left/CCW)
 :class:`GyroOdometry`      ``ticks``/``dist``/``speed`` plus ``yaw_rate`` (rad/s)
 :class:`CompassOdometry`   ``ticks``/``dist``/``speed`` plus ``heading`` (rad)
 =========================  ======================================================
+
+Only ``ticks*`` channels are converted by ``m_per_tick*``; ``dist*`` [m] and ``speed``
+[m/s] are metres already. The calibration factors (``c_*``) apply to all three.
 """
 
 from __future__ import annotations
@@ -63,10 +66,11 @@ class DiffDrive:
         Nominal distance b between the wheel contact points [m].
     m_per_tick_left, m_per_tick_right : float
         Nominal distance per encoder tick of each wheel [m], Borenstein–Feng eq. (2.1).
-        Use 1.0 when the log already holds distances in metres.
+        It converts ``ticks_*`` channels only: ``dist_*`` channels are metres already.
     c_left, c_right : float
         Dimensionless wheel-scale corrections (Borenstein–Feng eq. 4.30–4.31): the
-        distance a wheel travelled is ``c · m_per_tick · ticks``.
+        distance a wheel travelled is ``c · m_per_tick · ticks`` (``c · dist`` for a
+        channel in metres).
     c_wheel_base : float
         Dimensionless wheel-base correction: the effective wheel base is
         ``c_wheel_base · wheel_base`` (Borenstein–Feng eq. 4.32, b_new = E_b·b_nominal).
@@ -132,11 +136,13 @@ class Tricycle:
     wheel_to_axle : float
         Distance L from the front wheel contact point to the rear axle centre [m].
     m_per_tick : float
-        Traction-wheel distance per tick [m] (1.0 for a ``speed`` channel in m/s).
+        Traction-wheel distance per tick [m]; converts a ``ticks`` channel only
+        (``dist`` [m] and ``speed`` [m/s] are metres already).
     steering_offset : float
         Added to the measured steering angle [rad]: α = α_measured + steering_offset.
     c_scale : float
-        Dimensionless traction-wheel scale correction.
+        Dimensionless traction-wheel scale correction (applies to ticks, ``dist`` and
+        ``speed`` alike).
     """
 
     type_name: ClassVar[str] = "tricycle"
@@ -166,7 +172,8 @@ class GyroOdometry:
     Parameters
     ----------
     m_per_tick : float
-        Distance per tick [m] (1.0 for a ``speed`` channel in m/s or ``dist`` in m).
+        Distance per tick [m]; converts a ``ticks`` channel only (``dist`` [m] and
+        ``speed`` [m/s] are metres already).
     gyro_bias : float
         Subtracted from the measured yaw rate [rad/s].
     gyro_scale : float
@@ -194,7 +201,8 @@ class CompassOdometry:
     Parameters
     ----------
     m_per_tick : float
-        Distance per tick [m] (1.0 for a ``speed`` channel in m/s or ``dist`` in m).
+        Distance per tick [m]; converts a ``ticks`` channel only (``dist`` [m] and
+        ``speed`` [m/s] are metres already).
     heading_offset : float
         Added to the measured heading [rad].
     """

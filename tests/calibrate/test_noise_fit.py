@@ -181,3 +181,109 @@ def test_bad_input():
         fit_wheel_noise(np.ones((5, 3)), A, Bc, components=("x", "z"))
     with pytest.raises(OdomkitError, match="2x2"):
         ellipse_points(np.eye(3))
+
+
+# --- issue 10, item 6: say when the data cannot identify the fit -----------------------
+
+
+def forward_spin_back(length: float = 5.0) -> tuple[np.ndarray, np.ndarray]:
+    """Forward ``length``, spin 180° on the spot, forward ``length`` back to the start."""
+    n, m = int(round(length / STEP)), 60
+    spin = np.full(m, np.pi * B / 2 / m)   # each wheel travels π·B/2 for a half turn
+    straight = np.full(n, STEP)
+    return np.r_[straight, -spin, straight], np.r_[straight, spin, straight]
+
+
+def end_errors_on(path: tuple[np.ndarray, np.ndarray], k_left: float, k_right: float, runs: int,
+                  rng: np.random.Generator) -> np.ndarray:
+    """Chong–Kleeman eq. (4) noise on the wheels of ``path``: end of truth minus odometry."""
+    dl, dr = path
+    odo_end = dead_reckon(*diff_body_steps(dl, dr, B))[-1]
+    errs = []
+    for _ in range(runs):
+        tl = dl + k_left * np.sqrt(np.abs(dl)) * rng.standard_normal(dl.size)
+        tr = dr + k_right * np.sqrt(np.abs(dr)) * rng.standard_normal(dr.size)
+        errs.append(dead_reckon(*diff_body_steps(tl, tr, B))[-1] - odo_end)
+    return np.array(errs)
+
+
+def test_a_well_posed_fit_has_no_warnings():
+    rng = np.random.default_rng(11)
+    A, Bc = wheel_noise_basis(*forward_and_back(), B)
+    fit = fit_wheel_noise(noisy_end_errors(K_LEFT, K_RIGHT, 60, rng), A, Bc)
+    assert fit.warnings == ()
+    assert fit.to_dict()["warnings"] == []
+
+
+def test_forward_spin_back_cannot_tell_the_wheels_apart():
+    # After the half turn each wheel drives the other's side of the return leg: the end
+    # error depends (almost) on k_L² + k_R² only.
+    rng = np.random.default_rng(4)
+    path = forward_spin_back()
+    A, Bc = wheel_noise_basis(*path, B)
+    fit = fit_wheel_noise(end_errors_on(path, K_LEFT, K_RIGHT, 60, rng), A, Bc)
+    assert fit.k_correlation < -0.99
+    assert any("cannot tell k_left from k_right" in w for w in fit.warnings), fit.warnings
+    assert fit.to_dict()["warnings"] == list(fit.warnings)
+
+
+def test_one_component_cannot_separate_two_variances():
+    # One number per run carries one variance: the two k's are exactly confounded.
+    rng = np.random.default_rng(6)
+    A, Bc = wheel_noise_basis(*forward_and_back(), B)
+    fit = fit_wheel_noise(noisy_end_errors(K_LEFT, K_RIGHT, 40, rng), A, Bc,
+                          components=("theta",))
+    assert fit.k_correlation == pytest.approx(-1.0, abs=1e-9)
+    assert any("cannot tell k_left from k_right" in w for w in fit.warnings)
+
+
+@pytest.mark.slow
+def test_k_correlation_matches_the_scatter_of_repeated_fits():
+    # The reported correlation (expected Fisher information of k_L², k_R²) against the
+    # correlation of the estimates over 150 independent experiments on an arc, where the
+    # two wheels are partly confounded (ρ ≈ −0.88). Standard error of a sample correlation
+    # of 150 pairs near −0.9: (1 − ρ²)/√150 ≈ 0.016.
+    rng = np.random.default_rng(21)
+    n = 100
+    path = (np.full(n, 0.8 * STEP), np.full(n, 1.2 * STEP))
+    A, Bc = wheel_noise_basis(*path, B)
+    kl, kr = 0.002, 0.002
+    q, rho = [], []
+    for _ in range(150):
+        fit = fit_wheel_noise(end_errors_on(path, kl, kr, 100, rng), A, Bc, mean=np.zeros(3))
+        q.append((fit.k_left**2, fit.k_right**2))
+        rho.append(fit.k_correlation)
+    q_arr = np.array(q)
+    empirical = np.corrcoef(q_arr.T)[0, 1]
+    assert np.median(rho) == pytest.approx(empirical, abs=0.05)
+
+
+def test_runs_beyond_the_first_order_regime_warn():
+    # k = 0.03 m^½ over 10 m with B = 0.5 m: σθ ≈ √(2·10)·0.03/0.5 ≈ 0.27 rad at the turn
+    # back and ≈ 0.38 rad at the end (Chong–Kleeman eq. 27): the first-order likelihood
+    # no longer holds.
+    rng = np.random.default_rng(8)
+    A, Bc = wheel_noise_basis(*forward_and_back(), B)
+    fit = fit_wheel_noise(noisy_end_errors(0.03, 0.03, 40, rng), A, Bc)
+    sigma_theta = np.sqrt(fit.k_left**2 * A[2, 2] + fit.k_right**2 * Bc[2, 2])
+    assert sigma_theta > 0.3
+    assert any("first-order" in w for w in fit.warnings), fit.warnings
+
+
+def test_an_unbounded_profile_gives_an_open_interval_not_a_crash():
+    # The left wheel never moves: the runs say nothing about k_left, whose profile
+    # likelihood is flat and never crosses the χ² level. Its interval is open above.
+    rng = np.random.default_rng(0)
+    path = (np.zeros(200), np.full(200, 0.01))
+    A, Bc = wheel_noise_basis(*path, B)
+    fit = fit_wheel_noise(end_errors_on(path, 0.0, 1e-3, 20, rng), A, Bc)
+    assert fit.ci_left[1] == np.inf
+    assert fit.to_dict()["ci_left"][1] == np.inf   # JSON writes it as null
+    assert any("k_left" in w and "bound" in w for w in fit.warnings), fit.warnings
+    assert fit.ci_right[0] < 1e-3 < fit.ci_right[1]
+
+
+def test_identical_errors_are_refused_with_a_message():
+    A, Bc = wheel_noise_basis(*forward_and_back(), B)
+    with pytest.raises(InputError, match="spread"):
+        fit_wheel_noise(np.tile([0.01, 0.02, 0.003], (5, 1)), A, Bc)

@@ -129,14 +129,14 @@ def test_runs_form_passes_every_run_to_the_workflow(tmp_path, capsys, monkeypatc
         def to_dict(self):
             return {"e_max_syst": 0.5}
 
-    def fake(runs, robot, side):
-        calls.append((runs, robot, side))
+    def fake(runs, robot, side, log_options):
+        calls.append((runs, robot, side, log_options))
         return Fake()
 
     monkeypatch.setattr(umbmark_workflow, "umbmark_from_files", fake)
     assert main(["umbmark", "--runs", "a.csv", "b.csv", "--runs", "c.csv", "--robot", "r.toml",
-                 "--side", "0.75", "--json"]) == 0
+                 "--side", "0.75", "--decimate", "2", "--json"]) == 0
     assert json.loads(capsys.readouterr().out) == {"e_max_syst": 0.5}
-    (runs, robot, side), = calls
+    (runs, robot, side, options), = calls
     assert sorted(p.name for p in runs) == ["a.csv", "b.csv", "c.csv"]
-    assert robot.name == "r.toml" and side == 0.75
+    assert robot.name == "r.toml" and side == 0.75 and options.decimate == 2

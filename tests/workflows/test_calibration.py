@@ -121,10 +121,47 @@ def test_bad_requests(files):
         _calibrate(runs, robot_path, ros_yaml=tmp / "c.yaml")
     assert not (tmp / "c.yaml").exists()
     with pytest.raises(InputError, match="--side"):
-        _calibrate(runs, robot_path, method="umbmark")
+        calibrate_files(runs, robot_path, method="umbmark", log_options=LogOptions(columns=COLUMNS))
     with pytest.raises(ModelError, match="--method"):
         _calibrate(runs, robot_path, method="guess")
     with pytest.raises(InputError, match="no such file"):
         _calibrate([tmp / "missing.csv"], robot_path)
     with pytest.raises(InputError, match="no such robot file"):
         _calibrate(runs, tmp / "missing.toml")
+
+
+# --- issue 10, item 8: flags that do not apply are refused, outputs checked up front ----
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"method": "umbmark", "side": 0.75, "source": "trajectory"}, "--from applies to --method exact"),
+    ({"method": "umbmark", "side": 0.75, "heading_weight": 0.5},
+     "--heading-weight applies to --method exact"),
+    ({"wheel_radius": 0.04}, "--wheel-radius applies to --ros-yaml"),
+])
+def test_flags_that_do_not_apply_are_refused(files, kwargs, message):
+    tmp, runs, robot_path = files
+    with pytest.raises(InputError, match=message):
+        calibrate_files(runs, robot_path, log_options=LogOptions(columns=COLUMNS), **kwargs)
+
+
+def test_a_wheel_radius_that_conflicts_with_the_robot_file(files):
+    tmp, runs, robot_path = files
+    sized = tmp / "sized.toml"
+    sized.write_text(ROBOT_TOML.replace("m_per_tick = 1.0", "wheel_diameter = 0.08"), encoding="utf-8")
+    with pytest.raises(InputError, match="--wheel-radius 0.05 m conflicts with the robot file"):
+        _calibrate(runs, sized, ros_yaml=tmp / "c.yaml", wheel_radius=0.05)
+    assert not (tmp / "c.yaml").exists()
+    # the robot file's own radius is the default, and agreeing with it is fine
+    for radius in (None, 0.04):
+        out = tmp / f"c{radius}.yaml"
+        _calibrate(runs, sized, ros_yaml=out, wheel_radius=radius)
+        params = yaml.safe_load(out.read_text(encoding="utf-8"))
+        assert params["diff_drive_controller"]["ros__parameters"]["wheel_radius"] == pytest.approx(0.04)
+
+
+def test_outputs_are_checked_before_the_runs_are_read(files):
+    tmp, runs, robot_path = files
+    # the runs do not exist: the output problem is reported first, nothing is computed
+    with pytest.raises(InputError, match="--out-robot: no such folder"):
+        _calibrate([tmp / "missing.csv"], robot_path, out_robot=tmp / "nodir" / "r.toml")

@@ -267,7 +267,11 @@ def calibrate_exact(
         q0 = np.asarray(np.linalg.lstsq(prob.T, p0 - prob.offset, rcond=None)[0], dtype=np.float64)
     else:
         q0 = p0.copy()
-    n_res = prob.residuals(q0).size
+    r0 = prob.residuals(q0)
+    n_res = r0.size
+    if not (np.all(np.isfinite(r0)) and np.all(np.isfinite(prob.jacobian(q0)))):
+        raise ModelError("the pose residuals at the robot's starting parameters are not finite: "
+                         "the robot file's values overflow the dead reckoning (check their units)")
     if n_res <= q0.size:
         raise InputError(
             f"{n_res} residuals cannot determine {q0.size} parameters: give more runs "
@@ -278,6 +282,9 @@ def calibrate_exact(
     if not sol.success:
         notes.append(f"least_squares: {sol.message}")
     J = sol.jac
+    if not (np.all(np.isfinite(sol.x)) and np.all(np.isfinite(J)) and np.isfinite(sol.cost)):
+        raise ModelError("the calibration diverged to non-finite parameters or residuals; check the "
+                         "channel assignment (left/right) and the units of the robot file")
     dof = n_res - q0.size
     var_res = float(2.0 * sol.cost / dof)
     cov_q = var_res * np.linalg.pinv(J.T @ J)

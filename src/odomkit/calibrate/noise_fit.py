@@ -23,11 +23,25 @@ linear in the wheel errors; consider ``components=("y", "theta")`` on long paths
 
 Confidence intervals are **profile-likelihood** intervals: {k : 2·(ℓ_max − ℓ_profile(k)) ≤
 χ²₁(level)}; they respect the k ≥ 0 boundary, which Fisher-information intervals do not.
+Where the profile never rises above the χ² level (runs that say nothing about one wheel)
+the interval is open: its upper end is ``inf``.
+
+When the data cannot identify the fit, the result says so in ``warnings``:
+
+* the two k's are confounded when the estimates of k_L² and k_R² correlate beyond
+  :data:`CONFOUNDED_CORRELATION` (expected Fisher information of the Gaussian model,
+  I_jk = ½ Σ_i tr(C_i⁻¹ ∂_j C_i C_i⁻¹ ∂_k C_i), e.g. Kay, *Fundamentals of Statistical
+  Signal Processing I*, eq. 3.31). On a forward–spin–back path each wheel drives the other's
+  side of the return leg and ρ ≈ −0.9997: only k_L² + k_R² is measured, and each interval
+  alone means little;
+* the runs leave the first-order regime when the fitted end-heading spread σθ exceeds
+  :data:`FIRST_ORDER_SIGMA_THETA` (the along-track error's second-order term D·σθ²/2 is then
+  no longer small, and the fitted k comes out too large).
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -45,9 +59,20 @@ from odomkit.kinematics import Method, diff_body_jacobian, diff_body_steps, step
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive
 
-__all__ = ["fit_wheel_noise", "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
+__all__ = ["CONFOUNDED_CORRELATION", "FIRST_ORDER_SIGMA_THETA", "fit_wheel_noise",
+           "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
 
 _AXES = {"x": 0, "y": 1, "theta": 2}
+
+#: |correlation| of the k_L², k_R² estimates beyond which the two are not told apart
+#: (standard errors inflated by 1/√(1 − ρ²) > 7 against a fit of either k alone).
+CONFOUNDED_CORRELATION = 0.99
+#: End-heading standard deviation [rad] beyond which the first-order likelihood is wrong.
+FIRST_ORDER_SIGMA_THETA = 0.3
+# The upper end of an interval is searched up to this factor times the k that alone
+# explains the whole observed spread: a k predicting a spread 10⁶ times the observed one
+# that is still inside the interval means the profile never crosses.
+_OPEN_BOUND_FACTOR = 1e3
 
 
 def wheel_noise_basis(
@@ -110,7 +135,8 @@ class WheelNoiseFit:
     k_left, k_right : float
         ML (REML with an estimated mean) estimates [m^½].
     ci_left, ci_right : tuple of float
-        Profile-likelihood confidence intervals at ``level`` [m^½].
+        Profile-likelihood confidence intervals at ``level`` [m^½]; the upper end is
+        ``inf`` when the data do not bound that k from above (see ``warnings``).
     level : float
     mean : ndarray, shape (d,)
         Estimated (or given) mean end error.
@@ -124,6 +150,14 @@ class WheelNoiseFit:
     n_runs : int
     errors : ndarray, shape (n, d), optional
         The end errors the fit used (for plotting them against the ellipses).
+    k_correlation : float
+        Correlation of the k_L² and k_R² estimates (expected Fisher information at the
+        fit); NaN when the runs carry no information on one of them.
+    sigma_theta : float
+        Largest fitted end-heading standard deviation over the runs [rad].
+    warnings : tuple of str
+        Why the fit may not mean what it seems (confounded k's, an open interval, runs
+        beyond the first-order regime); empty when none applies.
     """
 
     k_left: float
@@ -138,15 +172,19 @@ class WheelNoiseFit:
     loglik: float
     n_runs: int
     errors: NDArray[np.float64] | None = None
+    k_correlation: float = float("nan")
+    sigma_theta: float = float("nan")
+    warnings: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, Any]:
+        """The ``--json`` object (an open interval end ``inf`` is written as null)."""
         return {
             "k_left": self.k_left, "k_right": self.k_right,
             "ci_left": list(self.ci_left), "ci_right": list(self.ci_right),
             "level": self.level, "ci_method": "profile likelihood",
             "mean": self.mean.tolist(), "components": list(self.components),
             "cov_fitted": self.cov_fitted.tolist(), "cov_empirical": self.cov_empirical.tolist(),
-            "loglik": self.loglik, "n_runs": self.n_runs,
+            "loglik": self.loglik, "n_runs": self.n_runs, "warnings": list(self.warnings),
         }
 
     def ellipse(self, axes: tuple[str, str] = ("x", "y"), prob: float = 0.95,
@@ -255,20 +293,59 @@ def fit_wheel_noise(
     except KeyError:
         raise ModelError(f"components must be among {list(_AXES)}, got {list(components)}") from None
     shared = np.ndim(cov_left) == 2 and np.ndim(cov_right) == 2
-    A = np.broadcast_to(np.asarray(cov_left, dtype=float), (n, 3, 3))[:, idx][:, :, idx]
-    B = np.broadcast_to(np.asarray(cov_right, dtype=float), (n, 3, 3))[:, idx][:, :, idx]
+    A_full = np.broadcast_to(np.asarray(cov_left, dtype=float), (n, 3, 3))
+    B_full = np.broadcast_to(np.asarray(cov_right, dtype=float), (n, 3, 3))
+    A = A_full[:, idx][:, :, idx]
+    B = B_full[:, idx][:, :, idx]
     e = e[:, idx]
     mu_known = None if mean is None else np.asarray(mean, dtype=float).reshape(-1)
     if mu_known is not None and mu_known.shape != (len(idx),):
         raise InputError(f"mean must have {len(idx)} components, got {mu_known.shape}")
     if mu_known is None and n < 3:
         raise InputError("with an estimated mean, fitting k_L, k_R needs at least three runs")
-    lik = _Likelihood(e, A, B, mu_known, shared)
     # Scale q so both coordinates are O(1): match each basis's trace to the observed spread.
-    spread = np.trace(np.cov(e.T).reshape(len(idx), len(idx)))
-    qs = np.array([spread / max(np.trace(A.mean(axis=0)), 1e-300),
-                   spread / max(np.trace(B.mean(axis=0)), 1e-300)])
+    spread = float(np.trace(np.cov(e.T).reshape(len(idx), len(idx))))
+    if mu_known is not None and not spread > 0:
+        spread = float(np.sum((e - mu_known) ** 2) / n)
+    if not np.isfinite(spread):
+        raise ModelError(f"the spread of the runs' end errors overflows ({spread!r}): the errors "
+                         "are out of range (check units and the robot file)")
+    if not spread > 0:
+        raise InputError("the runs' end errors have no spread to fit noise to: are the runs "
+                         "copies of one log?")
+    traces = np.array([np.trace(A.mean(axis=0)), np.trace(B.mean(axis=0))])
+    if not (np.all(np.isfinite(traces)) and traces.max() > 0):
+        raise ModelError("the runs' wheel travel predicts no error in the fitted components "
+                         f"{list(components)}: nothing to fit k_L, k_R to")
+    # A wheel whose noise does not reach the components (it never moves) has a zero
+    # basis; floor its scale so that its (unidentified) coordinate stays finite.
+    qs = spread / np.maximum(traces, 1e-12 * traces.max())
+    lik = _Likelihood(e, A, B, mu_known, shared)
+    with np.errstate(all="ignore"):
+        q_hat, ll_max, mu_hat = _maximise(lik, qs)
+        identified = traces > 0
+        q_hat = np.where(identified, q_hat, 0.0)  # the likelihood is flat in that k
+        crit = float(ndtri(0.5 * (1.0 + level)) ** 2)  # χ²₁ quantile = (z_{(1+level)/2})²
+        ci = [_profile_interval(lik, which, q_hat, qs, ll_max, crit) for which in (0, 1)]
+        rho = _k_correlation(A, B, q_hat)
+        sigma_theta = float(np.sqrt(np.max(q_hat[0] * A_full[:, 2, 2] + q_hat[1] * B_full[:, 2, 2])))
+    notes = _warnings(rho, identified, ci, sigma_theta, level)
 
+    ddof = 1 if mu_known is None else 0
+    r = e - (mu_hat if mu_known is None else mu_known)
+    cov_emp = r.T @ r / (n - ddof)
+    return WheelNoiseFit(
+        k_left=float(np.sqrt(q_hat[0])), k_right=float(np.sqrt(q_hat[1])),
+        ci_left=ci[0], ci_right=ci[1], level=level, mean=np.asarray(mu_hat),
+        cov_fitted=q_hat[0] * A.mean(axis=0) + q_hat[1] * B.mean(axis=0), cov_empirical=cov_emp,
+        components=tuple(components), loglik=ll_max, n_runs=n, errors=e,
+        k_correlation=rho, sigma_theta=sigma_theta, warnings=tuple(notes),
+    )
+
+
+def _maximise(lik: _Likelihood, qs: NDArray[np.float64]
+              ) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+    """(q̂, ℓ_max, μ̂): the (restricted) likelihood maximised over q = qs·exp(z)."""
     def nll(z: NDArray[np.float64]) -> float:
         # log-parametrised: q = qs·exp(z) > 0; the boundary k = 0 is approached as z → −∞.
         val = lik(np.exp(np.clip(z, -60.0, 60.0)) * qs)[0]
@@ -283,39 +360,100 @@ def fit_wheel_noise(
     assert best is not None
     q_hat = np.exp(np.clip(best.x, -60.0, 60.0)) * qs
     ll_max, mu_hat = lik(q_hat)
-    crit = float(ndtri(0.5 * (1.0 + level)) ** 2)  # χ²₁ quantile = (z_{(1+level)/2})²
+    if not np.isfinite(ll_max):
+        raise ModelError("the likelihood of k_L, k_R is not finite anywhere the fit looked: the "
+                         "runs' errors or wheel travel are out of range (check units and the robot file)")
+    return q_hat, float(ll_max), mu_hat
 
-    def profile(which: int, k: float) -> float:
-        def other(z: float) -> float:
-            q = np.empty(2)
-            q[which], q[1 - which] = k**2, max(z, 1e-12) * qs[1 - which]
-            val = lik(q)[0]
+
+def _profile(lik: _Likelihood, which: int, q_hat: NDArray[np.float64],
+             qs: NDArray[np.float64], ll_max: float, crit: float) -> Callable[[float], float]:
+    """k ↦ 2·(ℓ_max − ℓ_profile(k)) − χ²: ≤ 0 inside the interval, > 0 outside."""
+    other = 1 - which
+
+    def loglik(k: float, z: float) -> float:
+        q = np.empty(2)
+        q[which], q[other] = np.float64(k) ** 2, max(z, 1e-12) * qs[other]
+        return float(lik(q)[0])
+
+    def f(k: float) -> float:
+        def neg(z: float) -> float:
+            val = loglik(k, z)
             return 1e300 if not np.isfinite(val) else -val
-        hi = max(50.0, 10 * q_hat[1 - which] / qs[1 - which])
-        r = minimize_scalar(other, bounds=(1e-12, hi), method="bounded", options={"xatol": 1e-8})
-        return 2.0 * (ll_max + r.fun) - crit  # ≤ 0 inside the interval
+        hi = max(50.0, 10 * q_hat[other] / qs[other])
+        r = minimize_scalar(neg, bounds=(1e-12, hi), method="bounded", options={"xatol": 1e-8})
+        # The other k's fitted value is a candidate too, so that the profile at k̂ is ℓ_max.
+        best = max(-float(r.fun), loglik(k, q_hat[other] / qs[other]))
+        return 2.0 * (ll_max - best) - crit if np.isfinite(best) else np.inf
 
-    def interval(which: int) -> tuple[float, float]:
-        k_hat = float(np.sqrt(q_hat[which]))
-        lo = 0.0
-        if profile(which, 1e-9 * max(k_hat, 1e-12)) > 0:
-            lo = brentq(lambda k: profile(which, k), 1e-9 * k_hat, k_hat, xtol=1e-7 * k_hat + 1e-15)
-        hi_k = 2.0 * k_hat + 1e-12
-        while profile(which, hi_k) <= 0:
-            hi_k *= 2.0
-        hi = brentq(lambda k: profile(which, k), k_hat, hi_k, xtol=1e-7 * k_hat + 1e-15)
-        return float(lo), float(hi)
+    return f
 
-    ddof = 1 if mu_known is None else 0
-    r = e - (mu_hat if mu_known is None else mu_known)
-    cov_emp = r.T @ r / (n - ddof)
-    return WheelNoiseFit(
-        k_left=float(np.sqrt(q_hat[0])), k_right=float(np.sqrt(q_hat[1])),
-        ci_left=interval(0), ci_right=interval(1), level=level, mean=np.asarray(mu_hat),
-        cov_fitted=q_hat[0] * A.mean(axis=0) + q_hat[1] * B.mean(axis=0), cov_empirical=cov_emp,
-        components=tuple(components), loglik=ll_max, n_runs=n, errors=e,
-    )
 
+def _profile_interval(lik: _Likelihood, which: int, q_hat: NDArray[np.float64],
+                      qs: NDArray[np.float64], ll_max: float, crit: float) -> tuple[float, float]:
+    """Profile-likelihood interval of k_which: [0 or the lower crossing, the upper crossing
+    or ``inf`` when the profile never crosses below :data:`_OPEN_BOUND_FACTOR` times the k
+    that alone explains the observed spread]."""
+    f = _profile(lik, which, q_hat, qs, ll_max, crit)
+    k_hat = float(np.sqrt(q_hat[which]))
+    lo = 0.0
+    if k_hat > 0:
+        a = 1e-9 * max(k_hat, 1e-12)
+        if f(a) > 0 and f(k_hat) < 0:
+            lo = brentq(f, a, k_hat, xtol=1e-7 * k_hat + 1e-15)
+    k_cap = _OPEN_BOUND_FACTOR * max(float(np.sqrt(qs[which])), k_hat)
+    hi_k = 2.0 * k_hat + 1e-12
+    while f(hi_k) <= 0:
+        if hi_k > k_cap:
+            return float(lo), np.inf
+        hi_k *= 2.0
+    if not f(k_hat) < 0:  # cannot happen with a converged maximum; never bracket blindly
+        return float(lo), np.inf
+    hi = brentq(f, k_hat, hi_k, xtol=1e-7 * k_hat + 1e-15)
+    return float(lo), float(hi)
+
+
+def _k_correlation(A: NDArray[np.float64], B: NDArray[np.float64], q: NDArray[np.float64]) -> float:
+    """Correlation of the k_L², k_R² estimates from the expected Fisher information of
+    e_i ~ N(μ, q_L A_i + q_R B_i): I_jk = ½ Σ_i tr(C_i⁻¹ D_j C_i⁻¹ D_k) with D = (A_i, B_i)
+    (Kay, Fundamentals of Statistical Signal Processing I, eq. 3.31). NaN when a basis
+    carries no information or C is singular."""
+    try:
+        Cinv = np.linalg.inv(q[0] * A + q[1] * B)
+    except np.linalg.LinAlgError:
+        return float("nan")
+    X, Y = Cinv @ A, Cinv @ B
+    i00 = 0.5 * np.einsum("nij,nji->", X, X)
+    i11 = 0.5 * np.einsum("nij,nji->", Y, Y)
+    i01 = 0.5 * np.einsum("nij,nji->", X, Y)
+    if not (i00 > 0 and i11 > 0 and np.isfinite(i01)):
+        return float("nan")
+    # (I⁻¹)₀₁/√((I⁻¹)₀₀(I⁻¹)₁₁) for a 2×2 information matrix
+    return float(np.clip(-i01 / np.sqrt(i00 * i11), -1.0, 1.0))
+
+
+def _warnings(rho: float, identified: NDArray[np.bool_], ci: list[tuple[float, float]],
+              sigma_theta: float, level: float) -> list[str]:
+    notes = []
+    names = ("k_left", "k_right")
+    for name, known in zip(names, identified, strict=True):
+        if not known:
+            notes.append(f"the runs carry no information on {name} (that wheel's noise does not "
+                         "reach the fitted components: does the wheel move?); its value 0 means unknown")
+    if all(identified) and not abs(rho) < CONFOUNDED_CORRELATION:
+        notes.append(f"the runs cannot tell k_left from k_right: their estimates correlate at "
+                     f"{rho:.4f}, so only a combination is measured and each interval alone means "
+                     "little; drive a path where the two wheels' errors show differently (e.g. "
+                     "arcs turning both ways, no spin between out and back)")
+    for name, (_, hi) in zip(names, ci, strict=True):
+        if not np.isfinite(hi):
+            notes.append(f"the data do not bound {name} from above at the {100 * level:g} % level "
+                         "(open interval)")
+    if sigma_theta > FIRST_ORDER_SIGMA_THETA:
+        notes.append(f"the fitted end-heading spread is {sigma_theta:.3g} rad, beyond the first-order "
+                     f"regime (~{FIRST_ORDER_SIGMA_THETA} rad): the likelihood is wrong there and k "
+                     "comes out too large; fit shorter runs, or components y,theta")
+    return notes
 
 def fit_wheel_noise_from_runs(runs: Sequence[OdometryLog], robot: DiffDrive, **kwargs: Any) -> WheelNoiseFit:
     """:func:`fit_wheel_noise` on logs with ground truth: each run's end error (truth minus

@@ -255,16 +255,33 @@ def umbmark(
     L = validate.positive(side, "side", unit="m")
     b = validate.positive(wheel_base, "wheel_base", unit="m")
 
-    x_cw, y_cw = cw.mean(axis=0)  # Borenstein–Feng eq. (3.2)
-    x_ccw, y_ccw = ccw.mean(axis=0)
+    with np.errstate(all="ignore"):  # an overflow is reported below, not warned about
+        x_cw, y_cw = cw.mean(axis=0)  # Borenstein–Feng eq. (3.2)
+        x_ccw, y_ccw = ccw.mean(axis=0)
     r_cw, r_ccw = math.hypot(x_cw, y_cw), math.hypot(x_ccw, y_ccw)  # eq. (3.3)
+    if not math.isfinite(max(r_cw, r_ccw)):
+        raise ModelError("the centres of gravity of the return errors overflow: the errors are "
+                         "too large for UMBmark (check units: metres)")
 
     # Borenstein–Feng eq. (4.20a/b) and (4.24a/b), in radians. (The printed eq. 4.19
     # drops the β: it must read −4Lβ = x_cw − x_ccw.)
-    beta_x = (x_cw - x_ccw) / (-4.0 * L)
-    beta_y = (y_cw + y_ccw) / (-4.0 * L)
-    alpha_x = (x_cw + x_ccw) / (-4.0 * L)
-    alpha_y = (y_cw - y_ccw) / (-4.0 * L)
+    with np.errstate(all="ignore"):
+        beta_x = (x_cw - x_ccw) / (-4.0 * L)
+        beta_y = (y_cw + y_ccw) / (-4.0 * L)
+        alpha_x = (x_cw + x_ccw) / (-4.0 * L)
+        alpha_y = (y_cw - y_ccw) / (-4.0 * L)
+    # Each estimator alone must describe a turn error below the model's limit (α: 90°, or
+    # 180° for Chong–Kleeman's c_b; β: a half-turn per leg): errors whose x and y estimates
+    # are far out of range but happen to average to a small α or β (±6e198 rad -> 0) would
+    # otherwise give a silently wrong E_d, E_b.
+    alpha_limit = 0.5 * math.pi if variant == "borenstein-feng" else math.pi
+    for name, value, limit in (("α_x", alpha_x, alpha_limit), ("α_y", alpha_y, alpha_limit),
+                               ("β_x", beta_x, math.pi), ("β_y", beta_y, math.pi)):
+        if not abs(value) < limit:
+            raise ModelError(
+                f"{name} = {value:.4g} rad (eq. 4.20/4.24 with L = {L:g} m) is not below "
+                f"{math.degrees(limit):.0f}°: the errors are too large for UMBmark (check units: "
+                "metres, the side L, and the CW/CCW labels)")
     # Averaging α and β (Chong–Kleeman eq. 7–8). Borenstein–Feng's footnote 2 averages
     # E_d,x/E_d,y and E_b,x/E_b,y instead; the two differ by O((β_x − β_y)²), far below
     # the noise that makes β_x ≠ β_y, and averaging α, β keeps R, E_d and E_b consistent.

@@ -4,9 +4,11 @@
 
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
-        [--ros-yaml params.yaml --wheel-radius R] [--force] [--json]
+        [--ros-yaml params.yaml --wheel-radius R] [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
-        [--known-mean] [--level 0.95] [--json]
+        [--known-mean] [--level 0.95] [LOG OPTIONS] [--json]
+
+LOG OPTIONS are those of ``odomkit track`` (:mod:`odomkit.cli.log_options`).
 """
 
 from __future__ import annotations
@@ -17,18 +19,22 @@ from typing import Annotated, Any
 import typer
 
 from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    PeriodOption,
+    TimeScaleOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
 from odomkit.cli.output import print_json
 from odomkit.errors import InputError
 
 __all__ = ["calibrate_command", "calibrate_noise_command"]
-
-_FORMAT_HELP = "Log format: auto, csv, khepera, snowhite, optiodom."
-
-
-def _log_options(fmt: str, columns: str | None) -> Any:
-    from odomkit.workflows.logs import LogOptions
-
-    return LogOptions(format=fmt, columns=columns)
 
 
 @app.command("calibrate")
@@ -36,12 +42,13 @@ def calibrate_command(
     runs: Annotated[list[Path], typer.Argument(help="Logs with ground truth (e.g. OptiOdom run files).")],
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML) the odometry used.")],
     method: Annotated[str, typer.Option("--method", help="exact | umbmark")] = "exact",
-    source: Annotated[str, typer.Option(
-        "--from", help="exact: fit the run 'endpoints' or the whole 'trajectory'.")] = "endpoints",
+    source: Annotated[str | None, typer.Option(
+        "--from", help="exact: fit the run 'endpoints' (default) or the whole 'trajectory'.")] = None,
     side: Annotated[float | None, typer.Option(
         "--side", help="Square side [m]: required by umbmark; with exact, E_max,syst is reported.")] = None,
-    heading_weight: Annotated[float, typer.Option(
-        "--heading-weight", help="exact: metres per radian of heading residual (0 = positions only).")] = 0.0,
+    heading_weight: Annotated[float | None, typer.Option(
+        "--heading-weight",
+        help="exact: metres per radian of heading residual (default 0: positions only).")] = None,
     out_robot: Annotated[Path | None, typer.Option(
         "--out-robot", help="Write the corrected robot file.")] = None,
     ros_yaml: Annotated[Path | None, typer.Option(
@@ -49,19 +56,26 @@ def calibrate_command(
     wheel_radius: Annotated[float | None, typer.Option(
         "--wheel-radius", help="Nominal wheel radius [m] for --ros-yaml.")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
-    fmt: Annotated[str, typer.Option("--format", help=_FORMAT_HELP)] = "auto",
-    columns: Annotated[str | None, typer.Option("--columns", help="CSV column mapping.")] = None,
+    fmt: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
     from odomkit.workflows.calibration import calibrate_files
 
-    extra = {"heading_weight": heading_weight} if method == "exact" else {}
-    out = calibrate_files(runs, robot, method=method, source=source, side=side,
-                          out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
-                          overwrite=force, log_options=_log_options(fmt, columns), **extra)
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    with reported_warnings() as warned:
+        # Flags that do not apply to the method are refused by the workflow, not dropped.
+        out = calibrate_files(runs, robot, method=method, source=source, side=side,
+                              out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
+                              overwrite=force, log_options=options, heading_weight=heading_weight)
     if json_out:
-        print_json(out)
+        print_json(with_warnings(out, warned))
         return
     _print_text(out)
 
@@ -98,8 +112,13 @@ def calibrate_noise_command(
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw the errors with fitted and empirical 95 % ellipses (PNG).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
-    fmt: Annotated[str, typer.Option("--format", help=_FORMAT_HELP)] = "auto",
-    columns: Annotated[str | None, typer.Option("--columns", help="CSV column mapping.")] = None,
+    fmt: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Maximum-likelihood k_L, k_R (per-wheel noise, m^½) with profile-likelihood intervals."""
@@ -111,10 +130,11 @@ def calibrate_noise_command(
     kwargs: dict[str, Any] = {"components": comps, "level": level}
     if known_mean:
         kwargs["mean"] = [0.0] * len(comps)
-    out = noise_files(runs, robot, log_options=_log_options(fmt, columns), plot=plot,
-                      overwrite=force, **kwargs)
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    with reported_warnings() as warned:
+        out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force, **kwargs)
     if json_out:
-        print_json(out)
+        print_json(with_warnings(out, warned))
         return
     pct = f"{100 * out['level']:g} %"
     print(f"k_left  = {out['k_left']:.6g} m^1/2  ({pct} profile-likelihood interval "

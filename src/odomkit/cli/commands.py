@@ -3,6 +3,8 @@
 from odomkit.cli import (
     calibrate,  # noqa: F401
     demo,  # noqa: F401
+    evaluate,  # noqa: F401
+    fit_noise,  # noqa: F401
     predict,  # noqa: F401
     simulate,  # noqa: F401
     track,  # noqa: F401

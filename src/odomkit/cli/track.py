@@ -8,9 +8,30 @@ from typing import Annotated
 import typer
 
 from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    PeriodOption,
+    TimeScaleOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
 from odomkit.cli.output import print_json
+from odomkit.cli.truth_options import (
+    MaxGapOption,
+    TruthColumnsOption,
+    TruthFormatOption,
+    TruthOption,
+    TruthSigmaOption,
+    TruthTimeUnitOption,
+    parse_initial_cov,
+    truth_options,
+)
 from odomkit.errors import InputError
-from odomkit.workflows.logs import LOG_FORMATS, LogOptions
 
 __all__ = ["parse_pose", "track"]
 
@@ -34,18 +55,26 @@ def parse_pose(text: str | None, degrees: bool = False) -> tuple[float, float, f
 def track(
     log: Annotated[Path, typer.Argument(help="The log file.")],
     robot: Annotated[Path, typer.Option(help="Robot file (TOML).")],
-    format: Annotated[str, typer.Option(help=f"Log format: {', '.join(LOG_FORMATS)}.")] = "auto",
+    format: FormatOption = "auto",
     method: Annotated[str, typer.Option(help="exact | midpoint | euler")] = "exact",
-    columns: Annotated[str | None, typer.Option(
-        help="CSV column mapping, e.g. t=time,ticks_left=L,ticks_right=R")] = None,
-    cumulative: Annotated[bool, typer.Option(help="CSV counters are cumulative.")] = False,
-    wrap_bits: Annotated[int | None, typer.Option(help="Unwrap counters of this width.")] = None,
-    period: Annotated[float | None, typer.Option(help="Sample period [s] for logs without time.")] = None,
-    time_scale: Annotated[float, typer.Option(help="Multiply CSV time by this to get s.")] = 1.0,
-    decimate: Annotated[int, typer.Option(help="Use every n-th sample.")] = 1,
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
     initial_pose: Annotated[str | None, typer.Option(
         help="x,y,theta [m, m, rad]; default: first ground-truth pose or the origin")] = None,
     theta0_deg: Annotated[bool, typer.Option(help="Read theta of --initial-pose in degrees.")] = False,
+    initial_cov: Annotated[str | None, typer.Option(
+        help="Initial covariance: var_x,var_y,var_theta or 9 numbers (3x3 row by row) "
+             "[m², rad²]; default: the truth's start uncertainty, else zero.")] = None,
+    truth: TruthOption = None,
+    truth_format: TruthFormatOption = "auto",
+    truth_columns: TruthColumnsOption = None,
+    truth_time_unit: TruthTimeUnitOption = "s",
+    truth_sigma: TruthSigmaOption = 0.0,
+    max_gap: MaxGapOption = 0.5,
     covariance: Annotated[bool, typer.Option(help="Propagate the robot file's noise.")] = True,
     engine: Annotated[str, typer.Option(
         help="Covariance engine: recursion (step recursion) | transition (Kelly).")] = "recursion",
@@ -57,15 +86,18 @@ def track(
     """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     from odomkit.workflows.track import run_track
 
-    result = run_track(
-        log, robot, method=method,  # type: ignore[arg-type]
-        log_options=LogOptions(format, columns, cumulative, wrap_bits, period, time_scale),
-        decimate=decimate, pose0=parse_pose(initial_pose, theta0_deg),
-        with_covariance=covariance, engine=engine, out=out, tum=tum, overwrite=force,
-    )
-    summary = result.summary()
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    with reported_warnings() as warned:
+        result = run_track(
+            log, robot, method=method,  # type: ignore[arg-type]
+            log_options=options, pose0=parse_pose(initial_pose, theta0_deg),
+            cov0=parse_initial_cov(initial_cov),
+            truth=truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap),
+            with_covariance=covariance, engine=engine, out=out, tum=tum, overwrite=force,
+        )
+        summary = result.summary()
     if json:
-        print_json(summary)
+        print_json(with_warnings(summary, warned))
         return
     x, y, th = summary["pose"]
     print(f"{summary['samples']} poses over {summary['duration']:.3f} s, "
@@ -75,5 +107,8 @@ def track(
         g = summary["ground_truth"]
         print(f"vs ground truth: final position error {g['final_position_error']:.4f} m, "
               f"heading error {g['final_heading_error']:.4f} rad")
+    elif "final_position_error" in summary:
+        print(f"vs truth: final position error {summary['final_position_error']:.4f} m, "
+              f"max {summary['max_position_error']:.4f} m")
     for kind, path in summary["outputs"].items():
         print(f"wrote {kind}: {path}")

@@ -3,10 +3,12 @@
 ::
 
     odomkit umbmark ERRORS.csv --side 4 --wheel-base 0.34 [--json]
-    odomkit umbmark --runs RUN.csv [RUN.csv ...] --robot ROBOT.toml --side 0.75 [--json]
+    odomkit umbmark --runs RUN.csv [RUN.csv ...] --robot ROBOT.toml --side 0.75 [LOG OPTIONS] [--json]
 
 ERRORS.csv has a header naming the columns ``direction,x,y`` (see
 :mod:`odomkit.io.umbmark_errors`); the work is done by :mod:`odomkit.workflows.umbmark`.
+LOG OPTIONS are those of ``odomkit track`` (:mod:`odomkit.cli.log_options`) and apply to
+the logs of ``--runs``.
 """
 
 from __future__ import annotations
@@ -18,6 +20,18 @@ from typing import Annotated, Any
 import typer
 
 from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    PeriodOption,
+    TimeScaleOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
 from odomkit.cli.output import print_json
 from odomkit.errors import InputError
 
@@ -68,27 +82,40 @@ def umbmark_command(
     runs: Annotated[list[Path] | None, typer.Option(
         "--runs", help="Logs with ground truth (calibrate from logs).")] = None,
     robot: Annotated[Path | None, typer.Option("--robot", help="Robot file (TOML).")] = None,
+    fmt: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
     from odomkit.workflows import umbmark as workflow
 
     positional = list(errors_csv or [])
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"--side must be a positive length in metres, got {side!r} "
                          "(it is required)")
-    if runs:
-        # `--runs a.csv b.csv` leaves b.csv as a positional argument: they are all runs.
-        if robot is None:
-            raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
-        out = workflow.umbmark_from_files(list(runs) + positional, robot, side).to_dict()
-    else:
-        if len(positional) != 1:
-            raise InputError(
-                "give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
-        out = workflow.umbmark_from_errors_file(positional[0], side, wheel_base=wheel_base,
-                                                robot_path=robot)
+    with reported_warnings() as warned:
+        if runs:
+            # `--runs a.csv b.csv` leaves b.csv as a positional argument: they are all runs.
+            if robot is None:
+                raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
+            out = workflow.umbmark_from_files(list(runs) + positional, robot, side,
+                                              log_options=options).to_dict()
+        else:
+            if options.given():
+                raise InputError(f"{', '.join(options.given())} applies to the logs of --runs, "
+                                 "not to an ERRORS.csv")
+            if len(positional) != 1:
+                raise InputError(
+                    "give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
+            out = workflow.umbmark_from_errors_file(positional[0], side, wheel_base=wheel_base,
+                                                    robot_path=robot)
     if json_out:
-        print_json(out)
+        print_json(with_warnings(out, warned))
     else:
         _print_text(out)

@@ -14,7 +14,7 @@ import numpy as np
 from odomkit import validate
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
-from odomkit.io.table import cumulative_to_increments, read_numeric, unwrap_counter
+from odomkit.io.table import counter_increments, read_numeric, read_table
 from odomkit.log import OdometryLog
 
 __all__ = ["SNOWHITE_PERIOD", "read_khepera", "read_snowhite"]
@@ -28,19 +28,18 @@ def read_khepera(path: str | Path, period: float = 1.0, wrap_bits: int | None = 
 
     Parameters
     ----------
-    path : the text file
+    path : the text file (plain or gzip)
     period : sampling period [s]; the handout does not state it, so time is in samples
         by default.
     wrap_bits : undo wrap-around of a counter of this width (None: the counts never wrap).
     """
     period = validate.positive(period, "period", unit="s", error=InputError)
-    data = read_numeric(path, 2)
-    left, right = data[:, 0], data[:, 1]
-    if wrap_bits is not None:
-        left, right = unwrap_counter(left, wrap_bits), unwrap_counter(right, wrap_bits)
-    t = np.arange(data.shape[0], dtype=float) * period
-    channels = {"ticks_left": cumulative_to_increments(left),
-                "ticks_right": cumulative_to_increments(right)}
+    table = read_table(path, 2, integer_columns=(0, 1))
+    # Integer counts are differenced (and unwrapped) exactly, in int64 arithmetic.
+    left, right = table.counter(0, wrap_bits), table.counter(1, wrap_bits)
+    t = np.arange(table.values.shape[0], dtype=float) * period
+    channels = {"ticks_left": counter_increments(left, wrap_bits),
+                "ticks_right": counter_increments(right, wrap_bits)}
     return OdometryLog(t, channels, None, str(path), {"format": "khepera"})
 
 

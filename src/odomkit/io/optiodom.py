@@ -17,7 +17,8 @@ import numpy as np
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
-from odomkit.io.table import read_numeric
+from odomkit.io.table import read_numeric, warn_if_cumulative
+from odomkit.io.text import read_text
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle, metres_per_tick
 
@@ -61,13 +62,10 @@ class OptiOdomMetadata:
 def read_metadata(path: str | Path) -> OptiOdomMetadata:
     """Parse an OptiOdom ``*_metadata.csv`` (key in column 1, values after it)."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
     rows: dict[str, list[str]] = {}
-    with path.open(newline="", encoding="utf-8") as fh:
-        for row in csv.reader(fh):
-            if row and row[0].strip():
-                rows[row[0].strip()] = [v.strip() for v in row[1:] if v.strip()]
+    for row in csv.reader(read_text(path).splitlines()):
+        if row and row[0].strip():
+            rows[row[0].strip()] = [v.strip() for v in row[1:] if v.strip()]
 
     def number(key: str, default: float | None = None) -> float:
         values = rows.get(key)
@@ -111,18 +109,26 @@ def read_run(path: str | Path, platform: str = "diff") -> OdometryLog:
 
     Parameters
     ----------
-    path : the run file
+    path : the run file (plain or gzip)
     platform : "diff" or "tricyc" (decides what columns 5 and 6 mean)
+
+    Warns
+    -----
+    UserWarning
+        When a tick column never decreases and takes many values: the dataset's ticks are
+        per-cycle increments, so such a column is a cumulative counter in a foreign file.
     """
+    if platform not in ("diff", "tricyc"):
+        raise InputError(f"platform must be diff or tricyc, got {platform!r}", source=str(path))
     data = read_numeric(path, 6, delimiter=",")
     t = data[:, 0]
     truth = np.column_stack((data[:, 1], data[:, 2], unwrap_angle(data[:, 3])))
     if platform == "diff":
         channels = {"ticks_right": data[:, 4].copy(), "ticks_left": data[:, 5].copy()}
-    elif platform == "tricyc":
-        channels = {"ticks": data[:, 4].copy(), "steer": data[:, 5].copy()}
     else:
-        raise InputError(f"platform must be diff or tricyc, got {platform!r}", source=str(path))
+        channels = {"ticks": data[:, 4].copy(), "steer": data[:, 5].copy()}
+    for col, name in ((5, "ticks_right"), (6, "ticks_left")) if platform == "diff" else ((5, "ticks"),):
+        warn_if_cumulative(channels[name], str(path), f"column {col} ({name})")
     return OdometryLog(t, channels, truth, str(path), {"format": "optiodom", "platform": platform})
 
 

@@ -6,8 +6,8 @@ Example (all lengths in metres, angles in radians)::
     type = "diff"               # diff | tricycle | gyro | compass
     wheel_base = 0.2
     wheel_diameter = 0.084      # or wheel_diameter_left/_right, wheel_radius[_left/_right],
-    encoder_resolution = 64     #    or m_per_tick[_left/_right] directly
-    gear_ratio = 43.7
+    encoder_resolution = 64     #    or m_per_tick[_left/_right] directly (one per wheel;
+    gear_ratio = 43.7           #    encoder and gear go with a diameter or radius only)
     c_left = 1.0                # calibration factors (optional)
     c_right = 1.0
     c_wheel_base = 1.0
@@ -32,6 +32,7 @@ import tomli_w
 
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import refuse_overwrite
+from odomkit.io.text import read_text
 from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
 from odomkit.robot import (
     CompassOdometry,
@@ -75,59 +76,92 @@ class _Fields:
                              source=self.source)
 
 
-def _wheel_scale(f: _Fields, side: str) -> float:
-    """Metres per tick of one wheel from whichever description the file uses."""
-    for key in (f"m_per_tick_{side}", "m_per_tick"):
-        if f.has(key):
-            return f.number(key)
-    diameter = None
-    for key, factor in ((f"wheel_diameter_{side}", 1.0), ("wheel_diameter", 1.0),
-                        (f"wheel_radius_{side}", 2.0), ("wheel_radius", 2.0)):
-        if f.has(key):
-            diameter = factor * f.number(key)
-            break
-    if diameter is None:
-        raise InputError(
-            "[robot] needs the wheel size: m_per_tick[_left/_right], "
-            "wheel_diameter[_left/_right] or wheel_radius[_left/_right]",
-            source=f.source,
-        )
-    return metres_per_tick(diameter, f.number("encoder_resolution", 1.0), f.number("gear_ratio", 1.0))
+_SIZE_KEYS = ("m_per_tick", "wheel_diameter", "wheel_radius")
+_ENCODER_KEYS = ("encoder_resolution", "gear_ratio")
+
+
+class _WheelSizes:
+    """The wheel sizes of one ``[robot]`` table: each wheel from exactly one description
+    (``m_per_tick``, ``wheel_diameter`` or ``wheel_radius``, each also per wheel with a
+    ``_left``/``_right``/``_front`` suffix), and the encoder keys only beside a diameter or
+    radius. A wheel described twice is a conflict, named as one, not an "unknown field"."""
+
+    def __init__(self, f: _Fields):
+        self.f = f
+        self.from_diameter = False
+
+    def given(self, side: str | None) -> list[str]:
+        """The keys present that describe the ``side`` wheel (``None``: the only wheel)."""
+        keys = [k for base in _SIZE_KEYS for k in (base, f"{base}_{side}" if side else None) if k]
+        return [k for k in keys if self.f.has(k)]
+
+    def scale(self, side: str | None, wheel: str) -> float:
+        """Metres per tick of one wheel (``wheel`` names it in messages, e.g. "left")."""
+        given = self.given(side)
+        if not given:
+            suffix = f"[_{side}]" if side else ""
+            raise InputError(
+                f"[robot] needs the wheel size of the {wheel} wheel: m_per_tick{suffix}, "
+                f"wheel_diameter{suffix} or wheel_radius{suffix}", source=self.f.source)
+        if len(given) > 1:
+            raise InputError(f"[robot] {' and '.join(given)} both give the {wheel} wheel's size; "
+                             "keep one", source=self.f.source)
+        key = given[0]
+        value = self.f.number(key)
+        if key.startswith("m_per_tick"):
+            return value
+        self.from_diameter = True
+        diameter = 2.0 * value if key.startswith("wheel_radius") else value
+        return metres_per_tick(diameter, self.f.number("encoder_resolution", 1.0),
+                               self.f.number("gear_ratio", 1.0))
+
+    def optional_scale(self, side: str | None, wheel: str) -> float:
+        """:meth:`scale`, or 1.0 when the file gives no size (a log in metres needs none)."""
+        return self.scale(side, wheel) if self.given(side) else 1.0
+
+    def check_encoder(self) -> None:
+        """Encoder resolution and gear ratio turn a wheel size into metres per tick; beside
+        ``m_per_tick`` (metres per tick already) they would be silently ignored."""
+        if self.from_diameter:
+            return
+        for key in _ENCODER_KEYS:
+            if self.f.has(key):
+                raise InputError(f"[robot] {key} applies to wheel_diameter or wheel_radius, not to "
+                                 "m_per_tick (which is metres per tick already)", source=self.f.source)
 
 
 def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
     kind = table.get("type")
     f = _Fields(table, "robot", source)
     f.used.update({"type", "name"})
+    sizes = _WheelSizes(f)
     if kind == "diff":
         robot: Robot = DiffDrive(
             wheel_base=f.number("wheel_base"),
-            m_per_tick_left=_wheel_scale(f, "left"),
-            m_per_tick_right=_wheel_scale(f, "right"),
+            m_per_tick_left=sizes.scale("left", "left"),
+            m_per_tick_right=sizes.scale("right", "right"),
             c_left=f.number("c_left", 1.0),
             c_right=f.number("c_right", 1.0),
             c_wheel_base=f.number("c_wheel_base", 1.0),
         )
     elif kind == "tricycle":
-        scale = 1.0
-        if any(f.has(k) for k in ("m_per_tick", "wheel_diameter", "wheel_radius")):
-            scale = _wheel_scale(f, "front")
         robot = Tricycle(
             wheel_to_axle=f.number("wheel_to_axle"),
-            m_per_tick=scale,
+            m_per_tick=sizes.optional_scale("front", "front"),
             steering_offset=f.number("steering_offset", 0.0),
             c_scale=f.number("c_scale", 1.0),
         )
     elif kind == "gyro":
-        robot = GyroOdometry(m_per_tick=f.number("m_per_tick", 1.0),
+        robot = GyroOdometry(m_per_tick=sizes.optional_scale(None, "odometry"),
                              gyro_bias=f.number("gyro_bias", 0.0),
                              gyro_scale=f.number("gyro_scale", 1.0))
     elif kind == "compass":
-        robot = CompassOdometry(m_per_tick=f.number("m_per_tick", 1.0),
+        robot = CompassOdometry(m_per_tick=sizes.optional_scale(None, "odometry"),
                                 heading_offset=f.number("heading_offset", 0.0))
     else:
         raise InputError(f"[robot] type must be one of diff, tricycle, gyro, compass; got {kind!r}",
                          source=source)
+    sizes.check_encoder()
     f.check_unused()
     return robot
 
@@ -185,12 +219,16 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     path = Path(path)
     if not path.is_file():
         raise InputError("no such robot file", source=str(path))
+    # TOML is UTF-8 text by definition: a compressed or otherwise encoded file is refused.
+    text = read_text(path, compressed=False, strict_utf8=True, kind="TOML robot file")
     try:
-        doc = tomllib.loads(path.read_text(encoding="utf-8"))
+        doc = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"not valid TOML ({exc})", source=str(path)) from None
     if "robot" not in doc or not isinstance(doc["robot"], dict):
         raise InputError("needs a [robot] table", source=str(path))
+    if "noise" in doc and not isinstance(doc["noise"], dict):
+        raise InputError(f"[noise] must be a table, got {doc['noise']!r}", source=str(path))
     unknown = sorted(set(doc) - {"robot", "noise"})
     if unknown:
         raise InputError(f"unknown table(s) {', '.join(unknown)}; expected [robot] and [noise]",

@@ -1,8 +1,19 @@
-"""Reading numeric text tables with errors that name the file, line and column."""
+"""Reading numeric text tables with errors that name the file, line and column.
+
+The text comes from :func:`odomkit.io.text.read_text` (plain or gzip). Two parsers read it
+and give the same numbers and the same messages: polars (the ``fast`` extra, 10x faster on
+large single-character-delimited files) when it accepts the whole table, numpy otherwise.
+Counter columns can be read as exact 64-bit integers (:meth:`NumericTable.counter`), so
+that a 64-bit encoder count keeps its low bits (a float64 holds 2**63 only to ±1024).
+"""
 
 from __future__ import annotations
 
+import io
+import re
 import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -10,62 +21,135 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.errors import InputError
+from odomkit.io.text import read_text
 
-__all__ = ["cumulative_to_increments", "order_by_time", "polars_module", "read_numeric", "unwrap_counter"]
+__all__ = [
+    "COUNTER_BITS", "counter_increments", "cumulative_to_increments", "NumericTable",
+    "order_by_time", "polars_module", "read_numeric", "read_table", "unwrap_counter",
+    "warn_if_cumulative",
+]
+
+COUNTER_BITS = (8, 16, 24, 32, 64)
+"""Counter widths whose wrap-around can be undone."""
+
+# What numpy's parser takes as a float: Python's float() also takes '1_000' and Unicode
+# digits, which numpy refuses, so the line that made numpy fail must be found by this.
+_NUMBER = re.compile(r"\s*[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf(?:inity)?|nan)\s*",
+                     re.IGNORECASE | re.ASCII)
+# A column that only ever grows is flagged when it takes at least this many distinct values
+# (and 1 % of the rows): fewer could be increments that merely rose during a short log.
+_MIN_DISTINCT = 16
 
 
-def _first_bad_line(path: Path, ncols: int, delimiter: str | None, skip: int) -> InputError:
-    """Re-scan a file that numpy refused, to say exactly where and why."""
-    with path.open("r", encoding="utf-8", errors="replace") as fh:
-        for lineno, raw in enumerate(fh, start=1):
-            if lineno <= skip or not raw.strip() or raw.lstrip().startswith("#"):
+def _fields(line: str, delimiter: str | None) -> list[str] | None:
+    """The fields of a data line, or None for a blank or comment line (as numpy sees them:
+    ``#`` starts a comment anywhere on a line)."""
+    content = line.split("#", 1)[0]
+    if not content.strip():
+        return None
+    return content.strip().split(delimiter) if delimiter else content.split()
+
+
+@dataclass(frozen=True)
+class NumericTable:
+    """A numeric text table as read, with what is needed to name the line of a row.
+
+    Parameters
+    ----------
+    values : ndarray, shape (N, ncols)
+        Every field as float64.
+    integers : mapping of int to ndarray of int64, shape (N,)
+        Exact integers of the requested columns (0-based) that hold integers only; a
+        count at or above 2**63 is kept modulo 2**64 (two's complement), which is all that
+        differencing and unwrapping need.
+    source : str
+        The file, for messages.
+    """
+
+    values: NDArray[np.float64]
+    integers: Mapping[int, NDArray[np.int64]]
+    source: str
+    _text: str = field(repr=False)  # the file's text, read again only to name a line
+    _skip: int = field(repr=False)
+
+    def line(self, row: int) -> int:
+        """File line number of data row ``row`` (blank and comment lines do not count)."""
+        seen = -1
+        for lineno, raw in enumerate(self._text.split("\n"), start=1):
+            if lineno <= self._skip or _fields(raw, None) is None:
                 continue
-            fields = raw.strip().split(delimiter) if delimiter else raw.split()
-            if len(fields) != ncols:
-                return InputError(f"expected {ncols} columns, found {len(fields)}",
-                                  source=str(path), line=lineno)
-            for col, text in enumerate(fields, start=1):
-                try:
-                    float(text)
-                except ValueError:
-                    return InputError(f"column {col}: {text.strip()!r} is not a number",
-                                      source=str(path), line=lineno)
-    return InputError("could not be read as a numeric table", source=str(path))
+            seen += 1
+            if seen == row:
+                return lineno
+        return self._skip + row + 1
+
+    def counter(self, column: int, bits: int | None = None) -> NDArray[np.int64] | NDArray[np.float64]:
+        """Column ``column`` (0-based) as cumulative counts: exact int64 when it holds
+        integers (written as such, or as integral floats below 2**53), else float64.
+
+        With ``bits`` (the counter width, :data:`COUNTER_BITS`) the counts must be integers
+        that fit a counter of that width, signed or unsigned; else one error naming the line.
+        """
+        counts = self.integers.get(column)
+        if counts is None:
+            column_values = self.values[:, column]
+            whole = np.abs(column_values) <= 2.0**53
+            whole &= column_values == np.round(column_values)
+            if whole.all():
+                counts = column_values.astype(np.int64)
+            elif bits is not None:
+                row = int(np.argmin(whole))
+                raise InputError(
+                    f"column {column + 1} holds {column_values[row]!r}, not an integer count; "
+                    "--wrap-bits unwraps integer counters", source=self.source, line=self.line(row))
+            else:
+                return column_values
+        if bits is not None and bits < 64:
+            bad = (counts < -(2 ** (bits - 1))) | (counts >= 2**bits)
+            if bad.any():
+                row = int(np.argmax(bad))
+                raise InputError(
+                    f"column {column + 1} holds the count {counts[row]}, beyond a {bits}-bit "
+                    f"counter ({-(2 ** (bits - 1))} .. {2**bits - 1}); check --wrap-bits",
+                    source=self.source, line=self.line(row))
+        return counts
+
+
+def read_table(
+    path: str | Path, ncols: int, delimiter: str | None = None, skip_header: int = 0, *,
+    integer_columns: Sequence[int] = (), text: str | None = None,
+) -> NumericTable:
+    """Read an ``(N, ncols)`` numeric table; reject missing files, ragged rows, text, NaN.
+
+    Parameters
+    ----------
+    path : path to a text file, plain or gzip-compressed (:func:`odomkit.io.text.read_text`)
+    ncols : number of columns every row must have
+    delimiter : None for any whitespace, else e.g. ","
+    skip_header : lines to skip at the top
+    integer_columns : columns (0-based) to read also as exact integers where they hold them
+    text : the file's text if the caller has read it already
+    """
+    source = str(path)
+    if text is None:
+        text = read_text(path)
+    body = text.split("\n", skip_header)[-1] if skip_header else text
+    if skip_header and text.count("\n") < skip_header:
+        body = ""
+    found = _read_with_polars(body, ncols, delimiter, integer_columns)
+    if found is None:
+        found = _read_with_numpy(body, ncols, delimiter, integer_columns, source, text, skip_header)
+    values, integers = found
+    table = NumericTable(values, integers, source, text, skip_header)
+    _check_finite(table)
+    return table
 
 
 def read_numeric(
     path: str | Path, ncols: int, delimiter: str | None = None, skip_header: int = 0
 ) -> NDArray[np.float64]:
-    """Read an ``(N, ncols)`` float table; reject missing files, ragged rows, text, NaN.
-
-    Parameters
-    ----------
-    path : path to a text file
-    ncols : number of columns every row must have
-    delimiter : None for any whitespace, else e.g. ","
-    skip_header : lines to skip at the top
-    """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
-    data = _read_with_polars(path, ncols, delimiter, skip_header)
-    if data is not None:
-        return _check_finite(path, data, skip_header)
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("error")  # numpy warns on an empty file
-            data = np.loadtxt(path, delimiter=delimiter, skiprows=skip_header, ndmin=2,
-                              dtype=float, comments="#")
-    except UserWarning:
-        raise InputError("the file is empty: no data rows", source=str(path)) from None
-    except ValueError:
-        raise _first_bad_line(path, ncols, delimiter, skip_header) from None
-    if data.size == 0:
-        raise InputError("the file is empty: no data rows", source=str(path))
-    if data.shape[1] != ncols:
-        raise InputError(f"expected {ncols} columns, found {data.shape[1]}", source=str(path),
-                         line=skip_header + 1)
-    return _check_finite(path, data, skip_header)
+    """The float64 values of :func:`read_table`, shape (N, ncols)."""
+    return read_table(path, ncols, delimiter, skip_header).values
 
 
 def polars_module() -> object | None:
@@ -77,74 +161,184 @@ def polars_module() -> object | None:
     return polars
 
 
-def _read_with_polars(path: Path, ncols: int, delimiter: str | None,
-                      skip_header: int) -> NDArray[np.float64] | None:
-    """The fast path for large single-character-delimited files (10x numpy's parser).
+_Parsed = tuple[NDArray[np.float64], dict[int, NDArray[np.int64]]]
 
-    Returns None, so that numpy's path reads the file and names the offending line, when
-    polars is missing, the file is whitespace-separated (polars needs one separator
-    character), or polars finds anything it cannot read as ``ncols`` floats.
-    """
+
+def _read_with_polars(body: str, ncols: int, delimiter: str | None,
+                      integer_columns: Sequence[int]) -> _Parsed | None:
+    """The fast path. Returns None, so that numpy's path reads the text and names the
+    offending line, when polars is missing, the table is whitespace-separated (polars needs
+    one separator character), or polars finds anything it cannot read as ``ncols`` numbers
+    (integers in ``integer_columns``: a count written as ``12.0`` or above 2**63 is left
+    to numpy, whose rules then decide alike for both paths)."""
     pl: Any = polars_module()
     if pl is None or delimiter is None or len(delimiter) != 1:
         return None
+    schema = {f"c{i}": pl.Int64 if i in integer_columns else pl.Float64 for i in range(ncols)}
     try:
-        frame = pl.read_csv(path, has_header=False, separator=delimiter, skip_rows=skip_header,
-                            comment_prefix="#", schema={f"c{i}": pl.Float64 for i in range(ncols)})
+        frame = pl.read_csv(body.encode(), has_header=False, separator=delimiter,
+                            comment_prefix="#", schema=schema)
     except Exception:  # noqa: BLE001 - any refusal: let numpy find and name the problem
         return None
     if frame.height == 0 or frame.null_count().sum_horizontal().item() > 0:
         return None
-    return frame.to_numpy().astype(float, copy=False).reshape(-1, ncols)
+    integers = {i: frame[f"c{i}"].to_numpy().astype(np.int64, copy=False) for i in integer_columns}
+    values = frame.select(pl.all().cast(pl.Float64)).to_numpy().astype(float, copy=False)
+    return values.reshape(-1, ncols), integers
 
 
-def _check_finite(path: Path, data: NDArray[np.float64], skip_header: int) -> NDArray[np.float64]:
-    bad = ~np.isfinite(data)
+def _read_with_numpy(body: str, ncols: int, delimiter: str | None, integer_columns: Sequence[int],
+                     source: str, text: str, skip: int) -> _Parsed:
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")  # numpy warns on an empty file
+            data = np.loadtxt(io.StringIO(body), delimiter=delimiter, ndmin=2, dtype=float,
+                              comments="#")
+    except UserWarning:
+        raise InputError("the file is empty: no data rows", source=source) from None
+    except ValueError as exc:
+        raise _first_bad_line(text, ncols, delimiter, skip, source, exc) from None
+    if data.size == 0:
+        raise InputError("the file is empty: no data rows", source=source)
+    if data.shape[1] != ncols:
+        raise InputError(f"expected {ncols} columns, found {data.shape[1]}", source=source,
+                         line=skip + 1)
+    integers = {}
+    for col in integer_columns:
+        exact = _exact_integers(body, delimiter, col)
+        if exact is not None:
+            integers[col] = exact
+    return data, integers
+
+
+def _exact_integers(body: str, delimiter: str | None, col: int) -> NDArray[np.int64] | None:
+    """Column ``col`` parsed as int64 (or uint64 seen as int64 modulo 2**64), or None if
+    some field is not an integer (``12.0``, ``1e3``) or the column mixes counts above
+    2**63 with negative ones."""
+    for dtype in (np.int64, np.uint64):
+        try:
+            column = np.loadtxt(io.StringIO(body), delimiter=delimiter, usecols=(col,),
+                                dtype=dtype, comments="#", ndmin=1)
+        except (ValueError, OverflowError):
+            continue
+        return column.view(np.int64)
+    return None
+
+
+def _first_bad_line(text: str, ncols: int, delimiter: str | None, skip: int, source: str,
+                    exc: ValueError) -> InputError:
+    """Re-scan a table that numpy refused, to say exactly where and why."""
+    for lineno, raw in enumerate(text.split("\n"), start=1):
+        fields = None if lineno <= skip else _fields(raw, delimiter)
+        if fields is None:
+            continue
+        if len(fields) != ncols:
+            return InputError(f"expected {ncols} columns, found {len(fields)}",
+                              source=source, line=lineno)
+        for col, text_field in enumerate(fields, start=1):
+            if not _NUMBER.fullmatch(text_field):
+                return InputError(f"column {col}: {text_field.strip()!r} is not a number",
+                                  source=source, line=lineno)
+    return InputError(f"could not be read as a numeric table ({exc})", source=source)
+
+
+def _check_finite(table: NumericTable) -> None:
+    bad = ~np.isfinite(table.values)
     if bad.any():
         row, col = np.argwhere(bad)[0]
         raise InputError(
-            f"column {col + 1} is {data[row, col]}; odometry needs finite numbers "
+            f"column {col + 1} is {table.values[row, col]}; odometry needs finite numbers "
             "(drop or interpolate the row first)",
-            source=str(path), line=_data_line(path, int(row), skip_header),
+            source=table.source, line=table.line(int(row)),
         )
-    return data
 
 
-def _data_line(path: Path, row: int, skip: int) -> int:
-    """File line number of data row ``row`` (blank and comment lines do not count)."""
-    seen = -1
-    with path.open("r", encoding="utf-8", errors="replace") as fh:
-        for lineno, raw in enumerate(fh, start=1):
-            if lineno <= skip or not raw.strip() or raw.lstrip().startswith("#"):
-                continue
-            seen += 1
-            if seen == row:
-                return lineno
-    return skip + row + 1
+def _wrapped_steps(counts: NDArray[np.int64], bits: int | None) -> NDArray[np.int64]:
+    """Exact steps of an integer counter: each difference taken modulo 2**bits into
+    [−2**(bits−1), 2**(bits−1)). int64 arithmetic wraps modulo 2**64, a multiple of
+    2**bits, so the result is exact even where an intermediate sum wraps (and for
+    ``bits`` = 64 the wrapped difference is the answer)."""
+    with np.errstate(over="ignore"):
+        steps = np.diff(counts)
+        if bits is None or bits == 64:
+            return steps
+        span = np.int64(1) << np.int64(bits)
+        half = span >> np.int64(1)
+        return (steps + half) % span - half
 
 
-def unwrap_counter(counts: NDArray[np.float64], bits: int) -> NDArray[np.float64]:
+def _check_bits(bits: int) -> None:
+    if bits not in COUNTER_BITS:
+        raise InputError(f"counter width must be 8, 16, 24, 32 or 64 bits, got {bits}")
+
+
+def unwrap_counter(counts: NDArray[Any], bits: int) -> NDArray[Any]:
     """Undo wrap-around of a ``bits``-bit encoder counter (cumulative counts).
 
     Each difference is taken modulo 2**bits into [−2**(bits−1), 2**(bits−1)), so the
     counter may move either way (a reversing wheel) by less than half its range per row.
+    Integer counts are unwrapped exactly (int64, modulo 2**64); float counts in float64
+    (exact below 2**53).
 
     >>> unwrap_counter(np.array([65530.0, 65535.0, 3.0, 10.0]), 16)
     array([65530., 65535., 65539., 65546.])
-    >>> unwrap_counter(np.array([2.0, 0.0, 65534.0]), 16)   # reversing through zero
-    array([ 2.,  0., -2.])
+    >>> unwrap_counter(np.array([2, 0, 65534]), 16)   # reversing through zero
+    array([ 2,  0, -2])
     """
-    if bits not in (8, 16, 24, 32, 64):
-        raise InputError(f"counter width must be 8, 16, 24, 32 or 64 bits, got {bits}")
+    _check_bits(bits)
+    if counts.dtype.kind in "iu":
+        ints = counts.view(np.int64) if counts.dtype == np.uint64 else counts.astype(np.int64)
+        with np.errstate(over="ignore"):
+            return np.concatenate((ints[:1], ints[0] + np.cumsum(_wrapped_steps(ints, bits))))
     span = float(2**bits)
     half = span / 2.0
     steps = np.mod(np.diff(counts) + half, span) - half
     return np.concatenate((counts[:1], counts[0] + np.cumsum(steps)))
 
 
+def counter_increments(counts: NDArray[Any], bits: int | None = None) -> NDArray[np.float64]:
+    """Cumulative counts -> per-row increments [count] as float64 (row 0 gets 0).
+
+    Integer counts (:meth:`NumericTable.counter`) are differenced, and unwrapped if
+    ``bits`` is given, in exact integer arithmetic before the conversion to float.
+
+    >>> counter_increments(np.array([2**63 - 2, -(2**63) + 3]), 64).tolist()
+    [0.0, 5.0]
+    """
+    if bits is not None:
+        _check_bits(bits)
+    if counts.dtype.kind in "iu":
+        ints = counts.view(np.int64) if counts.dtype == np.uint64 else counts.astype(np.int64)
+        return np.concatenate(([0.0], _wrapped_steps(ints, bits).astype(float)))
+    if bits is not None:
+        counts = unwrap_counter(counts, bits)
+    return cumulative_to_increments(counts)
+
+
 def cumulative_to_increments(counts: NDArray[np.float64]) -> NDArray[np.float64]:
     """Cumulative counts -> per-row increments (row 0 gets 0)."""
     return np.concatenate(([0.0], np.diff(counts)))
+
+
+def warn_if_cumulative(values: NDArray[np.float64], source: str, column: str) -> None:
+    """Warn when an increment channel looks like a cumulative counter read as increments.
+
+    A column that never decreases over the whole log and takes many distinct values (at
+    least 16, and 1 % of the rows) is how a counter looks; increments of a real wheel
+    jitter up and down (DESIGN.md: a result that could silently be wrong is a warning).
+    ``column`` names it in the message, e.g. ``"column 'L' (ticks_left)"``.
+    """
+    if values.size < _MIN_DISTINCT:
+        return
+    steps = np.diff(values)
+    if np.any(steps < 0):
+        return
+    distinct = int(np.count_nonzero(steps)) + 1
+    if distinct >= max(_MIN_DISTINCT, values.size // 100):
+        warnings.warn(
+            f"{source}: {column} never decreases over its {values.size} rows ({distinct} "
+            "distinct values): it looks like a cumulative counter read as increments; "
+            "pass --cumulative if it is one", UserWarning, stacklevel=3)
 
 
 def order_by_time(t: NDArray[np.float64], source: str) -> NDArray[np.intp] | None:

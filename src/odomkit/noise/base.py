@@ -24,13 +24,27 @@ the others.
 Every field name says whether it is a standard deviation (``sigma_*``), a variance
 (``var_*``) or a variance density (``k_*``, ``alpha_*``, ``psd_*``), as GTSAM does at
 construction: nothing is ambiguous between σ and σ².
+
+Fitting a model to data (``odomkit fit-noise``) needs its *variance parameters*: the
+numbers the first-order covariance is linear in. :meth:`NoiseModel.variance_parameters`
+gives them by field name and :meth:`NoiseModel.from_variances` rebuilds a model from
+them. The field name decides the map (:func:`variance_power`):
+
+==========================  ================================  =====================
+field                       meaning                           variance parameter
+==========================  ================================  =====================
+``sigma_*``                 standard deviation                σ²  (field squared)
+``k_*``                     √(variance per metre) [m^½]       k²  (field squared)
+``var_*``, ``psd_*``,       variance, spectral density,       the field as it is
+``alpha_*``                 variance per metre
+==========================  ================================  =====================
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
 from typing import TYPE_CHECKING, ClassVar, Literal, TypeVar
 
 import numpy as np
@@ -55,6 +69,7 @@ __all__ = [
     "sym2",
     "require_non_negative",
     "steps_input",
+    "variance_power",
 ]
 
 NoiseKind = Literal["white", "bias"]
@@ -76,6 +91,26 @@ def sym2(q00: ArrayLike, q01: ArrayLike, q11: ArrayLike) -> NDArray[np.float64]:
                                   np.asarray(q11, dtype=float))
     # One stack instead of four strided writes: about 5x faster on cache-sized chunks.
     return np.stack([a, b, b, c], axis=-1).reshape(a.shape + (2, 2))
+
+
+_SQUARED_PREFIXES = ("sigma_", "k_")
+_LINEAR_PREFIXES = ("var_", "psd_", "alpha_")
+
+
+def variance_power(name: str) -> int:
+    """2 when a noise field is a standard deviation or its density (``sigma_*``, ``k_*``:
+    the variance parameter is its square), 1 when it is already a variance or a variance
+    density (``var_*``, ``psd_*``, ``alpha_*``); ModelError for a name that says neither.
+
+    >>> variance_power("k_left"), variance_power("psd_gyro")
+    (2, 1)
+    """
+    if name.startswith(_SQUARED_PREFIXES):
+        return 2
+    if name.startswith(_LINEAR_PREFIXES):
+        return 1
+    raise ModelError(f"noise field {name!r} says neither a standard deviation (sigma_*, k_*) "
+                     "nor a variance (var_*, psd_*, alpha_*)")
 
 
 def steps_input(steps: BodySteps, key: str, owner: object) -> NDArray[np.float64]:
@@ -155,6 +190,56 @@ class NoiseModel(ABC):
     def bias_jacobian(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """∂(Δd, Δθ)/∂(bias parameters) of steps a … b−1, shape (b − a, 2, p)."""
         return np.zeros((b - a, 2, 0))
+
+    # --- variance parameters (fitting) -----------------------------------------------
+    def variance_parameters(self, robot: Robot | None = None) -> dict[str, float]:
+        """The model's variance parameters by field name: the numbers its first-order
+        covariance contribution is linear in (σ and k fields squared, var/psd/alpha
+        fields as they are; see :func:`variance_power`). Text fields (a mode) are left
+        out.
+
+        With ``robot``, only the parameters that apply to it: a parameter stays when the
+        model with unit variance in it alone passes :meth:`check_robot` (a tricycle has
+        no right wheel scale).
+
+        >>> from odomkit.noise import WheelNoise
+        >>> WheelNoise(0.01, 0.02).variance_parameters()
+        {'k_left': 0.0001, 'k_right': 0.0004}
+        """
+        out: dict[str, float] = {}
+        for f in fields(self):  # type: ignore[arg-type]
+            value = getattr(self, f.name)
+            if isinstance(value, str):
+                continue
+            out[f.name] = float(value) ** variance_power(f.name)
+        if robot is None:
+            return out
+        zero = dict.fromkeys(out, 0.0)
+        kept = {}
+        for name, var in out.items():
+            try:
+                self.from_variances({**zero, name: 1.0}).check_robot(robot)
+            except ModelError:
+                continue
+            kept[name] = var
+        return kept
+
+    def from_variances(self: N, variances: Mapping[str, float]) -> N:
+        """A copy of the model with the given variance parameters (see
+        :meth:`variance_parameters`; fields not named keep their value).
+
+        >>> from odomkit.noise import WheelNoise
+        >>> WheelNoise(0.01, 0.02).from_variances({"k_left": 0.0009})
+        WheelNoise(k_left=0.03, k_right=0.02)
+        """
+        names = {f.name for f in fields(self)}  # type: ignore[arg-type]
+        values = {}
+        for name, var in variances.items():
+            if name not in names:
+                raise ModelError(f"{type(self).__name__} has no field {name!r}")
+            var = validate.non_negative(var, f"{type(self).__name__}.{name} variance")
+            values[name] = var if variance_power(name) == 1 else float(np.sqrt(var))
+        return replace(self, **values)  # type: ignore[type-var]
 
     def to_dict(self) -> dict[str, float | str]:
         """The model's parameters by field name (a robot file's ``[noise]`` keys)."""

@@ -8,6 +8,7 @@ Nothing existing is overwritten unless ``overwrite=True`` (CLI ``--force``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -21,12 +22,13 @@ from odomkit.calibrate.realdata import (
     umbmark_from_runs,
 )
 from odomkit.errors import InputError, ModelError
-from odomkit.io.files import refuse_overwrite
+from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.robot import DiffDrive
 from odomkit.workflows.logs import LogOptions, load_log
+from odomkit.workflows.results import check_result, numeric_guard
 
 __all__ = ["calibrate_files", "noise_files", "optiodom_square_table"]
 
@@ -36,7 +38,7 @@ def calibrate_files(
     robot_path: str | Path,
     *,
     method: str = "exact",
-    source: str = "endpoints",
+    source: str | None = None,
     side: float | None = None,
     out_robot: str | Path | None = None,
     ros_yaml: str | Path | None = None,
@@ -53,41 +55,65 @@ def calibrate_files(
         :func:`odomkit.workflows.logs.load_log` reads).
     robot_path : robot file (TOML) with the parameters the odometry used.
     method : {"exact", "umbmark"}
-    source : {"endpoints", "trajectory"} (exact only)
+    source : {"endpoints", "trajectory"}, optional
+        Exact only (default "endpoints"); an error with UMBmark, which ignores it.
     side : square side [m] (UMBmark only; required there).
-    out_robot, ros_yaml : optional output paths (never overwritten unless ``overwrite``).
-    wheel_radius : nominal wheel radius for the ROS snippet [m].
+    out_robot, ros_yaml : optional output paths (never overwritten unless ``overwrite``);
+        all outputs are checked before anything is read or computed.
+    wheel_radius : nominal wheel radius for the ROS snippet [m]; default the radius the
+        robot file gives (``wheel_radius``/``wheel_diameter``), and an error if it differs.
     log_options : :class:`odomkit.workflows.logs.LogOptions`.
-    **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact`.
+    **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
     -------
     dict with the calibration summary (JSON-ready), ``robot`` (the corrected parameters
     as in the robot file) and ``outputs`` (paths written).
     """
-    robot, noise = read_robot(robot_path)
-    refuse_overwrite(out_robot, ros_yaml, overwrite=overwrite)
-    if ros_yaml is not None and wheel_radius is None:
-        raise InputError("--ros-yaml needs --wheel-radius (the controller's nominal radius, m)")
-    runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    check_outputs({"--out-robot": out_robot, "--ros-yaml": ros_yaml}, overwrite=overwrite,
+                  inputs=[robot_path, *run_paths])
+    if method not in ("exact", "umbmark"):
+        raise ModelError(f"--method must be 'exact' or 'umbmark', got {method!r}")
     if method == "umbmark":
+        stray = [_EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
+        if source is not None:
+            stray.insert(0, "--from")
+        if stray:
+            raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
         if side is None:
             raise InputError("--method umbmark needs --side (the square side in metres)")
+    exact_kwargs = {k: v for k, v in exact_kwargs.items() if v is not None}
+    if wheel_radius is not None and ros_yaml is None:
+        raise InputError("--wheel-radius applies to --ros-yaml only (the controller's nominal radius)")
+    robot, noise = read_robot(robot_path)
+    if ros_yaml is not None:
         if not isinstance(robot, DiffDrive):
-            raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
-                             source=str(robot_path))
-        um = umbmark_from_runs(runs, robot, side)
-        summary = um.to_dict()
-        new_robot: Any = um.robot
-    elif method == "exact":
-        cal = calibrate_exact(runs, robot, source, **exact_kwargs)  # type: ignore[arg-type]
-        summary = cal.to_dict()
-        new_robot = cal.robot
-        if side is not None and isinstance(robot, DiffDrive):
-            summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
-            summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
-    else:
-        raise ModelError(f"--method must be 'exact' or 'umbmark', got {method!r}")
+            raise InputError(f"--ros-yaml writes diff_drive_controller parameters; the robot file "
+                             f"describes a {robot.type_name!r} robot", source=str(robot_path))
+        wheel_radius = _controller_radius(robot_path, wheel_radius)
+    if method == "umbmark" and not isinstance(robot, DiffDrive):
+        raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
+                         source=str(robot_path))
+    runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    with numeric_guard("the calibration"):
+        if method == "umbmark":
+            assert side is not None and isinstance(robot, DiffDrive)
+            um = umbmark_from_runs(runs, robot, side)
+            summary = um.to_dict()
+            new_robot: Any = um.robot
+        else:
+            cal = calibrate_exact(runs, robot, source or "endpoints", **exact_kwargs)  # type: ignore[arg-type]
+            summary = cal.to_dict()
+            new_robot = cal.robot
+            if side is not None and isinstance(robot, DiffDrive):
+                summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
+                summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
+    robot_fields = robot_to_dict(new_robot)["robot"]
+    check_result("the calibration", {
+        "the parameters": [v for k, v in robot_fields.items() if k != "type"],
+        **{k: summary.get(k) for k in ("E_d", "E_b", "wheel_base", "e_max_syst_before",
+                                       "e_max_syst_after")},
+    })
     outputs: dict[str, str] = {}
     if out_robot is not None:
         outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite))
@@ -96,9 +122,48 @@ def calibrate_files(
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
                                                   overwrite=overwrite))
     summary["method"] = method
-    summary["robot"] = robot_to_dict(new_robot)["robot"]
+    summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+# The CLI flag of each keyword argument of calibrate_exact, for messages.
+_EXACT_FLAGS = {"heading_weight": "--heading-weight"}
+
+
+def _controller_radius(robot_path: str | Path, given: float | None) -> float:
+    """The nominal wheel radius for the ROS controller: ``given`` (``--wheel-radius``) or the
+    robot file's own (mean of the two wheels), and an error when the two disagree, since the
+    multipliers are computed against the file's nominal wheels."""
+    radius = _file_wheel_radius(robot_path)
+    if given is None:
+        if radius is None:
+            raise InputError("--ros-yaml needs --wheel-radius (the controller's nominal radius, m): "
+                             "the robot file gives metres per tick, not a wheel size",
+                             source=str(robot_path))
+        return radius
+    if radius is not None and abs(given - radius) > 1e-9 * radius:
+        raise InputError(f"--wheel-radius {given:g} m conflicts with the robot file's wheel size "
+                         f"(radius {radius:g} m): the multipliers are relative to the file's wheels; "
+                         "leave --wheel-radius out or fix the file", source=str(robot_path))
+    return given
+
+
+def _file_wheel_radius(robot_path: str | Path) -> float | None:
+    """The mean nominal wheel radius [m] a diff robot file gives through ``wheel_radius`` or
+    ``wheel_diameter`` (plain or ``_left``/``_right``), or None when it gives metres per tick
+    (:func:`odomkit.io.robotfile.read_robot` has already checked the file)."""
+    import tomllib
+
+    table = tomllib.loads(Path(robot_path).read_text(encoding="utf-8")).get("robot", {})
+    radii = []
+    for side in ("left", "right"):
+        for key, factor in ((f"wheel_radius_{side}", 1.0), ("wheel_radius", 1.0),
+                            (f"wheel_diameter_{side}", 0.5), ("wheel_diameter", 0.5)):
+            if key in table:
+                radii.append(factor * float(table[key]))
+                break
+    return sum(radii) / len(radii) if len(radii) == 2 else None
 
 
 def noise_files(
@@ -109,20 +174,32 @@ def noise_files(
     """Read repeated runs and a robot file and fit k_L, k_R
     (:func:`odomkit.calibrate.noise_fit.fit_wheel_noise_from_runs`); JSON-ready dict.
     With ``plot``, also draw the runs' errors with the fitted and empirical 95 % ellipses
-    (needs matplotlib)."""
+    (needs matplotlib). The fit's ``warnings`` (k's the data cannot identify, runs beyond
+    the first-order regime) are also issued as :class:`UserWarning`\\ s."""
+    check_outputs({"--plot": plot}, overwrite=overwrite, inputs=[robot_path, *run_paths])
+    if plot is not None:
+        from odomkit.plot import have_matplotlib
+
+        if not have_matplotlib():
+            raise InputError("--plot needs matplotlib: pip install 'odomkit[plot]'")
     robot, _ = read_robot(robot_path)
     if not isinstance(robot, DiffDrive):
         raise InputError(f"calibrate-noise fits the wheel noise k_L, k_R of a differential drive; "
                          f"the robot file describes a {robot.type_name!r} robot", source=str(robot_path))
-    refuse_overwrite(plot, overwrite=overwrite)
     runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
-    fit = fit_wheel_noise_from_runs(runs, robot, **kwargs)
+    with numeric_guard("the noise fit"):
+        fit = fit_wheel_noise_from_runs(runs, robot, **kwargs)
+    # An interval open above is a finding (see warnings), not an overflow.
+    check_result("the noise fit", {"k_left": fit.k_left, "k_right": fit.k_right,
+                                   "the lower interval ends": [fit.ci_left[0], fit.ci_right[0]],
+                                   "the mean error": fit.mean, "the log-likelihood": fit.loglik},
+                 {"the fitted covariance": fit.cov_fitted})
+    for text in fit.warnings:
+        warnings.warn(text, stacklevel=2)
     out = fit.to_dict()
     if plot is not None:
-        from odomkit.plot import have_matplotlib, plot_noise_fit
+        from odomkit.plot import plot_noise_fit
 
-        if not have_matplotlib():
-            raise InputError("--plot needs matplotlib: pip install 'odomkit[plot]'")
         out["plot"] = str(plot_noise_fit(fit, plot))
     return out
 

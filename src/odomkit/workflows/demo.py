@@ -13,7 +13,7 @@ from odomkit.calibrate.exact import calibrate_exact
 from odomkit.calibrate.realdata import e_max_syst_of_runs, umbmark_from_runs
 from odomkit.data import builtin_data_path
 from odomkit.evaluate import evaluate_track
-from odomkit.io.files import refuse_overwrite
+from odomkit.io.files import check_outputs
 from odomkit.io.jsonfile import write_json
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, write_robot
@@ -36,7 +36,7 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     ``diff_drive_controller`` snippet, ``summary.json`` and, with matplotlib, a figure.
     """
     out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    check_outputs({"--out": out}, folders={"--out"})
     robot_file = builtin_data_path("optiodom_diff.toml")
     robot, noise = read_robot(robot_file)
     assert isinstance(robot, DiffDrive)  # the shipped robot file is a differential drive
@@ -48,7 +48,9 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     targets = [out / f"{s}_track.csv" for s in stems] + [out / f"{s}.tum" for s in stems]
     targets += [out / n for n in ("calibrated_robot.toml", "diff_drive_controller.yaml",
                                   "summary.json", "demo_tracks.png")]
-    refuse_overwrite(*targets, overwrite=overwrite)
+    check_outputs({"--out": out, **{str(p): p for p in targets}}, overwrite=overwrite,
+                  folders={"--out"})
+    out.mkdir(parents=True, exist_ok=True)
 
     summary: dict[str, Any] = {"robot": str(robot_file), "runs": {}}
     tracks = []

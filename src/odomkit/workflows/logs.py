@@ -1,31 +1,52 @@
 """Reading a log in any supported format: the log options every log-reading command shares
-(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``)."""
+(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``).
+
+The readers are imported inside :func:`load_log`, so that a command module may import
+:class:`LogOptions` and :data:`LOG_FORMATS` at start-up for nothing (``--help`` stays fast).
+"""
 
 from __future__ import annotations
 
+import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from odomkit.errors import InputError
-from odomkit.io.csvlog import parse_column_map, read_csv_log
-from odomkit.io.halmstad import read_khepera, read_snowhite
-from odomkit.io.optiodom import read_run
-from odomkit.log import OdometryLog
-from odomkit.robot import DiffDrive, Robot
+
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Robot
 
 __all__ = ["LOG_FORMATS", "LogOptions", "detect_format", "load_log"]
 
 LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom")
 
+# Counter widths whose wrap-around can be undone (odomkit.io.table.COUNTER_BITS, repeated
+# here so that importing this module loads no reader; tests/io checks they agree).
+_COUNTER_BITS = (8, 16, 24, 32, 64)
+
+# The options each format reads; any other option given for it is an error, not ignored.
+_APPLIES = {
+    "csv": {"columns", "cumulative", "wrap_bits", "time_scale"},
+    "khepera": {"cumulative", "wrap_bits", "period"},  # cumulative counts by definition
+    "snowhite": {"period"},
+    "optiodom": set(),
+}
+_FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
+          "period": "--period", "time_scale": "--time-scale"}
+
 
 def detect_format(path: Path) -> str:
-    """Guess a log format from its file name.
+    """Guess a log format from its file name (a ``.gz`` suffix is looked through).
 
-    >>> detect_format(Path("230620202042_run-01.csv")), detect_format(Path("log.csv"))
+    >>> detect_format(Path("230620202042_run-01.csv")), detect_format(Path("log.csv.gz"))
     ('optiodom', 'csv')
+    >>> detect_format(Path("230620202042_run-01.csv.gz"))
+    'optiodom'
     """
-    name = path.name.lower()
+    name = path.name.lower().removesuffix(".gz")
     if name.startswith("snowhite"):
         return "snowhite"
     if name.startswith("khepera"):
@@ -37,7 +58,18 @@ def detect_format(path: Path) -> str:
 
 @dataclass(frozen=True)
 class LogOptions:
-    """How to read a log (see ``odomkit track --help``)."""
+    """How to read a log (``odomkit track --help``, "log options"); checked when made.
+
+    Parameters
+    ----------
+    format : one of :data:`LOG_FORMATS` ("auto": from the file name, :func:`detect_format`)
+    columns : CSV column mapping ``t=time,ticks_left=L,...`` (csv only)
+    cumulative : increment channels hold cumulative counters (csv; khepera always does)
+    wrap_bits : width of a counter that wraps around: 8, 16, 24, 32 or 64
+    period : sample period [s] of a log without a time column (khepera, snowhite)
+    time_scale : seconds per unit of the CSV time column (1e-3 for ms, 1e-9 for ns)
+    decimate : use every n-th row (increments summed, rates sampled)
+    """
 
     format: str = "auto"
     columns: str | None = None
@@ -45,24 +77,76 @@ class LogOptions:
     wrap_bits: int | None = None
     period: float | None = None
     time_scale: float = 1.0
+    decimate: int = 1
+
+    def __post_init__(self) -> None:
+        if self.format not in LOG_FORMATS:
+            raise InputError(f"--format must be one of {', '.join(LOG_FORMATS)}, got {self.format!r}")
+        if self.wrap_bits is not None and self.wrap_bits not in _COUNTER_BITS:
+            raise InputError(f"--wrap-bits must be one of {', '.join(map(str, _COUNTER_BITS))}, "
+                             f"got {self.wrap_bits!r}")
+        if self.period is not None and not _positive(self.period):
+            raise InputError(f"--period must be a positive number of seconds, got {self.period!r}")
+        if not _positive(self.time_scale):
+            raise InputError(f"--time-scale must be a positive number (seconds per time unit), "
+                             f"got {self.time_scale!r}")
+        if isinstance(self.decimate, bool) or not isinstance(self.decimate, int) or self.decimate < 1:
+            raise InputError(f"--decimate must be a positive integer, got {self.decimate!r}")
+
+    def given(self) -> list[str]:
+        """The flags set to something other than their default, e.g. ``["--cumulative"]``."""
+        default = LogOptions()
+        return [f"--{f.name.replace('_', '-')}" for f in fields(self)
+                if getattr(self, f.name) != getattr(default, f.name)]
+
+    def check_format(self, fmt: str, source: str) -> None:
+        """Refuse an option that a log of format ``fmt`` would silently ignore."""
+        stray = [flag for name, flag in _FLAGS.items()
+                 if name not in _APPLIES[fmt] and getattr(self, name) != getattr(LogOptions(), name)]
+        if stray:
+            raise InputError(f"{', '.join(stray)} does not apply to a {fmt} log", source=source)
+        if self.wrap_bits is not None and fmt == "csv" and not self.cumulative:
+            raise InputError("--wrap-bits unwraps cumulative counters: add --cumulative", source=source)
+
+
+def _positive(value: float) -> bool:
+    return (not isinstance(value, bool) and isinstance(value, int | float)
+            and math.isfinite(value) and value > 0)
 
 
 def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions()) -> OdometryLog:
-    """Read a log in any supported format."""
+    """Read a log in any supported format (plain or gzip) and decimate it as ``options`` say.
+
+    Raises
+    ------
+    InputError
+        Missing or malformed file, or an option that the log's format does not use.
+
+    Warns
+    -----
+    UserWarning
+        A counter column read as increments that looks cumulative, or rows out of time order.
+    """
+    from odomkit.io.csvlog import parse_column_map, read_csv_log
+    from odomkit.io.halmstad import read_khepera, read_snowhite
+    from odomkit.io.optiodom import read_run
+    from odomkit.robot import DiffDrive
+
     path = Path(path)
     if not path.is_file():
         raise InputError("no such file", source=str(path))
     fmt = detect_format(path) if options.format == "auto" else options.format
-    if fmt not in LOG_FORMATS:
-        raise InputError(f"unknown log format {fmt!r}; expected one of {', '.join(LOG_FORMATS)}")
+    options.check_format(fmt, str(path))
     if fmt == "khepera":
-        return read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
-    if fmt == "snowhite":
-        return read_snowhite(path, **({"period": options.period} if options.period else {}))
-    if fmt == "optiodom":
-        return read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
-    if not options.columns:
-        raise InputError("a CSV log needs --columns, e.g. t=time,ticks_left=L,ticks_right=R",
-                         source=str(path))
-    return read_csv_log(path, parse_column_map(options.columns), cumulative=options.cumulative,
-                        wrap_bits=options.wrap_bits, time_scale=options.time_scale)
+        log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
+    elif fmt == "snowhite":
+        log = read_snowhite(path, **({"period": options.period} if options.period else {}))
+    elif fmt == "optiodom":
+        log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
+    else:
+        if not options.columns:
+            raise InputError("a CSV log needs --columns, e.g. t=time,ticks_left=L,ticks_right=R",
+                             source=str(path))
+        log = read_csv_log(path, parse_column_map(options.columns), cumulative=options.cumulative,
+                           wrap_bits=options.wrap_bits, time_scale=options.time_scale)
+    return log.decimate(options.decimate)

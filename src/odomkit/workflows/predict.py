@@ -14,6 +14,7 @@ from numpy.typing import ArrayLike
 
 from odomkit.io.ros import ros_pose_covariance
 from odomkit.path import Segment
+from odomkit.workflows.results import check_result, numeric_guard
 
 if TYPE_CHECKING:
     from odomkit.propagate.plan import NoiseArg
@@ -56,7 +57,9 @@ def run_predict(
     """
     from odomkit.propagate.predict import predict
 
-    result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
-                     engine=engine,  # type: ignore[arg-type]
-                     partitions=partitions, compass_period=compass_period)
+    with numeric_guard("the prediction"):
+        result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
+                         engine=engine,  # type: ignore[arg-type]
+                         partitions=partitions, compass_period=compass_period)
+    check_result("the prediction", {"the pose": result.pose}, {"the covariance": result.cov})
     return add_ros_pose_covariance(result.to_dict())

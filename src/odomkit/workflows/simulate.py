@@ -15,6 +15,7 @@ from numpy.typing import ArrayLike
 from odomkit.path import Segment
 from odomkit.robot import SystematicErrors
 from odomkit.workflows.predict import add_ros_pose_covariance
+from odomkit.workflows.results import check_result, numeric_guard
 
 if TYPE_CHECKING:
     from odomkit.propagate.plan import NoiseArg
@@ -50,11 +51,17 @@ def run_simulate(
     # The Monte Carlo stack (scipy.stats, numba, dask) loads only when a simulation runs.
     from odomkit.simulate import monte_carlo
 
-    result = monte_carlo(
-        segments, noise, wheel_base,
-        runs=runs, partitions=partitions, seed=seed, pose0=pose0, cov0=cov0,
-        systematic=systematic, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
-        scheduler=scheduler, progress=progress, compass_period=compass_period,
-    )
+    with numeric_guard("the simulation"):
+        result = monte_carlo(
+            segments, noise, wheel_base,
+            runs=runs, partitions=partitions, seed=seed, pose0=pose0, cov0=cov0,
+            systematic=systematic, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
+            scheduler=scheduler, progress=progress, compass_period=compass_period,
+        )
+    theory, simulation = result["theory"], result["simulation"]
+    check_result("the simulation", {"the predicted pose": theory["pose"],
+                                    "the simulated mean": simulation["mean"]},
+                 {"the predicted covariance": theory["cov"],
+                  "the simulated covariance": simulation["cov"]})
     result["theory"] = add_ros_pose_covariance(result["theory"])
     return result

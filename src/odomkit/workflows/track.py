@@ -6,16 +6,23 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from odomkit.angles import wrap_angle
+from odomkit.errors import InputError
 from odomkit.evaluate import evaluate_track
-from odomkit.io.files import refuse_overwrite
+from odomkit.io.files import check_outputs
 from odomkit.io.robotfile import read_robot
 from odomkit.io.ros import ros_pose_covariance
 from odomkit.io.trackio import write_track_csv, write_tum
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.track import Track, dead_reckon_log
+from odomkit.truth import start_pose, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
+from odomkit.workflows.results import check_result, numeric_guard
+from odomkit.workflows.truth import TruthOptions, load_truth
 
 __all__ = ["TrackRun", "run_track"]
 
@@ -27,11 +34,14 @@ class TrackRun:
     track: Track
     log: OdometryLog
     outputs: dict[str, str] = field(default_factory=dict)
+    truth: NDArray[np.float64] | None = None  # (N, 3) truth at the log rows, NaN outside it
 
     def summary(self) -> dict[str, Any]:
         """The ``--json`` object: final pose and covariance (also in ROS's 6×6 layout,
         :func:`odomkit.io.ros.ros_pose_covariance`), path length, duration, and the final
-        error against ground truth when the log has it."""
+        error against ground truth when the log has it (``ground_truth``), and, with any
+        truth (``--truth`` or the log's), ``final_position_error`` at the last row inside
+        the truth and ``max_position_error`` over the rows inside it."""
         final = self.track.poses[-1]
         out: dict[str, Any] = {
             "samples": int(self.track.poses.shape[0]),
@@ -44,8 +54,14 @@ class TrackRun:
             "duration": self.track.duration,
         }
         if self.log.ground_truth is not None:
-            out["ground_truth"] = evaluate_track(self.track.poses, self.log.ground_truth,
-                                                 self.track.cov).to_dict()
+            with numeric_guard("the comparison with ground truth"):
+                out["ground_truth"] = evaluate_track(self.track.poses, self.log.ground_truth,
+                                                     self.track.cov).to_dict()
+        if self.truth is not None:
+            inside = np.isfinite(self.truth[:, 0])
+            err = np.hypot(*(self.track.poses[inside, :2] - self.truth[inside, :2]).T)
+            out["final_position_error"] = float(err[-1])
+            out["max_position_error"] = float(err.max())
         out["outputs"] = self.outputs
         return out
 
@@ -56,8 +72,9 @@ def run_track(
     *,
     method: Method = "exact",
     log_options: LogOptions | None = None,
-    decimate: int = 1,
     pose0: tuple[float, float, float] | None = None,
+    cov0: list[list[float]] | None = None,
+    truth: TruthOptions | None = None,
     with_covariance: bool = True,
     engine: str = "recursion",
     out: str | Path | None = None,
@@ -67,17 +84,40 @@ def run_track(
     """Read a robot file and a log, dead-reckon, write the requested outputs.
 
     ``log_options`` (:class:`~odomkit.workflows.logs.LogOptions`, default: format guessed
-    from the file name) says how to read the log; ``out``/``tum`` are written only when
-    new, or when ``overwrite``.
+    from the file name) says how to read (and decimate) the log; ``out``/``tum`` are written only when
+    new, or when ``overwrite``. ``truth`` (:class:`~odomkit.workflows.truth.TruthOptions`)
+    names a truth file; without one the log's own ground truth is used, if it has any.
+    With truth the track starts at the truth pose at the first log time unless ``pose0``
+    is given, and ``cov0`` defaults to that pose's uncertainty (``--truth-sigma``, and the
+    variance of a heading fitted to position-only truth); the CSV gets ``gt_*`` columns.
     """
+    options = truth or TruthOptions()
+    check_outputs({"--out": out, "--tum": tum}, overwrite=overwrite,
+                  inputs=[p for p in (log_path, robot_path, options.path) if p is not None])
     robot, noise = read_robot(robot_path)
-    refuse_overwrite(out, tum, overwrite=overwrite)
-    log = load_log(log_path, robot, log_options or LogOptions()).decimate(decimate)
+    log = load_log(log_path, robot, log_options or LogOptions())
+    found = load_truth(options, log)
+    truth_rows = None
+    if found is not None:
+        samples = truth_at(found, log.t, options.max_gap)
+        if not samples.valid.any():
+            raise InputError(f"the truth ({found.t[0]:.6g}..{found.t[-1]:.6g} s) does not overlap the log "
+                             f"({log.t[0]:.6g}..{log.t[-1]:.6g} s); check --truth-time-unit",
+                             source=found.source)
+        truth_rows = samples.poses
+        if pose0 is None:
+            start, start_cov = start_pose(found, float(log.t[0]), options.max_gap)
+            pose0 = (float(start[0]), float(start[1]), float(start[2]))
+            if cov0 is None and start_cov.any():
+                cov0 = start_cov.tolist()
     use_noise = (noise if len(noise) > 1 else noise[0]) if (noise and with_covariance) else None
-    track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, engine=engine)
+    with numeric_guard("the track"):
+        track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, cov0=cov0, engine=engine)
+    check_result("the track", {"the poses": track.poses, "the path length": track.path_length},
+                 {"the covariance": track.cov})
     outputs = {}
     if out is not None:
-        outputs["track_csv"] = str(write_track_csv(out, track, overwrite))
+        outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
     if tum is not None:
         outputs["tum"] = str(write_tum(tum, track, overwrite))
-    return TrackRun(track, log, outputs)
+    return TrackRun(track, log, outputs, truth_rows)

@@ -13,7 +13,8 @@ from odomkit.errors import InputError
 from odomkit.io.robotfile import read_robot
 from odomkit.io.umbmark_errors import read_errors_csv
 from odomkit.robot import DiffDrive
-from odomkit.workflows.logs import load_log
+from odomkit.workflows.logs import LogOptions, load_log
+from odomkit.workflows.results import check_result, numeric_guard
 
 if TYPE_CHECKING:
     from odomkit.calibrate.realdata import UmbmarkFromRuns
@@ -51,15 +52,30 @@ def umbmark_from_errors_file(errors_csv: str | Path, side: float, *,
     if not (math.isfinite(wheel_base) and wheel_base > 0):
         raise InputError(f"--wheel-base must be a positive length in metres, got {wheel_base!r}")
     errors_cw, errors_ccw = read_errors_csv(errors_csv)
-    return umbmark_summary(errors_cw, errors_ccw, side, wheel_base)
+    with numeric_guard("UMBmark"):
+        summary = umbmark_summary(errors_cw, errors_ccw, side, wheel_base)
+    _check_umbmark(summary)
+    return summary
 
 
-def umbmark_from_files(run_paths: Sequence[str | Path], robot_path: str | Path, side: float,
-                       **kwargs: Any) -> UmbmarkFromRuns:
-    """UMBmark (:func:`odomkit.calibrate.realdata.umbmark_from_runs`) from log files and a
-    robot file: what ``odomkit umbmark --runs`` calls."""
+def umbmark_from_files(run_paths: Sequence[str | Path], robot_path: str | Path, side: float, *,
+                       log_options: LogOptions | None = None, **kwargs: Any) -> UmbmarkFromRuns:
+    """UMBmark (:func:`odomkit.calibrate.realdata.umbmark_from_runs`) from log files, read
+    as ``log_options`` say (:class:`~odomkit.workflows.logs.LogOptions`), and a robot file:
+    what ``odomkit umbmark --runs`` calls."""
     # The exact-calibration stack (scipy) loads only for this form.
     from odomkit.calibrate.realdata import umbmark_from_runs
 
     robot = _diff_robot(robot_path)
-    return umbmark_from_runs([load_log(p, robot) for p in run_paths], robot, side, **kwargs)
+    runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    with numeric_guard("UMBmark"):
+        result = umbmark_from_runs(runs, robot, side, **kwargs)
+    _check_umbmark(result.to_dict())
+    return result
+
+
+def _check_umbmark(summary: dict[str, Any]) -> None:
+    """The numbers UMBmark returns are finite (``radius`` is infinite on straight legs)."""
+    check_result("UMBmark", {key: summary.get(key) for key in (
+        "cg", "e_max_syst", "alpha", "beta", "E_d", "E_b", "c_left", "c_right", "wheel_base",
+        "e_max_syst_before", "e_max_syst_after")})

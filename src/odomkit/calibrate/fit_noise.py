@@ -1,0 +1,520 @@
+"""Maximum-likelihood noise variances from window-end errors (``odomkit fit-noise``).
+
+Each log with ground truth is cut into windows that restart from the truth
+(:mod:`odomkit.windows`). To first order a window end's covariance is linear in the
+noise models' variance parameters v (:meth:`odomkit.noise.NoiseModel.variance_parameters`:
+σ and k fields squared, var/psd/alpha fields as they are), so the bases are computed once
+per window and the likelihood of every window end (:class:`WindowLikelihood`: white
+noise independent between windows, one bias draw per log) is cheap to evaluate at any v.
+It is maximised over v ≥ 0 by L-BFGS-B on log v with its analytic gradient.
+
+Intervals are **profile-likelihood** intervals {v_j : 2(ℓ̂ − ℓ_p(v_j)) ≤ χ²₁(level)}: they
+respect the boundary v ≥ 0 (an interval may be closed at 0) and are reported in the
+model's own units (σ, k: the square root of the variance bounds). A likelihood that stays
+within the threshold however large v_j grows gives an open upper bound (infinity): the
+data cannot identify that parameter.
+
+Warnings (the result's ``warnings``) say when a result could be silently wrong: a
+parameter the data cannot identify (flat profile, correlation near ±1, too little
+turning, too few windows or logs), a first-order model stretched too far (σθ large at
+window ends), and logs that disagree with the fit (each log's eᵀΣ⁻¹e against its χ²
+distribution, Bonferroni-corrected).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass, field, fields
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import brentq
+from scipy.stats import chi2
+
+from odomkit.calibrate.window_likelihood import WindowLikelihood
+from odomkit.errors import ModelError
+from odomkit.noise import NOISE_MODELS, NoiseModel, NoiseSet
+from odomkit.noise.base import variance_power
+
+if TYPE_CHECKING:
+    from odomkit.robot import Robot
+    from odomkit.windows import WindowBasis
+
+__all__ = [
+    "COVERAGE_LEVELS",
+    "DEFAULT_WHITE",
+    "FIRST_ORDER_SIGMA_THETA",
+    "NoiseFit",
+    "NoiseParameter",
+    "coverage_of",
+    "fit_noise",
+    "noise_parameters",
+    "models_to_fit",
+]
+
+#: The white models fitted when a robot file names none, by robot type.
+DEFAULT_WHITE: dict[str, tuple[str, ...]] = {
+    "diff": ("WheelNoise",),
+    "tricycle": ("TricycleNoise",),
+    "gyro": ("SpeedNoise", "GyroNoise"),
+    "compass": ("SpeedNoise", "CompassNoise"),
+}
+#: Parameters of those defaults held at zero: with a constant sample period a period
+#: error moves a tricycle exactly as a speed error does (∂/∂T = (v/T)·∂/∂v), so the data
+#: cannot tell them apart.
+DEFAULT_FIXED = frozenset({"sigma_dt"})
+#: σθ at a window end [rad] above which the first-order model is doubtful: the along-track
+#: second-order error (≈ D σθ²/2) reaches a tenth of the cross-track error (D σθ).
+FIRST_ORDER_SIGMA_THETA = 0.2
+COVERAGE_LEVELS = (0.5, 0.9, 0.95, 0.99)
+_CORRELATION = 0.95
+_U_MAX = 1e14  # upper bound of a variance in units of its starting scale
+_MAX_STEPS = 200
+_TOL_LL = 1e-9  # log L gain that ends the iteration (intervals need ~1e-3)
+_FLAT = 1e12  # an upper profile bound beyond this many times the scale is open
+
+
+@dataclass(frozen=True)
+class NoiseParameter:
+    """One variance parameter: ``models[model]``'s field ``name``.
+
+    ``key`` names it in the output (the field name, or ``Class.field`` when two models
+    share a field name); ``kind`` is its model's (white or bias); ``free`` whether it is
+    fitted (else held at its model's value).
+    """
+
+    key: str
+    model: int
+    name: str
+    kind: str
+    free: bool
+
+    def to_value(self, variance: float) -> float:
+        """The model-unit value (σ, k or the variance itself) of a variance."""
+        return float(np.sqrt(variance)) if variance_power(self.name) == 2 else float(variance)
+
+
+def _zero_model(cls: type[NoiseModel]) -> NoiseModel | None:
+    """The model with every numeric field zero (text fields at their default), or None."""
+    kwargs = {}
+    for f in fields(cls):  # type: ignore[arg-type]
+        if not isinstance(f.default, str):
+            kwargs[f.name] = 0.0
+    try:
+        return cls(**kwargs)
+    except (TypeError, ModelError):
+        return None
+
+
+def _applies(model: NoiseModel, robot: Robot) -> bool:
+    try:
+        model.check_robot(robot)
+    except ModelError:
+        return False
+    return True
+
+
+def models_to_fit(robot: Robot, models: Sequence[NoiseModel], kinds: Collection[str]
+                  ) -> tuple[tuple[NoiseModel, ...], frozenset[str]]:
+    """The models a fit uses, and the fields held fixed by default.
+
+    The given models (a robot file's ``[noise]``), plus, for each asked kind they lack, a
+    default: white from :data:`DEFAULT_WHITE` (else every registered white model made for
+    exactly this robot type); bias from the registered models whose all-zero instance is a
+    bias model that applies to the robot, those made for this robot type preferred to
+    those for any robot. A new model class plugs in by registering; nothing here changes.
+    """
+    out = list(models)
+    fixed: set[str] = set()
+    kind_name = robot.type_name
+    if "white" in kinds and not any(m.kind == "white" for m in out):
+        names = DEFAULT_WHITE.get(kind_name)
+        if names is None:
+            names = tuple(n for n, c in NOISE_MODELS.items() if c.robot_types == (kind_name,))
+        made = [m for m in (_zero_model(NOISE_MODELS[n]) for n in names) if m is not None]
+        made = [m for m in made if m.kind == "white" and _applies(m, robot)]
+        if not made:
+            raise ModelError(f"fit-noise has no default white noise for a {type(robot).__name__}; "
+                             "name the models to fit in the robot file's [noise] table")
+        out += made
+        fixed |= DEFAULT_FIXED & {n for m in made for n in m.variance_parameters()}
+    if "bias" in kinds and not any(m.kind == "bias" for m in out):
+        made = [m for m in (_zero_model(c) for c in NOISE_MODELS.values()) if m is not None]
+        made = [m for m in made if m.kind == "bias" and _applies(m, robot)]
+        specific = [m for m in made if kind_name in m.robot_types]
+        out += specific or made
+    if not out:
+        raise ModelError("no noise models to fit")
+    NoiseSet.of(out).check_robot(robot)
+    return tuple(out), frozenset(fixed)
+
+
+def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collection[str],
+                     fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
+    """Every variance parameter of ``models`` that applies to ``robot``: white ones first,
+    then bias (the order of :func:`odomkit.windows.window_covariance_basis`); free when
+    the model's kind is in ``kinds`` and the key or field is not in ``fixed``."""
+    entries = []
+    for kind in ("white", "bias"):
+        for i, model in enumerate(models):
+            if model.kind == kind:
+                entries += [(i, name, kind) for name in model.variance_parameters(robot)]
+    counts: dict[str, int] = {}
+    for _, name, _ in entries:
+        counts[name] = counts.get(name, 0) + 1
+    out = []
+    for i, name, kind in entries:
+        key = name if counts[name] == 1 else f"{type(models[i]).__name__}.{name}"
+        out.append(NoiseParameter(key, i, name, kind, kind in kinds and key not in fixed
+                                  and name not in fixed))
+    return tuple(out)
+
+
+def coverage_of(errors_xy: NDArray[np.float64], cov_xy: NDArray[np.float64],
+                levels: Sequence[float] = COVERAGE_LEVELS) -> dict[str, float]:
+    """Fraction of errors (n, 2) inside the predicted ellipse (n, 2, 2) of each
+    probability: eᵀP⁻¹e ≤ χ²₂(p) = −2 ln(1 − p)."""
+    from odomkit.evaluate import nees
+
+    values = nees(errors_xy, cov_xy)
+    values = values[np.isfinite(values)]
+    if values.size == 0:
+        return {f"{p:g}": float("nan") for p in levels}
+    return {f"{p:g}": float(np.mean(values <= -2.0 * np.log1p(-p))) for p in levels}
+
+
+@dataclass(frozen=True)
+class NoiseFit:
+    """Result of :func:`fit_noise` (values in each model's own units).
+
+    ``parameters`` and ``interval`` hold the free parameters by key (interval upper bound
+    ``inf`` when the data cannot bound it); ``variances`` every parameter's variance;
+    ``models`` the fitted noise models; ``per_log`` each log's windows, eᵀΣ⁻¹e, its
+    degrees of freedom and two-sided p-value.
+    """
+
+    parameters: dict[str, float]
+    interval: dict[str, tuple[float, float]]
+    variances: dict[str, float]
+    kinds: dict[str, str]
+    models: tuple[NoiseModel, ...]
+    level: float
+    log_likelihood: float
+    windows: int
+    logs: int
+    coverage_in_sample: dict[str, float]
+    correlation: dict[str, dict[str, float]]
+    per_log: list[dict[str, float | int | str]]
+    warnings: list[str] = field(default_factory=list)
+    cross_validation: dict[str, object] | None = None
+
+    def to_dict(self) -> dict[str, object]:
+        out: dict[str, object] = {
+            "parameters": self.parameters,
+            "interval95" if self.level == 0.95 else f"interval{100 * self.level:g}":
+                {k: list(v) for k, v in self.interval.items()},
+            "variances": self.variances, "kinds": self.kinds, "level": self.level,
+            "windows": self.windows, "logs": self.logs, "log_likelihood": self.log_likelihood,
+            "coverage_in_sample": self.coverage_in_sample, "correlation": self.correlation,
+            "warnings": self.warnings, "per_log": self.per_log,
+        }
+        if self.cross_validation is not None:
+            out["cross_validation"] = self.cross_validation
+        return out
+
+
+class _Problem:
+    """log L over the free parameters, maximised by Newton steps projected on v ≥ 0.
+
+    Each step solves J Δ = g over the parameters not held at zero by the bound, clips at
+    zero and halves until log L does not decrease. J is the observed information where
+    it is positive definite, else the average information (Gilmour, Thompson and Cullis
+    1995), always positive semi-definite; both and g are in closed form
+    (:class:`WindowLikelihood`), so a fit takes a handful of evaluations. (Fisher
+    scoring, with the expected information, converged linearly here, 15–20 steps; scipy's
+    L-BFGS-B was ten times slower on a busy machine, its BLAS threads contending with the
+    likelihood's numpy calls.)
+    """
+
+    def __init__(self, lik: WindowLikelihood, v0: NDArray[np.float64], free: NDArray[np.intp],
+                 scale: NDArray[np.float64]):
+        self.lik, self.v0, self.free, self.scale = lik, v0, free, scale
+        self.steps = 0
+
+    def maximise(self, base: NDArray[np.float64], idx: NDArray[np.intp],
+                 start: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
+        """Maximise over v[idx] from v[idx] = ``start``, the other entries as in ``base``."""
+        v = base.copy()
+        v[idx] = np.maximum(start, 0.0)
+        val = self.lik(v, information=idx.size > 0)
+        if idx.size == 0:
+            return v, val.loglik
+        s = self.scale[idx]
+        for _ in range(_MAX_STEPS):
+            assert val.gradient is not None and val.average is not None
+            assert val.information is not None
+            g = val.gradient[idx] * s
+            both = np.ix_(idx, idx)
+            outer = s[:, None] * s[None, :]
+            u = v[idx] / s
+            move = ~((u <= 0.0) & (g <= 0.0))  # a variance at zero that would go negative stays
+            step = np.zeros_like(u)
+            if move.any():
+                mm = np.ix_(move, move)
+                # The observed information 2A − I where it is positive definite (Newton:
+                # quadratic convergence), else the average information A.
+                observed = ((2.0 * val.average - val.information)[both] * outer)[mm]
+                eig = np.linalg.eigvalsh(observed)
+                if eig[0] > 1e-10 * max(eig[-1], 1e-300):
+                    step[move] = np.linalg.solve(observed, g[move])
+                else:
+                    step[move] = np.linalg.pinv((val.average[both] * outer)[mm], rcond=1e-12) @ g[move]
+            t, accepted, gain = 1.0, None, 0.0
+            while t > 1e-12:
+                trial = v.copy()
+                trial[idx] = s * np.minimum(np.maximum(u + t * step, 0.0), _U_MAX)
+                gain = self.lik(trial, gradient=False).loglik - val.loglik
+                if gain >= 0.0:
+                    accepted = trial
+                    break
+                t *= 0.5
+            if accepted is None:
+                break
+            change = np.max(np.abs(accepted[idx] - v[idx]) / s / (1.0 + u))
+            v = accepted
+            val = self.lik(v, information=True)
+            self.steps += 1
+            if gain <= _TOL_LL and change < 1e-6:
+                break
+        return v, val.loglik
+
+
+def _scales(lik: WindowLikelihood, free: NDArray[np.intp]) -> NDArray[np.float64]:
+    """A starting variance per parameter: the one that alone would explain the errors,
+    shared among the free parameters (geometric mean over the observed components)."""
+    e2 = np.sum(lik.error**2, axis=0)
+    fixed, white, sens = lik.raw
+    diag = np.concatenate([np.einsum("wjaa->ja", white),
+                           lik.weights @ np.einsum("wac,wac->ca", sens, sens)])
+    obs = lik.observed.any(axis=0)
+    scale = np.ones(lik.n_params)
+    for j in range(lik.n_params):
+        ok = obs & (diag[j] > 0) & (e2 > 0)
+        if ok.any():
+            scale[j] = float(np.exp(np.mean(np.log(e2[ok] / diag[j, ok])))) / max(free.size, 1)
+    return scale
+
+
+def _profile_interval(prob: _Problem, v_hat: NDArray[np.float64], ll_hat: float, j: int,
+                      crit: float) -> tuple[float, float]:
+    """Profile-likelihood interval of v_j (variances)."""
+    others = np.array([i for i in prob.free if i != j], dtype=np.intp)
+    target = ll_hat - 0.5 * crit
+
+    def gap(x: float) -> float:
+        base = v_hat.copy()
+        base[j] = x
+        _, ll = prob.maximise(base, others, v_hat[others])
+        return ll - target  # ≥ 0 inside the interval
+
+    s = prob.scale[j]
+    start = v_hat[j] if v_hat[j] > 0 else s * 1e-6
+    # Upper bound: grow by ×10 until outside, then bisect on log v.
+    lo_x, hi_x, upper = start, start, float("inf")
+    while hi_x < s * _FLAT:
+        lo_x, hi_x = hi_x, hi_x * 10.0
+        if gap(hi_x) < 0:
+            upper = float(np.exp(brentq(lambda y: gap(float(np.exp(y))), np.log(lo_x),
+                                        np.log(hi_x), xtol=1e-4)))
+            break
+    if v_hat[j] == 0 or gap(0.0) >= 0:
+        return 0.0, upper
+    hi_x = v_hat[j]
+    while True:
+        lo_x = hi_x / 10.0
+        if gap(lo_x) < 0:
+            break
+        hi_x = lo_x
+        if hi_x < v_hat[j] * 1e-12:
+            return 0.0, upper
+    lower = float(np.exp(brentq(lambda y: gap(float(np.exp(y))), np.log(lo_x), np.log(hi_x),
+                                xtol=1e-4)))
+    return lower, upper
+
+
+def _correlation(prob: _Problem, v_hat: NDArray[np.float64], idx: NDArray[np.intp]
+                 ) -> NDArray[np.float64]:
+    """Correlation of the estimates of v[idx] from the expected (Fisher) information at
+    the fit (pseudo-inverse: a direction the data do not inform gives ±1, not an error).
+    It is a property of the design (which directions the windows inform), so parameters
+    fitted to zero take part too."""
+    info = prob.lik(v_hat, information=True).information
+    assert info is not None
+    sub = info[np.ix_(idx, idx)]
+    d = np.sqrt(np.clip(np.diag(sub), 1e-300, None))
+    cov = np.linalg.pinv(sub / d[:, None] / d[None, :], rcond=1e-12, hermitian=True)
+    e = np.sqrt(np.clip(np.diag(cov), 1e-300, None))
+    return np.clip(cov / e[:, None] / e[None, :], -1.0, 1.0)
+
+
+def fit_noise(
+    bases: Sequence[WindowBasis],
+    models: Sequence[NoiseModel],
+    robot: Robot,
+    *,
+    kinds: Collection[str] = ("white",),
+    fixed: Collection[str] = (),
+    level: float = 0.95,
+    log_names: Sequence[str] | None = None,
+    cross_validate: bool = False,
+) -> NoiseFit:
+    """Maximum-likelihood variances of ``models`` from the window bases of several logs.
+
+    Parameters
+    ----------
+    bases : sequence of WindowBasis
+        One per log, from :func:`odomkit.windows.window_covariance_basis` with ``models``.
+    models : sequence of NoiseModel
+        The models (:func:`models_to_fit`); parameters not fitted keep their value.
+    robot : Robot
+    kinds : collection of {"white", "bias"}
+        Which models' parameters are fitted.
+    fixed : collection of str
+        Parameter keys (or field names) held at their model's value.
+    level : float
+        Confidence level of the profile-likelihood intervals.
+    log_names : sequence of str, optional
+        Names of the logs for ``per_log`` and warnings.
+    cross_validate : bool
+        Also refit without each log in turn and score that log (leave-one-log-out
+        coverage).
+
+    Returns
+    -------
+    NoiseFit
+    """
+    if not 0 < level < 1:
+        raise ModelError(f"level must be in (0, 1), got {level}")
+    params = noise_parameters(models, robot, kinds, fixed)
+    names = list(log_names) if log_names is not None else [f"log {i}" for i in range(len(bases))]
+    used = [i for i, b in enumerate(bases) if len(b.windows)]
+    lik = WindowLikelihood([bases[i] for i in used])
+    if lik.n_params != len(params):
+        raise ModelError("the bases do not belong to these noise models")
+    free = np.array([k for k, p in enumerate(params) if p.free], dtype=np.intp)
+    if free.size == 0:
+        raise ModelError("nothing to fit: no free noise parameter of the asked kinds")
+    v0 = np.array([models[p.model].variance_parameters()[p.name] for p in params])
+    prob = _Problem(lik, v0, free, _scales(lik, free))
+    best = None
+    for start in (prob.scale[free], 0.1 * prob.scale[free]):
+        cand = prob.maximise(v0, free, start)
+        if best is None or cand[1] > best[1]:
+            best = cand
+    assert best is not None
+    v_hat, ll_hat = best
+    crit = float(chi2.ppf(level, 1))
+    intervals = {int(j): _profile_interval(prob, v_hat, ll_hat, int(j), crit) for j in free}
+    warnings: list[str] = []
+    flat = [j for j in free if not np.isfinite(intervals[int(j)][1])]
+    for j in flat:
+        v_hat[j] = v0[j]  # the data say nothing: keep the robot file's value
+    cov = lik.window_covariance(v_hat)
+    val = lik(v_hat, gradient=False)
+    informed = np.array([j for j in free if j not in flat], dtype=np.intp)
+    corr = _correlation(prob, v_hat, informed) if informed.size > 1 else np.eye(informed.size)
+    keys = [p.key for p in params]
+    _warn(warnings, lik, params, free, intervals, flat, informed, corr, cov, val.quad,
+          [names[i] for i in used], bases=[bases[i] for i in used])
+    fitted = []
+    for i, model in enumerate(models):
+        mine = {p.name: float(v_hat[k]) for k, p in enumerate(params) if p.model == i}
+        fitted.append(model.from_variances(mine) if mine else model)
+    per_log = []
+    for k, i in enumerate(used):
+        dof = int(lik.nobs[k])
+        per_log.append({"log": names[i], "windows": len(bases[i].windows), "quad": float(val.quad[k]),
+                        "dof": dof, "p_value": _two_sided(float(val.quad[k]), dof)})
+    cv = _cross_validate(lik, prob, v_hat, bases, used, params) if cross_validate else None
+    if cross_validate and cv is None:
+        warnings.append("cross-validation needs at least two logs with windows")
+    return NoiseFit(
+        parameters={keys[j]: params[j].to_value(v_hat[j]) for j in free},
+        interval={keys[j]: (params[j].to_value(intervals[int(j)][0]),
+                            params[j].to_value(intervals[int(j)][1])) for j in free},
+        variances={keys[k]: float(v_hat[k]) for k in range(len(params))},
+        kinds={p.key: p.kind for p in params},
+        models=tuple(fitted), level=level, log_likelihood=float(val.loglik),
+        windows=lik.n_windows, logs=lik.n_logs,
+        coverage_in_sample=coverage_of(lik.error[:, :2], cov[:, :2, :2]),
+        correlation={keys[a]: {keys[b]: float(corr[x, y]) for y, b in enumerate(informed)}
+                     for x, a in enumerate(informed)},
+        per_log=per_log, warnings=warnings, cross_validation=cv,
+    )
+
+
+def _two_sided(quad: float, dof: int) -> float:
+    return float(min(1.0, 2.0 * min(chi2.cdf(quad, dof), chi2.sf(quad, dof))))
+
+
+def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter],
+          free: NDArray[np.intp], intervals: dict[int, tuple[float, float]], flat: list[int],
+          informed: NDArray[np.intp], corr: NDArray[np.float64], cov: NDArray[np.float64],
+          quad: NDArray[np.float64], names: Sequence[str], bases: Sequence[WindowBasis]) -> None:
+    turning = np.concatenate([b.turning for b in bases])
+    mean_turn = float(np.mean(turning)) if turning.size else 0.0
+    hint = (f" (too little turning: the windows turn {mean_turn:.2g} rad each on average)"
+            if mean_turn < 0.5 else "")
+    n_free = int(free.size)
+    if lik.n_windows < max(10, 5 * n_free):
+        out.append(f"too few windows ({lik.n_windows}) for {n_free} free parameter(s): the "
+                   "intervals rest on large-sample theory; use more logs or shorter windows")
+    if any(params[j].kind == "bias" for j in free) and lik.n_logs < 5:
+        out.append(f"bias variances rest on {lik.n_logs} log(s): each log draws its bias once, "
+                   "so they are weakly determined; fit more logs")
+    for j in flat:
+        out.append(f"{params[j].key} is not identifiable from these data (the likelihood does "
+                   f"not bound it){hint}; kept at its robot-file value")
+    for x in range(informed.size):
+        for y in range(x + 1, informed.size):
+            if abs(corr[x, y]) > _CORRELATION:
+                a, b = params[informed[x]].key, params[informed[y]].key
+                out.append(f"{a} and {b} are not separately identifiable (correlation "
+                           f"{corr[x, y]:+.3f}){hint}")
+    sigma_theta = np.sqrt(np.clip(cov[:, 2, 2], 0.0, None))
+    big = sigma_theta > FIRST_ORDER_SIGMA_THETA
+    if big.any():
+        out.append(f"the first-order model may not hold: σθ reaches {sigma_theta.max():.3g} rad "
+                   f"at {int(big.sum())} of {big.size} window ends (> {FIRST_ORDER_SIGMA_THETA} "
+                   "rad); use shorter windows")
+    p = np.array([_two_sided(float(q), int(n)) for q, n in zip(quad, lik.nobs, strict=True)])
+    bad = np.flatnonzero(p < 0.01 / max(len(p), 1))
+    if len(p) > 1 and bad.size:
+        shown = ", ".join(f"{names[i]} (eᵀΣ⁻¹e/dof = {quad[i] / lik.nobs[i]:.3g})"
+                          for i in bad[np.argsort(p[bad])][:5])
+        more = f" and {bad.size - 5} more" if bad.size > 5 else ""
+        out.append(f"{bad.size} of {len(p)} logs disagree with the fit (per-log χ² test at 1 %, "
+                   f"Bonferroni): {shown}{more}")
+
+
+def _cross_validate(lik: WindowLikelihood, prob: _Problem, v_hat: NDArray[np.float64],
+                    bases: Sequence[WindowBasis], used: Sequence[int],
+                    params: Sequence[NoiseParameter]) -> dict[str, object] | None:
+    """Leave-one-log-out: refit without each log (from the full fit) and score it."""
+    if len(used) < 2:
+        return None
+    errors, covs = [], []
+    spread: dict[str, list[float]] = {params[j].key: [] for j in prob.free}
+    for k in range(len(used)):
+        rest = WindowLikelihood([bases[i] for m, i in enumerate(used) if m != k])
+        sub = _Problem(rest, prob.v0, prob.free, prob.scale)
+        v, _ = sub.maximise(v_hat, prob.free, v_hat[prob.free])
+        held = WindowLikelihood([bases[used[k]]])
+        errors.append(held.error[:, :2])
+        covs.append(held.window_covariance(v)[:, :2, :2])
+        for j in prob.free:
+            spread[params[j].key].append(params[j].to_value(v[j]))
+    return {"coverage": coverage_of(np.concatenate(errors), np.concatenate(covs)),
+            "folds": len(used), "windows": int(sum(e.shape[0] for e in errors)),
+            "parameter_range": {k: [min(x), max(x)] for k, x in spread.items()}}

@@ -1,0 +1,138 @@
+"""``odomkit evaluate``: how wrong a track is against ground truth, and how honest its covariance.
+
+::
+
+    odomkit evaluate TRACK.csv [TRACK.csv ...] [--truth GT ...] [--align none|start|se2] [--json]
+    odomkit evaluate LOG [LOG ...] --robot ROBOT.toml [--truth GT ...] [--window 30s|5m] [--json]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    PeriodOption,
+    TimeScaleOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
+from odomkit.cli.output import print_json
+from odomkit.cli.truth_options import (
+    MaxGapOption,
+    TruthColumnsOption,
+    TruthFormatOption,
+    TruthListOption,
+    TruthSigmaOption,
+    TruthTimeUnitOption,
+    truth_options,
+)
+from odomkit.errors import InputError
+
+__all__ = ["evaluate_command", "print_report"]
+
+
+def _distances(text: str) -> list[float]:
+    try:
+        values = [float(v) for v in text.split(",") if v.strip()]
+    except ValueError:
+        values = []
+    if not values or not all(v > 0 for v in values):
+        raise InputError(f"--rpe expects positive distances in metres, e.g. 0.5,1, got {text!r}")
+    return values
+
+
+@app.command("evaluate")
+def evaluate_command(
+    files: Annotated[list[Path], typer.Argument(
+        help="Track CSVs (odomkit track --out), or logs with --robot.")],
+    robot: Annotated[Path | None, typer.Option(
+        "--robot", help="Robot file (TOML) with [noise]: FILES are logs, re-run from truth.")] = None,
+    window: Annotated[str | None, typer.Option(
+        "--window", help="Honesty-test windows: 30s (time) or 5m (odometry travel); default one "
+                         "window per log.")] = None,
+    min_travel: Annotated[float, typer.Option(
+        "--min-travel", help="Windows travelling less [m] are left out and counted.")] = 0.05,
+    align: Annotated[str, typer.Option("--align", help="none | start | se2 (Umeyama, no scale).")] = "none",
+    rpe: Annotated[str, typer.Option("--rpe", help="RPE distances [m], comma-separated.")] = "1",
+    truth: TruthListOption = None,
+    truth_format: TruthFormatOption = "auto",
+    truth_columns: TruthColumnsOption = None,
+    truth_time_unit: TruthTimeUnitOption = "s",
+    truth_sigma: TruthSigmaOption = 0.0,
+    max_gap: MaxGapOption = 0.5,
+    format: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
+    method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Score tracks against ground truth (ATE, RPE, drift, NEES, ellipse coverage); with --robot,
+    the windowed honesty test of the robot file's noise on logs."""
+    from odomkit.evaluate import ALIGNMENTS
+    from odomkit.workflows.evaluate import evaluate_logs, evaluate_tracks
+    from odomkit.workflows.truth import truth_options_per_log
+
+    if align not in ALIGNMENTS:
+        raise InputError(f"--align must be one of {', '.join(ALIGNMENTS)}, got {align!r}")
+    distances = _distances(rpe)
+    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    per_file = truth_options_per_log(base, list(truth or []), len(files))
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    if robot is None:
+        if window is not None:
+            raise InputError("--window re-runs dead reckoning, so it needs --robot (and FILES that are logs)")
+        if options.given():
+            raise InputError(f"{', '.join(options.given())} reads logs, so it needs --robot (and FILES "
+                             "that are logs)")
+    with reported_warnings() as warned:
+        if robot is None:
+            out = evaluate_tracks(files, per_file, align=align, rpe_distances=distances,
+                                  min_travel=min_travel)
+        else:
+            out = evaluate_logs(files, robot, per_file, log_options=options, window=window,
+                                min_travel=min_travel, align=align, rpe_distances=distances, method=method)
+    out = with_warnings(out, warned)
+    if json_out:
+        print_json(out)
+        return
+    print_report(out, windowed=robot is not None)
+
+
+def _fmt(value: float | None, spec: str = ".4f") -> str:
+    return "n/a" if value is None else format(value, spec)
+
+
+def print_report(out: dict[str, Any], windowed: bool) -> None:
+    """The short text report of ``odomkit evaluate``."""
+    from odomkit.workflows.evaluate import CONTAINMENT_NOTE, WINDOWED_NOTE
+
+    print(f"{out['rows_evaluated']} rows evaluated, {out['rows_skipped']} skipped (no truth there, or "
+          f"before the start), {len(out['per_log'])} file(s)")
+    print(f"position error: final {_fmt(out['final_position_error'])} m, max "
+          f"{_fmt(out['max_position_error'])} m, ATE RMSE {_fmt(out['ate_rmse'])} m, drift "
+          f"{_fmt(out['drift_percent'], '.2f')} %")
+    print("RPE RMSE: " + ", ".join(("n/a" if v is None else f"{v:.4f} m") + f" over {k} m"
+                                   for k, v in out["rpe"].items()))
+    cov = out["coverage"]
+    what = f"{out['windows']} window ends" if windowed else "track rows"
+    if out["nees_position_mean"] is not None:
+        lo, hi = out["nees_bounds"]
+        print(f"position NEES over {what}: mean {out['nees_position_mean']:.3g} (95 % bounds "
+              f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}")
+        print("inside the predicted 50/90/95/99 % ellipses: "
+              + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")))
+    print(f"note: {WINDOWED_NOTE if windowed else CONTAINMENT_NOTE}")

@@ -1,0 +1,126 @@
+"""``odomkit fit-noise``: maximum-likelihood noise variances from logs with ground truth.
+
+::
+
+    odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
+        [--window 30s|5m] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
+        [--cross-validate] [--truth-sigma S] [--workers N | --scheduler ADDR] [--force] [--json]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    PeriodOption,
+    TimeScaleOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
+from odomkit.cli.output import print_json
+from odomkit.cli.truth_options import (
+    MaxGapOption,
+    TruthColumnsOption,
+    TruthFormatOption,
+    TruthListOption,
+    TruthSigmaOption,
+    TruthTimeUnitOption,
+    truth_options,
+)
+
+__all__ = ["fit_noise_command", "print_fit"]
+
+
+@app.command("fit-noise")
+def fit_noise_command(
+    robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML); its [noise] names the models.")],
+    log: Annotated[list[Path], typer.Option("--log", help="A log with ground truth; repeat it.")],
+    out: Annotated[Path, typer.Option("--out", help="Write the robot file with the fitted [noise] here.")],
+    window: Annotated[str | None, typer.Option(
+        "--window", help="Windows that restart from truth: 30s (time) or 5m (odometry travel); "
+                         "default one window per log.")] = None,
+    kinds: Annotated[str, typer.Option(
+        "--kinds", help="Which variances to fit: white, bias or white,bias.")] = "white",
+    fix: Annotated[str | None, typer.Option(
+        "--fix", help="Noise fields held at the robot file's value, e.g. sigma_dt.")] = None,
+    min_travel: Annotated[float, typer.Option(
+        "--min-travel", help="Windows travelling less [m] are left out and counted.")] = 0.05,
+    cross_validate: Annotated[bool, typer.Option(
+        "--cross-validate", help="Also report leave-one-log-out coverage.")] = False,
+    level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
+    method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
+    workers: Annotated[int | None, typer.Option(
+        "--workers", help="Processes reading the logs (default: one per core for large inputs).")] = None,
+    scheduler: Annotated[str | None, typer.Option(
+        "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
+    truth: TruthListOption = None,
+    truth_format: TruthFormatOption = "auto",
+    truth_columns: TruthColumnsOption = None,
+    truth_time_unit: TruthTimeUnitOption = "s",
+    truth_sigma: TruthSigmaOption = 0.0,
+    max_gap: MaxGapOption = 0.5,
+    format: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --out file.")] = False,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Maximum-likelihood white and bias noise variances from logs with ground truth, with
+    profile-likelihood intervals and warnings where the data cannot identify them."""
+    from odomkit.errors import InputError
+    from odomkit.workflows.fit_noise import fit_noise_files, parse_kinds
+    from odomkit.workflows.truth import truth_options_per_log
+
+    if not 0 < level < 1:
+        raise InputError(f"--level must be in (0, 1), got {level}")
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers must be a positive integer, got {workers}")
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    per_log = truth_options_per_log(base, list(truth or []), len(log))
+    fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
+    with reported_warnings() as warned:
+        result = fit_noise_files(robot, log, per_log, out, window=window, kinds=parse_kinds(kinds),
+                                 fixed=fixed, log_options=options, min_travel=min_travel,
+                                 method=method, level=level, cross_validate=cross_validate,
+                                 workers=workers, scheduler=scheduler, overwrite=force)
+    result = with_warnings(result, warned)
+    if json_out:
+        print_json(result)
+        return
+    print_fit(result)
+
+
+def print_fit(out: dict[str, Any]) -> None:
+    """The short text report of ``odomkit fit-noise``."""
+    key = next(k for k in out if k.startswith("interval"))
+    print(f"fitted {len(out['parameters'])} parameter(s) on {out['windows']} window(s) of "
+          f"{out['logs']} log(s); log-likelihood {out['log_likelihood']:.6g}")
+    for name, value in out["parameters"].items():
+        lo, hi = out[key][name]
+        print(f"  {name:20s} {out['kinds'][name]:5s} {value:.6g}   ({100 * out['level']:g} % "
+              f"profile interval {lo:.6g} .. {hi:.6g})")
+    cov = out["coverage_in_sample"]
+    print("in-sample coverage of the 50/90/95/99 % ellipses: "
+          + " / ".join(f"{cov[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
+    if "cross_validation" in out:
+        cv = out["cross_validation"]["coverage"]
+        print("leave-one-log-out coverage: " + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
+    for w in out["warnings"]:
+        print(f"warning: {w}")
+    for kind, path in out["outputs"].items():
+        print(f"wrote {kind}: {path}")

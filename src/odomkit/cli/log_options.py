@@ -1,0 +1,84 @@
+"""The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
+files"): ``--format --columns --cumulative --wrap-bits --period --time-scale --decimate``,
+declared once here and parsed into :class:`odomkit.workflows.logs.LogOptions`; and the
+warnings that reading (or the work after it) raises, shown as one line each.
+
+``track``, ``calibrate``, ``calibrate-noise`` and ``umbmark --runs`` take these options alike
+(``tests/cli/test_log_options.py`` checks that no command lacks one).
+"""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.workflows.logs import LOG_FORMATS, LogOptions
+
+__all__ = [
+    "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "log_options",
+    "PeriodOption", "reported_warnings", "TimeScaleOption", "with_warnings", "WrapBitsOption",
+]
+
+FormatOption = Annotated[str, typer.Option(
+    "--format", help=f"Log format: {', '.join(LOG_FORMATS)} (auto: from the file name). "
+                     "Plain or gzip (.gz) text.")]
+ColumnsOption = Annotated[str | None, typer.Option(
+    "--columns", help="CSV column mapping, e.g. t=time,ticks_left=L,ticks_right=R.")]
+CumulativeOption = Annotated[bool, typer.Option(
+    "--cumulative/--no-cumulative",
+    help="CSV ticks_*/dist_* columns are cumulative counters (differenced, integers exactly).")]
+WrapBitsOption = Annotated[int | None, typer.Option(
+    "--wrap-bits", help="Unwrap cumulative counters of this width: 8, 16, 24, 32 or 64.")]
+PeriodOption = Annotated[float | None, typer.Option(
+    "--period", help="Sample period [s] of a log without time (khepera, snowhite).")]
+TimeScaleOption = Annotated[float, typer.Option(
+    "--time-scale", help="Seconds per unit of the CSV time column (1e-9 for ns stamps).")]
+DecimateOption = Annotated[int, typer.Option(
+    "--decimate", help="Use every n-th row (increments summed, rates sampled).")]
+
+
+def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: int | None,
+                period: float | None, time_scale: float, decimate: int) -> LogOptions:
+    """The parsed log options; a bad value is one line naming its flag (exit 2)."""
+    return LogOptions(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+
+
+@contextmanager
+def reported_warnings() -> Iterator[list[str]]:
+    """Collect the warnings raised inside the block, and print each on stderr as one line
+    ``odomkit: warning: ...`` when it ends (also when it ends in an error, which a warning
+    may explain). The yielded list holds their texts, for the JSON ``warnings`` key."""
+    messages: list[str] = []
+    others: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            # odomkit warns with UserWarning: every one is shown. Other categories (a
+            # library's DeprecationWarning, numpy's RuntimeWarning) keep Python's filters.
+            warnings.simplefilter("always", UserWarning)
+            try:
+                yield messages
+            finally:
+                for item in caught:
+                    text = " ".join(str(item.message).split())
+                    if not issubclass(item.category, UserWarning):
+                        others.append(item)
+                    elif text not in messages:
+                        messages.append(text)
+    finally:
+        for text in messages:
+            print(f"odomkit: warning: {text}", file=sys.stderr)
+        for item in others:  # outside catch_warnings: Python's own display
+            warnings.showwarning(item.message, item.category, item.filename, item.lineno)
+
+
+def with_warnings(out: dict[str, Any], messages: list[str]) -> dict[str, Any]:
+    """``out`` with ``messages`` added to its ``warnings`` list (made if there are any)."""
+    if messages:
+        known = list(out.get("warnings", []))
+        out["warnings"] = known + [m for m in messages if m not in known]
+    return out

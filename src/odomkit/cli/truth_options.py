@@ -1,0 +1,69 @@
+"""The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
+and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
+--max-gap``, parsed into :class:`odomkit.workflows.truth.TruthOptions`."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated
+
+import typer
+
+from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = [
+    "MaxGapOption", "parse_initial_cov", "truth_options", "TruthColumnsOption", "TruthFormatOption",
+    "TruthListOption", "TruthOption", "TruthSigmaOption", "TruthTimeUnitOption",
+]
+
+_TRUTH_HELP = ("Ground-truth file: TUM (t x y z qx qy qz qw), KITTI pose rows with the time first, "
+               "or text t,x,y[,theta]; default: the log's own gt_* columns.")
+TruthOption = Annotated[Path | None, typer.Option("--truth", help=_TRUTH_HELP)]
+TruthListOption = Annotated[list[Path] | None, typer.Option(
+    "--truth", help=_TRUTH_HELP + " Repeat it: the i-th --truth belongs to the i-th log.")]
+TruthFormatOption = Annotated[str, typer.Option(
+    "--truth-format", help="auto | tum | kitti | csv")]
+TruthColumnsOption = Annotated[str | None, typer.Option(
+    "--truth-columns", help="Text truth columns: in order (t,x,y,_,theta; _ skips one; theta_deg "
+    "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw).")]
+TruthTimeUnitOption = Annotated[str, typer.Option(
+    "--truth-time-unit", help="Unit of the truth's time column: s | ms | us | ns.")]
+TruthSigmaOption = Annotated[float, typer.Option(
+    "--truth-sigma", help="Standard deviation of the truth positions per axis [m].")]
+MaxGapOption = Annotated[float, typer.Option(
+    "--max-gap", help="Rows inside a truth gap longer than this [s] are left out and counted "
+                      "(0: no limit).")]
+
+
+def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float,
+                  max_gap: float) -> TruthOptions:
+    """The parsed truth options (``--max-gap 0`` means no limit)."""
+    from odomkit.workflows.truth import TruthOptions
+
+    if not (math.isfinite(sigma) and sigma >= 0):
+        raise InputError(f"--truth-sigma must be a non-negative number of metres, got {sigma!r}")
+    if not (math.isfinite(max_gap) and max_gap >= 0):
+        raise InputError(f"--max-gap must be a non-negative number of seconds, got {max_gap!r}")
+    return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None)
+
+
+def parse_initial_cov(text: str | None) -> list[list[float]] | None:
+    """``--initial-cov``: 3 variances (x, y, θ) or 9 numbers (the 3×3 matrix row by row)."""
+    if text is None:
+        return None
+    try:
+        values = [float(v) for v in text.replace(";", ",").replace(" ", "").split(",") if v]
+    except ValueError:
+        values = []
+    if len(values) not in (3, 9) or not all(math.isfinite(v) for v in values):
+        raise InputError(f"--initial-cov expects 3 variances var_x,var_y,var_theta or 9 numbers "
+                         f"(a 3x3 matrix row by row), got {text!r}")
+    if len(values) == 3:
+        if min(values) < 0:
+            raise InputError(f"--initial-cov variances must be >= 0, got {text!r}")
+        return [[values[0], 0.0, 0.0], [0.0, values[1], 0.0], [0.0, 0.0, values[2]]]
+    return [values[0:3], values[3:6], values[6:9]]

@@ -1,0 +1,290 @@
+"""Ground truth on its own clock: interpolation at the evaluated times, gaps, headings.
+
+A :class:`Truth` is a sequence of timed fixes (positions, and headings when the truth
+system measures them) that need not share the log's clock. :func:`truth_at` interpolates
+it at any times, leaving out (and counting) the times outside its span or inside a gap
+longer than ``max_gap``. Where the truth has no heading, :func:`heading_from_positions`
+fits one to the positions around a time, with its variance, so that a pose that must
+start from truth can still be given one.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit import validate
+from odomkit.angles import unwrap_angle
+from odomkit.errors import InputError
+from odomkit.log import OdometryLog
+
+__all__ = ["heading_from_positions", "MAX_HEADING_SIGMA", "start_pose", "Truth", "truth_at", "truth_from_log",
+           "TruthSamples"]
+
+#: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
+#: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
+MAX_HEADING_SIGMA = 0.4
+
+
+@dataclass(frozen=True)
+class Truth:
+    """Timed ground-truth fixes.
+
+    Parameters
+    ----------
+    t : ndarray, shape (K,)
+        Time of each fix [s], strictly increasing (the readers sort and drop duplicates).
+    xy : ndarray, shape (K, 2)
+        Position [m].
+    theta : ndarray, shape (K,), optional
+        Heading [rad], continuous (unwrapped); None for position-only truth.
+    sigma : float
+        Standard deviation of each truth position per axis [m] (``--truth-sigma``).
+    source : str
+        Where the truth came from (used in messages).
+    """
+
+    t: NDArray[np.float64]
+    xy: NDArray[np.float64]
+    theta: NDArray[np.float64] | None = None
+    sigma: float = 0.0
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        error = partial(InputError, source=self.source)
+        t = validate.shape(self.t, "truth time", ("K",), error=error)
+        if t.size == 0:
+            raise error("the truth has no fixes")
+        validate.shape(self.xy, "truth positions", (t.size, 2), error=error)
+        if self.theta is not None:
+            validate.shape(self.theta, "truth heading", (t.size,), error=error)
+        for name, values in (("time", self.t), ("position", self.xy), ("heading", self.theta)):
+            if values is not None and not np.all(np.isfinite(values)):
+                raise error(f"truth {name} holds NaN or infinite values; expected finite numbers")
+        if t.size > 1 and not np.all(np.diff(t) > 0):
+            raise error("truth times must be strictly increasing")
+        validate.non_negative(self.sigma, "truth sigma", unit="m", error=error)
+
+    def __len__(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def has_heading(self) -> bool:
+        """Whether the truth measures heading (False for position-only truth)."""
+        return self.theta is not None
+
+
+@dataclass(frozen=True)
+class TruthSamples:
+    """The truth at a set of asked times (see :func:`truth_at`).
+
+    Parameters
+    ----------
+    poses : ndarray, shape (n, 3)
+        ``[x, y, θ]`` at each asked time [m, m, rad]; θ is NaN when the truth has no
+        heading, and the whole row is NaN where ``valid`` is False.
+    valid : ndarray of bool, shape (n,)
+        Inside the truth's span and not inside a gap longer than ``max_gap``.
+    outside : int
+        How many asked times lie outside the truth's span.
+    in_gaps : int
+        How many lie inside a gap longer than ``max_gap``.
+    """
+
+    poses: NDArray[np.float64]
+    valid: NDArray[np.bool_]
+    outside: int
+    in_gaps: int
+
+
+def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> TruthSamples:
+    """Linear interpolation of the truth at ``times``, with gaps left out and counted.
+
+    x, y and the continuous (unwrapped) θ are interpolated linearly between the two fixes
+    around each time. A time that falls between two fixes more than ``max_gap`` seconds
+    apart is left out (a truth system that lost the robot for a while says nothing about
+    where it was); a time equal to a fix is always kept.
+
+    Parameters
+    ----------
+    truth : Truth, K fixes
+    times : array_like, shape (n,)
+        Times to sample [s], in any order.
+    max_gap : float or None
+        Longest gap between fixes to interpolate across [s]; None for no limit.
+
+    Returns
+    -------
+    TruthSamples
+
+    Examples
+    --------
+    >>> tr = Truth(np.array([0.0, 1.0, 3.0]), np.array([[0.0, 0], [1, 0], [3, 0]]),
+    ...            np.array([0.0, 0.5, 1.0]))
+    >>> s = truth_at(tr, [0.5, 2.0, 4.0], max_gap=1.5)
+    >>> s.poses[0].tolist(), s.valid.tolist(), s.outside, s.in_gaps
+    ([0.5, 0.0, 0.25], [True, False, False], 1, 1)
+    """
+    t = np.asarray(times, dtype=float).reshape(-1)
+    if max_gap is not None:
+        max_gap = validate.positive(max_gap, "max_gap", unit="s", error=InputError)
+    inside = (t >= truth.t[0]) & (t <= truth.t[-1])
+    # Interval i holds truth.t[i] <= t < truth.t[i+1]; a time equal to a fix is exact.
+    i = np.clip(np.searchsorted(truth.t, t, side="right") - 1, 0, max(len(truth) - 2, 0))
+    on_fix = np.isin(t, truth.t)
+    gap = np.zeros(t.size, dtype=bool)
+    if max_gap is not None and len(truth) > 1:
+        gap = inside & ~on_fix & (truth.t[i + 1] - truth.t[i] > max_gap)
+    valid = inside & ~gap
+    poses = np.full((t.size, 3), np.nan)
+    if valid.any():
+        tv = t[valid]
+        poses[valid, 0] = np.interp(tv, truth.t, truth.xy[:, 0])
+        poses[valid, 1] = np.interp(tv, truth.t, truth.xy[:, 1])
+        if truth.theta is not None:
+            poses[valid, 2] = np.interp(tv, truth.t, truth.theta)
+    return TruthSamples(poses, valid, int(np.count_nonzero(~inside)), int(np.count_nonzero(gap)))
+
+
+def truth_from_log(log: OdometryLog) -> Truth | None:
+    """The log's own ground truth (OptiOdom, Snowhite, ``gt_*`` columns) as a :class:`Truth`.
+
+    Rows repeating an earlier time are dropped (the first is kept), so that the truth's
+    clock is strictly increasing. Returns None when the log carries no truth.
+    """
+    if log.ground_truth is None:
+        return None
+    t = np.asarray(log.t, dtype=float)
+    keep = np.concatenate(([True], np.diff(t) > 0))
+    gt = np.asarray(log.ground_truth, dtype=float)[keep]
+    return Truth(t[keep], gt[:, :2].copy(), unwrap_angle(gt[:, 2]), source=log.source)
+
+
+def heading_from_positions(
+    truth: Truth,
+    time: float,
+    span: float = 1.0,
+    min_fixes: int = 5,
+    max_residual: float | None = None,
+) -> tuple[float, float] | None:
+    """The heading of the truth path around ``time``, fitted to its positions, and its variance.
+
+    x(t) and y(t) over the fixes within ±``span``/2 of ``time`` are each fitted with a
+    quadratic in (t − time) by least squares; the heading is the direction of the fitted
+    velocity (ẋ, ẏ) at ``time``. The quadratic term absorbs the path's curvature, so a
+    robot driving an arc gets the tangent, not the chord. The position noise σ² is the
+    larger of ``truth.sigma``² and the fit's residual variance (RSS/(n − 3)); with
+    V = σ² [(AᵀA)⁻¹]₁₁ the variance of each velocity component, the heading variance is
+    V / |v|² (first-order propagation through atan2).
+
+    This is the direction of *travel*: a robot reversing at ``time`` faces the opposite
+    way, and a caller that knows the direction of travel from odometry adds π.
+
+    Parameters
+    ----------
+    truth : Truth
+    time : float
+        Time of the heading [s].
+    span : float
+        Width of the window of fixes [s].
+    min_fixes : int
+        Fewest fixes to fit (at least 4, so the residual has a degree of freedom).
+    max_residual : float, optional
+        Largest residual RMS per axis [m] accepted; None for no limit.
+
+    Returns
+    -------
+    (heading [rad], variance [rad²]) or None when the fixes cannot support a heading:
+    too few fixes, the robot hardly moved (heading standard deviation above
+    :data:`MAX_HEADING_SIGMA`), or a residual above ``max_residual``.
+
+    Examples
+    --------
+    >>> t = np.linspace(0.0, 2.0, 21)
+    >>> tr = Truth(t, np.column_stack((0.5 * t, 0.5 * t)))
+    >>> h, var = heading_from_positions(tr, 1.0)
+    >>> round(h, 12), var < 1e-20
+    (0.785398163397, True)
+    """
+    span = validate.positive(span, "span", unit="s", error=InputError)
+    min_fixes = max(int(min_fixes), 4)
+    near = np.flatnonzero(np.abs(truth.t - time) <= span / 2)
+    if near.size < min_fixes:
+        return None
+    dt = truth.t[near] - time
+    # Scaled design [1, τ, τ²] with τ = dt/span keeps AᵀA well conditioned.
+    scale = span / 2
+    tau = dt / scale
+    A = np.column_stack((np.ones_like(tau), tau, tau**2))
+    coef, _, rank, _ = np.linalg.lstsq(A, truth.xy[near], rcond=None)
+    if rank < 3:
+        return None
+    resid = truth.xy[near] - A @ coef
+    dof = near.size - 3
+    s2 = float(np.sum(resid**2)) / (2 * dof)  # pooled over x and y
+    if max_residual is not None and math.sqrt(s2) > max_residual:
+        return None
+    sigma2 = max(truth.sigma**2, s2)
+    vx, vy = coef[1, 0] / scale, coef[1, 1] / scale
+    speed2 = vx * vx + vy * vy
+    if speed2 == 0.0:
+        return None
+    var_v = sigma2 * float(np.linalg.inv(A.T @ A)[1, 1]) / scale**2
+    var_heading = var_v / speed2
+    if var_heading > MAX_HEADING_SIGMA**2:
+        return None
+    return float(math.atan2(vy, vx)), float(var_heading)
+
+
+def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, reverse: bool = False,
+               span: float = 1.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The truth pose at ``time`` to start dead reckoning from, and its covariance.
+
+    The covariance is diag(σ², σ², var_θ): σ = ``truth.sigma`` and var_θ = 0 when the
+    truth measures heading; otherwise θ is :func:`heading_from_positions` (plus π when
+    ``reverse``, a robot backing up) and var_θ its variance.
+
+    Parameters
+    ----------
+    truth : Truth
+    time : float
+        Start time [s].
+    max_gap : float or None
+        As in :func:`truth_at`.
+    reverse : bool
+        The robot travels backwards at ``time`` (position-only truth only).
+    span : float
+        Width of the heading fit [s] (position-only truth only).
+
+    Returns
+    -------
+    pose : ndarray, shape (3,)
+        [m, m, rad].
+    cov : ndarray, shape (3, 3)
+
+    Raises
+    ------
+    InputError
+        When ``time`` is outside the truth or inside a gap, or the heading cannot be fitted.
+    """
+    sample = truth_at(truth, [time], max_gap)
+    if not sample.valid[0]:
+        where = "inside a gap of" if sample.in_gaps else "outside"
+        raise InputError(f"the start time {time:.6g} s is {where} the truth "
+                         f"({truth.t[0]:.6g}..{truth.t[-1]:.6g} s): there is no truth pose to start from; "
+                         "give --initial-pose", source=truth.source)
+    pose = sample.poses[0].copy()
+    cov = np.diag([truth.sigma**2, truth.sigma**2, 0.0])
+    if truth.theta is None:
+        fit = heading_from_positions(truth, time, span)
+        if fit is None:
+            raise InputError(f"the truth has no heading, and its positions around {time:.6g} s do not "
+                             "give one (too few fixes, or the robot hardly moves); give --initial-pose",
+                             source=truth.source)
+        pose[2] = fit[0] + (math.pi if reverse else 0.0)
+        cov[2, 2] = fit[1]
+    return pose, cov

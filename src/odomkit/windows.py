@@ -1,0 +1,528 @@
+"""Windows over a log with ground truth: each restarts dead reckoning from the truth.
+
+Long logs say little about odometry as a whole (the error of one 10-minute run is one
+sample); cut into non-overlapping windows that each restart from the truth pose, they give
+one error sample per window. :func:`split_windows` cuts a log by time (``30s``) or by
+odometry travel (``5m``); :func:`window_errors` dead-reckons each window from the truth at
+its start and scores its end against the predicted covariance (the honesty test of
+``odomkit evaluate --window``); :func:`window_covariance_basis` gives the same windows'
+covariance per unit variance of each noise parameter (``odomkit fit-noise``).
+
+The covariance of a window end
+------------------------------
+With e = truth − odometry at the window end, to first order
+
+    Cov(e) = Φ P_start Φᵀ + R_end + Σ_j v_j B_j,
+
+where P_start is the start pose's covariance (the truth's own noise ``truth.sigma``² on
+x and y; where the truth has no heading, the variance of the heading fitted to the truth
+positions, :func:`odomkit.truth.heading_from_positions`), Φ its transition to the window
+end (the engines carry it), R_end = diag(σ², σ², 0) the truth's noise at the end, and
+B_j the covariance that unit variance in noise parameter j alone gives
+(:meth:`odomkit.noise.NoiseModel.variance_parameters`). The recursion
+P_{k+1} = F P Fᵀ + G Q Gᵀ is linear in (P_0, Q) and a bias adds S diag(σ²) Sᵀ, so the
+sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from odomkit import validate
+from odomkit.angles import wrap_angle
+from odomkit.errors import InputError, ModelError
+from odomkit.integrate import dead_reckon
+from odomkit.kinematics import BodySteps, body_steps
+from odomkit.log import OdometryLog
+from odomkit.noise import NoiseModel, NoiseSet
+from odomkit.robot import Robot
+
+if TYPE_CHECKING:
+    from odomkit.propagate.plan import NoiseArg
+    from odomkit.truth import Truth
+
+__all__ = [
+    "Window",
+    "WindowBasis",
+    "WindowErrors",
+    "WindowSpec",
+    "cumulative_travel",
+    "parse_window",
+    "split_windows",
+    "window_covariance_basis",
+    "window_errors",
+]
+
+
+@dataclass(frozen=True)
+class WindowSpec:
+    """How long each window is: ``length`` seconds (unit ``"s"``) or metres of odometry
+    travel (unit ``"m"``)."""
+
+    length: float
+    unit: Literal["s", "m"]
+
+    def __post_init__(self) -> None:
+        validate.positive(self.length, "window length", unit=self.unit, error=InputError)
+        if self.unit not in ("s", "m"):
+            raise InputError(f"window unit must be 's' or 'm', got {self.unit!r}")
+
+    def __str__(self) -> str:
+        return f"{self.length:g} {self.unit}"
+
+
+_WINDOW_UNITS = {"s": ("s", 1.0), "min": ("s", 60.0), "h": ("s", 3600.0), "m": ("m", 1.0)}
+
+
+def parse_window(text: str) -> WindowSpec:
+    """A window length from text: ``30s``, ``2min``, ``1h`` (time) or ``5m`` (metres of
+    odometry travel).
+
+    >>> parse_window("30s"), parse_window("2.5 min"), parse_window("5m")
+    (WindowSpec(length=30.0, unit='s'), WindowSpec(length=150.0, unit='s'), WindowSpec(length=5.0, unit='m'))
+    """
+    match = re.fullmatch(r"\s*([0-9]*\.?[0-9]+(?:[eE][-+]?[0-9]+)?)\s*(s|min|h|m)\s*", str(text))
+    if match is None:
+        raise InputError(f"--window must be a length such as 30s (seconds), 2min or 5m (metres "
+                         f"of travel), got {text!r}")
+    unit, factor = _WINDOW_UNITS[match.group(2)]
+    value = float(match.group(1)) * factor
+    if value <= 0:
+        raise InputError(f"--window must be longer than zero, got {text!r}")
+    return WindowSpec(value, unit)  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class Window:
+    """One window: dead reckoning runs from log row ``start`` to row ``end``.
+
+    ``duration`` [s] and ``travel`` [m] (odometry path length, reversing included) of
+    the window.
+    """
+
+    start: int
+    end: int
+    duration: float
+    travel: float
+
+
+def cumulative_travel(steps: BodySteps) -> NDArray[np.float64]:
+    """Odometry path length from row 0 to each row, shape (M + 1,) [m] (|Δd| summed)."""
+    return np.concatenate(([0.0], np.cumsum(np.abs(np.asarray(steps.dd, dtype=float)))))
+
+
+def split_windows(
+    t: ArrayLike,
+    travel: ArrayLike,
+    spec: WindowSpec | None,
+    min_travel: float = 0.05,
+    *,
+    valid: ArrayLike | None = None,
+) -> tuple[list[Window], int]:
+    """Non-overlapping windows over the rows where the truth is valid.
+
+    The rows with valid truth form contiguous runs (a truth gap splits them); each run is
+    cut greedily from its first row: a window ends at the first row at least
+    ``spec.length`` seconds (or metres of travel) after its start, and the next window
+    starts there. A run's tail shorter than a window is left out. ``spec`` None gives one
+    window from the first to the last valid row.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Time of each row [s], non-decreasing.
+    travel : array_like, shape (N,)
+        Odometry path length from row 0 to each row [m] (:func:`cumulative_travel`).
+    spec : WindowSpec or None
+    min_travel : float
+        Windows travelling less than this [m] are left out and counted: a robot standing
+        still says nothing about its odometry.
+    valid : array_like of bool, shape (N,), optional
+        Rows where the truth is valid (default: all).
+
+    Returns
+    -------
+    windows : list of Window
+    skipped : int
+        Windows left out for travelling less than ``min_travel``.
+
+    Examples
+    --------
+    >>> t = np.arange(0.0, 10.01, 0.5)
+    >>> w, skipped = split_windows(t, t, WindowSpec(3.0, "s"))
+    >>> [(x.start, x.end) for x in w], skipped
+    ([(0, 6), (6, 12), (12, 18)], 0)
+    """
+    t = validate.shape(t, "time", ("N",), error=InputError)
+    s = validate.shape(travel, "travel", (t.size,), error=InputError)
+    ok = np.ones(t.size, dtype=bool) if valid is None else np.asarray(valid, dtype=bool)
+    if ok.shape != t.shape:
+        raise InputError(f"valid must have shape {t.shape}, got {ok.shape}")
+    min_travel = validate.non_negative(min_travel, "min_travel", unit="m", error=InputError)
+    windows: list[Window] = []
+    skipped = 0
+
+    def add(a: int, b: int) -> None:
+        nonlocal skipped
+        w = Window(a, b, float(t[b] - t[a]), float(s[b] - s[a]))
+        if w.travel < min_travel:
+            skipped += 1
+        else:
+            windows.append(w)
+
+    rows = np.flatnonzero(ok)
+    if rows.size == 0:
+        return windows, 0
+    if spec is None:
+        if rows[-1] > rows[0]:
+            add(int(rows[0]), int(rows[-1]))
+        return windows, skipped
+    axis = t if spec.unit == "s" else s
+    # Runs of consecutive valid rows: [first, last] inclusive.
+    breaks = np.flatnonzero(np.diff(rows) > 1)
+    firsts = np.concatenate(([rows[0]], rows[breaks + 1]))
+    lasts = np.concatenate((rows[breaks], [rows[-1]]))
+    for first, last in zip(firsts.tolist(), lasts.tolist(), strict=True):
+        a = first
+        while True:
+            b = int(np.searchsorted(axis, axis[a] + spec.length, side="left"))
+            # searchsorted may land on a repeated value below the target; never before a+1.
+            b = max(b, a + 1)
+            if b > last or axis[b] < axis[a] + spec.length:
+                break
+            add(a, b)
+            a = b
+    return windows, skipped
+
+
+@dataclass(frozen=True)
+class WindowErrors:
+    """Window-end errors and their predicted covariance (:func:`window_errors`).
+
+    Parameters
+    ----------
+    windows : list of Window
+        The windows scored (W), those whose start heading could be had.
+    error : ndarray, shape (W, 3)
+        Truth − odometry at each window end [m, m, rad], θ wrapped; θ NaN where the
+        truth has no heading.
+    cov : ndarray, shape (W, 3, 3)
+        Predicted covariance of ``error``: start covariance carried to the end, the
+        truth's noise at the end and the odometry noise.
+    start_cov : ndarray, shape (W, 3, 3)
+        Covariance of each start pose (truth noise, fitted heading).
+    end_rows : ndarray of int, shape (W,)
+        Log row of each window end.
+    dropped : int
+        Windows left out because no start heading could be fitted to the truth positions.
+    """
+
+    windows: list[Window]
+    error: NDArray[np.float64]
+    cov: NDArray[np.float64]
+    start_cov: NDArray[np.float64]
+    end_rows: NDArray[np.int64]
+    dropped: int
+
+
+@dataclass(frozen=True)
+class _Prepared:
+    """Each kept window's steps, dead-reckoned track, start covariance and end error."""
+
+    windows: list[Window]
+    steps: list[BodySteps]
+    poses: list[NDArray[np.float64]]
+    start_cov: NDArray[np.float64]
+    error: NDArray[np.float64]
+    end_noise: float  # truth σ² [m²] added to x and y at each window end
+    dropped: int
+    method: str
+
+
+def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:
+    """Steps a … b−1 (rows a … b); per-row inputs (a compass heading, M + 1) keep rows a … b."""
+    m = len(steps)
+    inputs = {k: (v[a:b + 1] if np.shape(v)[0] == m + 1 else v[a:b]) for k, v in steps.inputs.items()}
+    return BodySteps(steps.dd[a:b], steps.dtheta[a:b], steps.dt[a:b], inputs, steps.robot)
+
+
+def _start_heading(truth: Truth | None, time: float, reversing: bool, source: str
+                   ) -> tuple[float, float] | None:
+    """Heading and its variance fitted to position-only truth around ``time``."""
+    if truth is None:
+        raise InputError("the truth has no heading at a window start; pass the Truth so that "
+                         "one can be fitted to its positions", source=source)
+    from odomkit.truth import heading_from_positions
+
+    fitted = heading_from_positions(truth, time)
+    if fitted is None:
+        return None
+    heading, var = fitted
+    # heading_from_positions gives the direction of travel; a reversing robot faces away.
+    return (heading + np.pi if reversing else heading), var
+
+
+def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid: ArrayLike,
+             windows: list[Window], truth: Truth | None, method: str,
+             steps: BodySteps | None = None) -> _Prepared:
+    n = len(log)
+    gt = validate.shape(truth_poses, "truth poses", (n, 3), error=InputError)
+    ok = np.asarray(truth_valid, dtype=bool)
+    if ok.shape != (n,):
+        raise InputError(f"truth_valid must have shape ({n},), got {ok.shape}")
+    steps = body_steps(robot, log) if steps is None else steps
+    sigma2 = 0.0 if truth is None else float(truth.sigma) ** 2
+    kept: list[Window] = []
+    parts: list[BodySteps] = []
+    tracks: list[NDArray[np.float64]] = []
+    starts, errors = [], []
+    dropped = 0
+    for w in windows:
+        a, b = w.start, w.end
+        if not (0 <= a < b < n) or not (ok[a] and ok[b]):
+            raise ModelError(f"window rows {a}..{b} need valid truth at both ends of a "
+                             f"{n}-row log")
+        if not np.all(np.isfinite(gt[[a, b], :2])):
+            raise InputError(f"the truth position at row {a if not np.isfinite(gt[a, 0]) else b} "
+                             "is NaN; expected finite numbers", source=log.source)
+        part = _slice_steps(steps, a, b)
+        cov0 = np.zeros((3, 3))
+        cov0[0, 0] = cov0[1, 1] = sigma2
+        pose0 = gt[a].copy()
+        if robot.measures_heading:
+            pose0[2] = part.inputs["heading"][0]  # the measured heading (see dead_reckon_log)
+        elif not np.isfinite(pose0[2]):
+            ahead = part.dd[: max(1, int(np.searchsorted(np.cumsum(part.dt), 0.5)))]
+            fitted = _start_heading(truth, float(log.t[a]), float(np.sum(ahead)) < 0, log.source)
+            if fitted is None:
+                dropped += 1
+                continue
+            pose0[2], cov0[2, 2] = fitted
+        poses = dead_reckon(part.dd, part.dtheta, pose0, method)  # type: ignore[arg-type]
+        err = gt[b] - poses[-1]
+        err[2] = wrap_angle(err[2])
+        kept.append(w)
+        parts.append(part)
+        tracks.append(poses)
+        starts.append(cov0)
+        errors.append(err)
+    start = np.array(starts).reshape(-1, 3, 3)
+    error = np.array(errors).reshape(-1, 3)
+    return _Prepared(kept, parts, tracks, start, error, sigma2, dropped, method)
+
+
+def _end_covariance(part: BodySteps, poses: NDArray[np.float64], noise: NoiseArg,
+                    cov0: NDArray[np.float64], method: str) -> NDArray[np.float64]:
+    """Covariance at a window's last row from the engines (recursion)."""
+    from odomkit.propagate.recursion import iter_track_covariance
+
+    last = cov0
+    for _, chunk in iter_track_covariance(part, poses, noise, cov0, method):
+        last = chunk[-1]
+    return np.array(last)
+
+
+def window_errors(
+    log: OdometryLog,
+    robot: Robot,
+    noise: NoiseArg,
+    truth_poses: ArrayLike,
+    truth_valid: ArrayLike,
+    windows: list[Window],
+    *,
+    truth: Truth | None = None,
+    method: str = "exact",
+) -> WindowErrors:
+    """Dead-reckon each window from the truth at its start and score its end.
+
+    Each window starts at the truth pose of its first row with covariance
+    diag(σ², σ², 0), σ = ``truth.sigma`` (zero without ``truth``); where the truth has no
+    heading (θ NaN in ``truth_poses``), the start heading is fitted to the truth positions
+    (:func:`odomkit.truth.heading_from_positions`, turned by π while reversing) and its
+    variance enters the start covariance; a window where that fails is dropped and
+    counted. A compass robot starts from its measured heading, as ``odomkit track`` does.
+
+    Parameters
+    ----------
+    log : OdometryLog, N rows
+    robot : Robot
+    noise : noise model, sequence of models or NoiseSet
+    truth_poses : array_like, shape (N, 3)
+        Truth at each log row (e.g. :func:`odomkit.truth.truth_at` at ``log.t``); θ NaN
+        for position-only truth.
+    truth_valid : array_like of bool, shape (N,)
+    windows : list of Window
+        From :func:`split_windows`; both ends must have valid truth.
+    truth : Truth, optional
+        The truth itself: its ``sigma``, and its positions for fitted start headings.
+    method : {"exact", "midpoint", "euler"}
+
+    Returns
+    -------
+    WindowErrors
+
+    Examples
+    --------
+    >>> from odomkit.noise import WheelNoise
+    >>> from odomkit.robot import DiffDrive
+    >>> t = np.arange(0.0, 20.01, 0.1)
+    >>> log = OdometryLog(t, {"dist_left": np.full(t.size, 0.01), "dist_right": np.full(t.size, 0.01)})
+    >>> truth = np.column_stack((0.1 * t, 0 * t, 0 * t))
+    >>> w, _ = split_windows(t, 0.1 * t, WindowSpec(10.0, "s"))
+    >>> out = window_errors(log, DiffDrive(0.4), WheelNoise(0.01, 0.01), truth,
+    ...                     np.ones(t.size, bool), w)
+    >>> bool(np.abs(out.error).max() < 1e-12), round(float(out.cov[0, 0, 0]), 12)  # (k²+k²)·1 m/4
+    (True, 5e-05)
+    """
+    prep = _prepare(log, robot, truth_poses, truth_valid, windows, truth, method)
+    NoiseSet.of(noise).check_robot(robot)
+    covs = np.empty((len(prep.windows), 3, 3))
+    for i, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
+        covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method)
+        covs[i, 0, 0] += prep.end_noise
+        covs[i, 1, 1] += prep.end_noise
+    ends = np.array([w.end for w in prep.windows], dtype=np.int64)
+    return WindowErrors(prep.windows, prep.error, covs, prep.start_cov, ends, prep.dropped)
+
+
+@dataclass(frozen=True)
+class WindowBasis:
+    """Window-end errors and their covariance per unit variance of each noise parameter
+    (:func:`window_covariance_basis`).
+
+    With v_j the variance parameters (:meth:`odomkit.noise.NoiseModel.variance_parameters`)
+    the covariance of window w's end error is
+
+        ``fixed[w] + Σ_j v_j white[w, j] + sens[w] diag(bias_weights.T @ v_bias) sens[w]ᵀ``
+
+    and windows of one log share the bias: their errors are correlated through ``sens``.
+
+    Parameters
+    ----------
+    windows : list of Window (W)
+    error : ndarray, shape (W, 3)
+        Truth − odometry at each window end; θ NaN where the truth has no heading.
+    fixed : ndarray, shape (W, 3, 3)
+        The part that no parameter scales: start covariance carried to the end plus the
+        truth's noise at the end.
+    white : ndarray, shape (W, q, 3, 3)
+        Covariance per unit variance of each white parameter (``white_names``).
+    sens : ndarray, shape (W, 3, c)
+        Sensitivity of each window end to the c bias columns (each model's bias
+        parameters, :meth:`odomkit.noise.NoiseModel.bias_jacobian`).
+    bias_weights : ndarray, shape (p, c)
+        Variance each bias column gets per unit of each bias parameter (``bias_names``).
+    white_names, bias_names : tuple of (model index, field name)
+    turning : ndarray, shape (W,)
+        Odometry heading change of each window, Σ|Δθ| [rad] (turning identifies the
+        heading-related parameters).
+    dropped : int
+        Windows left out for lack of a fitted start heading.
+    """
+
+    windows: list[Window]
+    error: NDArray[np.float64]
+    fixed: NDArray[np.float64]
+    white: NDArray[np.float64]
+    sens: NDArray[np.float64]
+    bias_weights: NDArray[np.float64]
+    white_names: tuple[tuple[int, str], ...]
+    bias_names: tuple[tuple[int, str], ...]
+    turning: NDArray[np.float64]
+    dropped: int
+
+    def covariance(self, variances: ArrayLike) -> NDArray[np.float64]:
+        """Each window end's covariance (W, 3, 3) at variance parameters ``variances``
+        (q white then p bias, in the order of ``white_names`` + ``bias_names``)."""
+        v = np.asarray(variances, dtype=float)
+        q = len(self.white_names)
+        cov = self.fixed + np.einsum("j,wjab->wab", v[:q], self.white)
+        col = self.bias_weights.T @ v[q:]
+        return cov + np.einsum("wac,c,wbc->wab", self.sens, col, self.sens)
+
+
+def window_covariance_basis(
+    log: OdometryLog,
+    robot: Robot,
+    models: NoiseArg,
+    truth_poses: ArrayLike,
+    truth_valid: ArrayLike,
+    windows: list[Window],
+    *,
+    truth: Truth | None = None,
+    method: str = "exact",
+) -> WindowBasis:
+    """Per-parameter covariance bases of the window ends, for fitting variances.
+
+    White parameter j's basis is the engines' covariance (:func:`window_errors`' engine)
+    with unit variance in j alone and zero start covariance; a bias model's columns are
+    the sensitivities S = ∂(window-end pose)/∂β, accumulated from each window's start
+    (:func:`odomkit.propagate.transition.sensitivity_chunk`), so that its covariance
+    S diag(σ²) Sᵀ is the engines' and windows of one log can share β.
+
+    Parameters
+    ----------
+    log, robot, truth_poses, truth_valid, windows, truth, method
+        As for :func:`window_errors`.
+    models : noise model, sequence of models or NoiseSet
+        Every variance parameter of every model that applies to ``robot`` gets a basis
+        (their current values do not matter).
+
+    Returns
+    -------
+    WindowBasis
+    """
+    from odomkit.propagate.inputs import step_terms
+    from odomkit.propagate.transition import sensitivity_chunk, sensitivity_terms
+
+    noise = NoiseSet.of(models)
+    noise.check_robot(robot)
+    prep = _prepare(log, robot, truth_poses, truth_valid, windows, truth, method)
+    step_map = noise.step_map(method)
+    white_units: list[tuple[tuple[int, str], NoiseModel]] = []
+    bias_names: list[tuple[int, str]] = []
+    bias_models: list[NoiseModel] = []
+    weight_blocks: list[NDArray[np.float64]] = []
+    for i, model in enumerate(noise.models):
+        params = model.variance_parameters(robot)
+        zero = dict.fromkeys(params, 0.0)
+        units = [(name, model.from_variances({**zero, name: 1.0})) for name in params]
+        if model.kind == "white":
+            white_units += [((i, name), unit) for name, unit in units]
+        else:
+            bias_models.append(model)
+            bias_names += [(i, name) for name, _ in units]
+            weight_blocks.append(np.array([unit.bias_variances(robot) for _, unit in units])
+                                 .reshape(len(units), -1))
+    n_cols = sum(b.shape[1] for b in weight_blocks)
+    weights = np.zeros((len(bias_names), n_cols))
+    r = c = 0
+    for block in weight_blocks:
+        weights[r:r + block.shape[0], c:c + block.shape[1]] = block
+        r, c = r + block.shape[0], c + block.shape[1]
+    n_win = len(prep.windows)
+    fixed = np.zeros((n_win, 3, 3))
+    white = np.zeros((n_win, len(white_units), 3, 3))
+    sens = np.zeros((n_win, 3, n_cols))
+    for w, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
+        if np.any(prep.start_cov[w]):
+            fixed[w] = _end_covariance(part, poses, (), prep.start_cov[w], method)
+        fixed[w, 0, 0] += prep.end_noise
+        fixed[w, 1, 1] += prep.end_noise
+        for j, (_, unit) in enumerate(white_units):
+            white[w, j] = _end_covariance(part, poses, unit, np.zeros((3, 3)), method)
+        if n_cols and len(part):
+            K = np.concatenate([m.bias_jacobian(part, 0, len(part)) for m in bias_models], axis=-1)
+            u, C = sensitivity_terms(step_terms(poses[:-1, 2], part.dd, part.dtheta, step_map), K)
+            if robot.measures_heading:
+                u = np.zeros_like(u)  # a measured heading carries no error forward (Kelly 3.1)
+            sens[w] = sensitivity_chunk(u, C, np.zeros((3, n_cols)))[-1]
+    turning = np.array([float(np.sum(np.abs(part.dtheta))) for part in prep.steps])
+    return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights,
+                       tuple(name for name, _ in white_units), tuple(bias_names), turning,
+                       prep.dropped)

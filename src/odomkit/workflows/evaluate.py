@@ -1,0 +1,373 @@
+"""``odomkit evaluate``: how wrong a track is, and how honest its covariance.
+
+Two forms (DESIGN.md, "``odomkit evaluate``"):
+
+* :func:`evaluate_tracks` scores tracks written by ``odomkit track --out`` against truth
+  (a truth file, or the track's own ``gt_*`` columns): every row inside the truth is an
+  error sample, and its covariance is scored at every row.
+* :func:`evaluate_logs` re-runs dead reckoning on logs: once from the truth at the first
+  row (the whole-run figures: ATE, RPE, drift), and once per non-overlapping window from
+  the truth at its start, scoring each window end against its predicted covariance (the
+  honesty test: window ends are independent samples, the rows of one run are not).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.io.trackio import TrackFile
+    from odomkit.log import OdometryLog
+    from odomkit.propagate.plan import NoiseArg
+    from odomkit.robot import Robot
+    from odomkit.truth import Truth
+    from odomkit.windows import WindowSpec
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["CONTAINMENT_NOTE", "evaluate_logs", "evaluate_tracks", "Scored", "summarise", "WINDOWED_NOTE"]
+
+#: The one line every text report carries about what a single run's containment means.
+CONTAINMENT_NOTE = (
+    "a single run's containment fraction is one sample, not a statistic: the errors along a run are "
+    "correlated (each pose inherits the error of the one before), so trust the windowed test "
+    "(--robot --window), whose windows restart from truth and give independent samples")
+WINDOWED_NOTE = (
+    "each window restarts from truth, so window ends are independent samples: this is the test to trust "
+    "(coverage near 0.5/0.9/0.95/0.99 and NEES mean inside its bounds means an honest covariance)")
+
+
+@dataclass(frozen=True)
+class Scored:
+    """One track's or log's raw figures, kept for pooling over several."""
+
+    label: str
+    rows_evaluated: int
+    rows_skipped: int
+    position_errors: NDArray[np.float64]  # (n,) [m] at the evaluated rows, in time order
+    path_length: float  # true travel over the evaluated rows [m]
+    rpe: dict[str, NDArray[np.float64] | None]  # distance key -> pair error norms [m]
+    honesty_errors: NDArray[np.float64]  # (m, 2) position errors scored against a covariance
+    honesty_cov: NDArray[np.float64]  # (m, 2, 2)
+    windows: int = 0
+    warnings: list[str] = field(default_factory=list)
+
+
+def _rpe_key(distance: float) -> str:
+    return f"{distance:g}"
+
+
+def _score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] | None,
+                truth: NDArray[np.float64], valid: NDArray[np.bool_], *, align: str,
+                truth_sigma: float, rpe_distances: Sequence[float], min_travel: float,
+                honesty_from_rows: bool) -> Scored:
+    """Score the rows of one track where ``valid``; ``truth`` (N, 3), θ NaN if unknown."""
+    from odomkit.evaluate import align_track, relative_pose_errors
+
+    notes: list[str] = []
+    n = poses.shape[0]
+    rows = np.flatnonzero(valid)
+    if rows.size == 0:
+        raise InputError("no row of the track lies inside the truth: the truth does not overlap it in "
+                         "time (check --truth-time-unit and --max-gap)", source=label)
+    est, ref = poses[rows], truth[rows]
+    P = None if cov is None else cov[rows]
+    path = float(np.sum(np.hypot(*np.diff(ref[:, :2], axis=0).T)))
+    if path < min_travel:
+        raise InputError(f"the truth moves {path:.4g} m over the evaluated rows, less than --min-travel "
+                         f"{min_travel:g} m: a robot standing still says nothing about odometry",
+                         source=label)
+    if align == "start" and not np.isfinite(ref[0, 2]):
+        notes.append(f"{label}: the truth has no heading, so --align start only translates the track")
+    if align == "se2" and P is not None and honesty_from_rows:
+        notes.append(f"{label}: --align se2 fits the track to the truth, so its NEES and coverage do not "
+                     "test the covariance; use --align none or start")
+    est, P = align_track(est, ref, align, P)
+    err = np.hypot(*(est[:, :2] - ref[:, :2]).T)
+    rpe: dict[str, NDArray[np.float64] | None] = {}
+    for d in rpe_distances:
+        if not np.all(np.isfinite(ref[:, 2])):
+            rpe[_rpe_key(d)] = None
+            continue
+        e = relative_pose_errors(est, ref, d, pairs="consecutive")
+        rpe[_rpe_key(d)] = np.hypot(e[:, 0], e[:, 1]) if e.shape[0] else None
+    if any(v is None for v in rpe.values()):
+        why = ("the truth has no heading" if not np.all(np.isfinite(ref[:, 2]))
+               else "the truth travels less than the distance")
+        notes.append(f"{label}: no RPE over {', '.join(k for k, v in rpe.items() if v is None)} m ({why})")
+    if honesty_from_rows and P is not None:
+        he, hc = est[:, :2] - ref[:, :2], P[:, :2, :2] + truth_sigma**2 * np.eye(2)
+    else:
+        he, hc = np.empty((0, 2)), np.empty((0, 2, 2))
+        if honesty_from_rows:
+            notes.append(f"{label}: the track has no covariance, so there is no NEES or coverage")
+    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes)
+
+
+def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
+    """The output keys of DESIGN.md pooled over ``scored`` (without ``per_log``).
+
+    Pooled: ``ate_rmse`` and each ``rpe`` are the RMS over every sample of every log,
+    ``max_position_error`` the largest, ``final_position_error`` the mean of the logs'
+    final errors, ``drift_percent`` 100 × Σ final errors / Σ true travel, and the NEES
+    and coverage figures use every scored pose (window ends, or track rows).
+    """
+    from odomkit.evaluate import coverage, nees_summary
+
+    err = np.concatenate([s.position_errors for s in scored])
+    finals = np.array([s.position_errors[-1] for s in scored])
+    travel = sum(s.path_length for s in scored)
+    rpe: dict[str, float | None] = {}
+    for d in rpe_distances:
+        parts = [s.rpe[_rpe_key(d)] for s in scored]
+        got = [p for p in parts if p is not None]
+        rpe[_rpe_key(d)] = float(np.sqrt(np.mean(np.concatenate(got) ** 2))) if got else None
+    he = np.concatenate([s.honesty_errors for s in scored])
+    hc = np.concatenate([s.honesty_cov for s in scored])
+    nees = nees_summary(he, hc) if he.shape[0] else {"mean": None, "median": None, "bounds": None}
+    cover = coverage(he, hc) if he.shape[0] else {"0.5": None, "0.9": None, "0.95": None, "0.99": None}
+    return {
+        "rows_evaluated": int(sum(s.rows_evaluated for s in scored)),
+        "rows_skipped": int(sum(s.rows_skipped for s in scored)),
+        "final_position_error": float(finals.mean()),
+        "max_position_error": float(err.max()),
+        "ate_rmse": float(np.sqrt(np.mean(err**2))),
+        "rpe": rpe,
+        "drift_percent": float(100.0 * finals.sum() / travel) if travel > 0 else None,
+        "windows": int(sum(s.windows for s in scored)),
+        "nees_position_mean": nees["mean"],
+        "nees_position_median": nees["median"],
+        "nees_bounds": nees["bounds"],
+        "coverage": cover,
+        "inside_95_fraction": cover["0.95"],
+    }
+
+
+def _report(scored: list[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
+    """The pooled figures, ``per_log``, and ``warnings`` (each also raised as a UserWarning,
+    which the CLI prints on stderr)."""
+    out = summarise(scored, rpe_distances)
+    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances)} for s in scored]
+    out["warnings"] = list(dict.fromkeys(w for s in scored for w in s.warnings))
+    for text in out["warnings"]:
+        warnings.warn(text, stacklevel=3)
+    return out
+
+
+def evaluate_tracks(
+    tracks: Sequence[str | Path],
+    truth: Sequence[TruthOptions],
+    *,
+    align: str = "none",
+    rpe_distances: Sequence[float] = (1.0,),
+    min_travel: float = 0.05,
+) -> dict[str, Any]:
+    """Score track CSVs (``odomkit track --out``) against truth.
+
+    Parameters
+    ----------
+    tracks : track CSV paths
+    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per track; ``path`` None
+        uses the track's ``gt_*`` columns.
+    align : {"none", "start", "se2"}
+    rpe_distances : true travel of each RPE [m]
+    min_travel : a track whose truth travels less [m] is an error (nothing to score)
+
+    Returns
+    -------
+    dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
+    """
+    from odomkit.truth import truth_at
+
+    scored = []
+    for path, opts in zip(tracks, truth, strict=True):
+        track = _read_estimate(Path(path))
+        if opts.path is not None:
+            found = _load(opts, None)
+            samples = truth_at(found, track.t, opts.max_gap)
+            ref, valid = samples.poses, samples.valid
+        elif track.truth is not None:
+            ref, valid = track.truth, np.isfinite(track.truth[:, 0]) & np.isfinite(track.truth[:, 1])
+        else:
+            raise InputError("no truth: give --truth, or a track written with truth (gt_* columns)",
+                             source=str(path))
+        scored.append(_score_rows(str(path), track.poses, track.cov, ref, valid, align=align,
+                                  truth_sigma=opts.sigma, rpe_distances=rpe_distances,
+                                  min_travel=min_travel, honesty_from_rows=True))
+    return _report(scored, rpe_distances)
+
+
+def _read_estimate(path: Path) -> TrackFile:
+    """A track CSV (``odomkit track --out``, found by its header), else any pose file that
+    truth can be (TUM, KITTI rows with time, headerless ``t,x,y,theta``) without covariance."""
+    from odomkit.io.trackio import TrackFile, read_track_csv
+    from odomkit.io.truth import read_truth
+
+    if not path.is_file():
+        raise InputError("no such file", source=str(path))
+    with path.open("rb") as fh:
+        head = fh.read(4096).decode("utf-8", errors="replace")
+    first = next((line for line in head.splitlines() if line.strip() and not line.startswith("#")), "")
+    if {"t", "x", "y", "theta"} <= {f.strip() for f in first.split(",")}:
+        return read_track_csv(path)
+    poses = read_truth(path)
+    if poses.theta is None:
+        raise InputError("the track has no heading column; expected a track CSV (odomkit track --out), "
+                         "a TUM file or t,x,y,theta", source=str(path))
+    return TrackFile(poses.t, np.column_stack((poses.xy, poses.theta)), None, None, str(path))
+
+
+def _load(opts: TruthOptions, log: OdometryLog | None) -> Truth:
+    from odomkit.workflows.truth import load_truth
+
+    found = load_truth(opts, log)
+    if found is None:
+        source = getattr(log, "source", None)
+        raise InputError("no truth: give --truth, or a log with ground truth (gt_* columns, OptiOdom, "
+                         "Snowhite)", source=source)
+    return found
+
+
+def evaluate_logs(
+    logs: Sequence[str | Path],
+    robot_path: str | Path,
+    truth: Sequence[TruthOptions],
+    *,
+    log_options: LogOptions | None = None,
+    window: str | None = None,
+    min_travel: float = 0.05,
+    align: str = "none",
+    rpe_distances: Sequence[float] = (1.0,),
+    method: str = "exact",
+) -> dict[str, Any]:
+    """The honesty test: dead reckoning restarted from truth in each window, scored at its end.
+
+    Parameters
+    ----------
+    logs : log paths
+    robot_path : robot file with a ``[noise]`` table
+    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per log
+    log_options : how to read the logs
+    window : ``"30s"`` or ``"5m"``; None for one window per log from its first row
+    min_travel : windows whose odometry travels less [m] are left out and counted
+    align : alignment of the whole-run track for ATE (see :func:`evaluate_tracks`)
+    rpe_distances : true travel of each RPE [m]
+    method : integration method
+
+    Returns
+    -------
+    dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
+    """
+    from odomkit.io.robotfile import read_robot
+    from odomkit.windows import parse_window
+    from odomkit.workflows.logs import LogOptions, load_log
+
+    robot, noise = read_robot(robot_path)
+    if not noise:
+        raise InputError("the robot file has no [noise] table: the honesty test scores a predicted "
+                         "covariance", source=str(robot_path))
+    noise_arg = noise if len(noise) > 1 else noise[0]
+    spec = parse_window(window) if window else None
+    scored = []
+    for path, opts in zip(logs, truth, strict=True):
+        log = load_log(path, robot, log_options or LogOptions())
+        found = _load(opts, log)
+        scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
+                                 align=align, rpe_distances=rpe_distances, method=method))
+    return _report(scored, rpe_distances)
+
+
+def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, opts: TruthOptions,
+               spec: WindowSpec | None, *, min_travel: float, align: str, rpe_distances: Sequence[float],
+               method: str) -> Scored:
+    """Whole-run figures from truth at the first row, and the window ends of one log."""
+    from odomkit.kinematics import body_steps
+    from odomkit.log import OdometryLog
+    from odomkit.track import dead_reckon_log
+    from odomkit.truth import truth_at
+    from odomkit.windows import cumulative_travel, split_windows, window_errors
+
+    samples = truth_at(truth, log.t, opts.max_gap)
+    rows = np.flatnonzero(samples.valid)
+    if rows.size == 0:
+        raise InputError(f"the truth ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the log "
+                         f"({log.t[0]:.6g}..{log.t[-1]:.6g} s); check --truth-time-unit", source=log.source)
+    steps = body_steps(robot, log)
+    travel = cumulative_travel(steps)  # odometry travel at each row [m], reversing counted
+    signed = np.concatenate(([0.0], np.cumsum(steps.dd)))  # forward minus backward [m]
+    first, pose0, cov0 = _whole_run_start(log, truth, opts, rows, signed)
+    # The whole run, dead-reckoned from the truth at its first usable row.
+    sub = OdometryLog(log.t[first:], {k: v[first:] for k, v in log.channels.items()},
+                      None, log.source, log.meta)
+    track = dead_reckon_log(sub, robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
+    whole = _score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
+                         align=align, truth_sigma=opts.sigma, rpe_distances=rpe_distances,
+                         min_travel=0.0, honesty_from_rows=False)
+    notes = list(whole.warnings)
+    if first != rows[0]:
+        notes.append(f"{log.source}: the whole-run track starts at {log.t[first]:.6g} s, the first "
+                               "time the position-only truth gives a heading (the robot stands still before)")
+    # The honesty test: one window per span of the log, restarted from truth.
+    valid_t = log.t[samples.valid]
+    if spec is not None:
+        have = (float(valid_t[-1] - valid_t[0]) if spec.unit == "s"
+                else float(travel[samples.valid][-1] - travel[samples.valid][0]))
+        if spec.length > have:
+            unit = "s" if spec.unit == "s" else "m of travel"
+            raise InputError(f"the window ({spec.length:g} {unit}) is longer than the log inside the truth "
+                             f"({have:.4g} {unit})", source=log.source)
+    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=samples.valid)
+    if not windows:
+        raise InputError(f"no window travels --min-travel {min_travel:g} m or more: the log shows no "
+                         "motion, and a robot standing still says nothing about odometry",
+                         source=log.source)
+    if skipped:
+        notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m and "
+                               "were left out")
+    found = window_errors(log, robot, noise, samples.poses, samples.valid, windows, truth=truth,
+                          method=method)
+    if found.dropped:
+        notes.append(f"{log.source}: {found.dropped} window(s) left out: no start heading could be "
+                               "fitted to the position-only truth")
+    # found.cov holds the truth's noise at both window ends already (odomkit.windows).
+    return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
+                   honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes)
+
+
+def _whole_run_start(log: OdometryLog, truth: Truth, opts: TruthOptions, rows: NDArray[np.intp],
+                     signed: NDArray[np.float64]) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
+    """The first row with valid truth from which a track can start, its pose and covariance.
+
+    With position-only truth the heading is fitted to the truth positions
+    (:func:`odomkit.truth.start_pose`; turned by π where the odometry ``signed`` travel
+    goes backwards over the next 0.5 s), which a robot standing still cannot give: then
+    the next rows are tried, about every 0.5 s, until one gives a heading.
+    """
+    from odomkit.truth import start_pose
+
+    last_error: InputError | None = None
+    tried = -np.inf
+    for row in rows.tolist():
+        if log.t[row] < tried + 0.5:
+            continue
+        tried = float(log.t[row])
+        ahead = min(int(np.searchsorted(log.t, log.t[row] + 0.5)), len(signed) - 1)
+        try:
+            pose, cov = start_pose(truth, tried, opts.max_gap, reverse=bool(signed[ahead] < signed[row]))
+        except InputError as exc:
+            if truth.has_heading:
+                raise
+            last_error = exc
+            continue
+        return int(row), pose, cov
+    assert last_error is not None
+    raise last_error

@@ -1,0 +1,230 @@
+"""``odomkit fit-noise``: the robot file's noise variances from logs with ground truth.
+
+Each log (with its truth file, or its own ``gt_*`` columns) is read, cut into windows that
+restart from the truth (:mod:`odomkit.windows`) and turned into per-parameter covariance
+bases, one log per task: in worker processes (``workers``), on a Dask cluster
+(``scheduler``) or in this process. Tasks are independent and their results are gathered
+in log order, so the fit is the same whatever runs them. The maximum-likelihood fit is
+:func:`odomkit.calibrate.fit_noise.fit_noise`; the robot file is written again with the
+fitted ``[noise]``.
+"""
+
+from __future__ import annotations
+
+import os
+import time
+from collections.abc import Callable, Sequence
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, TypeVar
+
+from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.noise import NoiseModel
+    from odomkit.robot import Robot
+    from odomkit.windows import WindowBasis, WindowSpec
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["KINDS", "LogTask", "PreparedLog", "fit_noise_files", "parse_kinds", "prepare_log"]
+
+KINDS = ("white", "bias")
+#: Below this many log rows in all, worker processes cost more to start than they save.
+PARALLEL_ROWS = 1_000_000
+
+
+def parse_kinds(text: str) -> tuple[str, ...]:
+    """``"white,bias"`` -> ("white", "bias"); one line naming ``--kinds`` otherwise."""
+    kinds = tuple(k.strip() for k in text.split(",") if k.strip())
+    bad = [k for k in kinds if k not in KINDS]
+    if not kinds or bad:
+        raise InputError(f"--kinds must be white, bias or white,bias, got {text!r}")
+    return kinds
+
+
+@dataclass(frozen=True)
+class LogTask:
+    """One log to prepare: where it is, how to read it and its truth, and the fit's setup."""
+
+    path: Path
+    truth: TruthOptions
+    log_options: LogOptions
+    robot: Robot
+    models: tuple[NoiseModel, ...]
+    spec: WindowSpec | None
+    min_travel: float
+    method: str
+
+
+@dataclass(frozen=True)
+class PreparedLog:
+    """A log's windows as bases, or why it has none (``reason``)."""
+
+    name: str
+    basis: WindowBasis | None
+    rows: int
+    skipped: int
+    reason: str | None
+
+
+def prepare_log(task: LogTask) -> PreparedLog:
+    """Read one log and its truth, cut its windows and compute their covariance bases."""
+    import numpy as np
+
+    from odomkit.kinematics import body_steps
+    from odomkit.truth import truth_at
+    from odomkit.windows import cumulative_travel, split_windows, window_covariance_basis
+    from odomkit.workflows.logs import load_log
+    from odomkit.workflows.truth import load_truth
+
+    name = str(task.path)
+    log = load_log(task.path, task.robot, task.log_options)
+    truth = load_truth(task.truth, log)
+    if truth is None:
+        raise InputError("the log has no ground truth: pass --truth FILE for it, or use a log "
+                         "with gt_* columns", source=name)
+    samples = truth_at(truth, log.t, task.truth.max_gap)
+    steps = body_steps(task.robot, log)
+    travel = cumulative_travel(steps)
+    windows, skipped = split_windows(log.t, travel, task.spec, task.min_travel, valid=samples.valid)
+    if not windows:
+        rows = np.flatnonzero(samples.valid)
+        span = float(log.t[rows[-1]] - log.t[rows[0]]) if rows.size else 0.0
+        moved = float(travel[rows[-1]] - travel[rows[0]]) if rows.size else 0.0
+        if rows.size < 2:
+            reason = "the truth does not overlap the log in time (check --truth-time-unit)"
+        elif skipped:
+            reason = (f"no motion: every window travels less than {task.min_travel:g} m "
+                      f"(--min-travel)")
+        elif task.spec is not None and task.spec.unit == "s":
+            reason = f"the window ({task.spec}) is longer than the log's {span:.3g} s with truth"
+        elif task.spec is not None:
+            reason = f"the window ({task.spec}) is longer than the log's {moved:.3g} m of travel"
+        else:
+            reason = "no window: the log has fewer than two rows with truth"
+        return PreparedLog(name, None, len(log), skipped, reason)
+    basis = window_covariance_basis(log, task.robot, task.models, samples.poses, samples.valid,
+                                    windows, truth=truth, method=task.method)
+    return PreparedLog(name, basis, len(log), skipped, None)
+
+
+T = TypeVar("T")
+R = TypeVar("R")
+
+
+def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: str | None) -> list[R]:
+    """``fn`` over ``tasks`` in order: on Dask, in worker processes, or here."""
+    if scheduler is not None:
+        from odomkit.simulate.distributed import get_client
+
+        client, owned = get_client(scheduler)
+        try:
+            return list(client.gather(client.map(fn, list(tasks), pure=False)))
+        finally:
+            if owned:
+                client.close()
+    if workers <= 1 or len(tasks) < 2:
+        return [fn(t) for t in tasks]
+    with ProcessPoolExecutor(max_workers=min(workers, len(tasks))) as pool:
+        return list(pool.map(fn, tasks, chunksize=max(1, len(tasks) // (4 * workers))))
+
+
+def _rows(path: Path) -> int:
+    try:
+        return max(path.stat().st_size // 40, 1)  # about 40 bytes a row of a text log
+    except OSError:
+        return 1
+
+
+def fit_noise_files(
+    robot_path: str | Path,
+    logs: Sequence[str | Path],
+    truths: Sequence[TruthOptions],
+    out: str | Path,
+    *,
+    window: str | None = None,
+    kinds: Sequence[str] = ("white",),
+    fixed: Sequence[str] = (),
+    log_options: LogOptions | None = None,
+    min_travel: float = 0.05,
+    method: str = "exact",
+    level: float = 0.95,
+    cross_validate: bool = False,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    overwrite: bool = False,
+) -> dict[str, Any]:
+    """Fit the noise of ``robot_path`` to ``logs`` and write the fitted robot file to ``out``.
+
+    Parameters
+    ----------
+    robot_path : the robot file; its ``[noise]`` names the models (defaults per vehicle
+        when it names none: :func:`odomkit.calibrate.fit_noise.models_to_fit`).
+    logs : log files.
+    truths : one :class:`TruthOptions` per log (path None: the log's own ``gt_*`` columns).
+    out : the robot file to write (refused if it exists, unless ``overwrite``).
+    window : ``"30s"``, ``"5m"`` (:func:`odomkit.windows.parse_window`); None: each log is
+        one window.
+    kinds : which models' variances are fitted ("white", "bias").
+    fixed : parameter names held at the robot file's value.
+    workers : processes for reading logs and computing bases; None: one per core when
+        the logs are large (:data:`PARALLEL_ROWS`), else this process.
+    scheduler : a Dask scheduler address: run those tasks on its cluster instead.
+
+    Returns
+    -------
+    dict: the JSON output of ``odomkit fit-noise`` (see DESIGN.md).
+    """
+    from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
+    from odomkit.io.files import refuse_overwrite
+    from odomkit.io.robotfile import read_robot, write_robot
+    from odomkit.windows import parse_window
+    from odomkit.workflows.logs import LogOptions
+
+    started = time.perf_counter()
+    if not logs:
+        raise InputError("fit-noise needs at least one --log")
+    if len(truths) != len(logs):
+        raise InputError(f"give one --truth per --log: {len(logs)} log(s), {len(truths)} truth(s)")
+    spec = parse_window(window) if window is not None else None
+    refuse_overwrite(out, overwrite=overwrite)
+    robot, file_models = read_robot(robot_path)
+    models, default_fixed = models_to_fit(robot, file_models, kinds)
+    options = log_options if log_options is not None else LogOptions()
+    tasks = [LogTask(Path(p), t, options, robot, models, spec, min_travel, method)
+             for p, t in zip(logs, truths, strict=True)]
+    if workers is None:
+        big = sum(_rows(Path(p)) for p in logs) >= PARALLEL_ROWS
+        workers = (os.cpu_count() or 1) if big else 1
+    prepared = _run_all(prepare_log, tasks, workers, scheduler)
+    used = [p for p in prepared if p.basis is not None]
+    if not used:
+        first = prepared[0]
+        raise InputError(first.reason or "no windows", source=first.name)
+    notes = []
+    left_out = [p for p in prepared if p.basis is None]
+    if left_out:
+        shown = "; ".join(f"{p.name}: {p.reason}" for p in left_out[:3])
+        more = f"; and {len(left_out) - 3} more" if len(left_out) > 3 else ""
+        notes.append(f"{len(left_out)} of {len(prepared)} logs left out: {shown}{more}")
+    bases = [p.basis for p in used if p.basis is not None]
+    dropped = sum(b.dropped for b in bases)
+    if dropped:
+        notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
+                     "position-only truth")
+    fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
+                    level=level, log_names=[p.name for p in used], cross_validate=cross_validate)
+    written = write_robot(out, robot, fit.models, overwrite=overwrite)
+    result = fit.to_dict()
+    result["warnings"] = notes + list(fit.warnings)
+    result.update({
+        "window": None if spec is None else str(spec),
+        "windows_skipped": sum(p.skipped for p in prepared),
+        "windows_dropped": dropped,
+        "logs_left_out": [p.name for p in left_out],
+        "outputs": {"robot": str(written)},
+        "seconds": time.perf_counter() - started,
+    })
+    return result

@@ -1,0 +1,116 @@
+"""The last check of every command: the numbers it returns are finite, its covariances
+symmetric positive semi-definite, and numeric trouble on the way is one line, not a
+traceback or a NaN printed as ``null`` (issue 10).
+
+Extreme but finite inputs (a wheel base of 1e-300 m, a noise of 1e200 m^½) make the
+arithmetic overflow or underflow. Inside :func:`numeric_guard` numpy computes on quietly
+(``inf``/``nan`` instead of RuntimeWarnings printed before an error), and the failures
+that cannot compute on (a Python float overflowing, an SVD that does not converge on
+``inf``) become one :class:`~odomkit.errors.ModelError`; :func:`check_result` then names
+the first number that is not finite.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from odomkit.errors import ModelError
+
+__all__ = ["check_result", "numeric_guard", "RESULT_RTOL"]
+
+#: Asymmetry and negative eigenvalue a computed covariance may show, relative to its largest
+#: entry: rounding of long recursions and prefix sums (~1e-13), far below any real defect.
+RESULT_RTOL = 1e-8
+
+_ADVICE = "check the units and the size of the inputs (robot file, log, flags)"
+
+
+@contextmanager
+def numeric_guard(what: str) -> Iterator[None]:
+    """Run a command's numerics with numpy's floating-point warnings off and its overflow
+    failures turned into one :class:`~odomkit.errors.ModelError` naming ``what``.
+
+    >>> with numeric_guard("the track"):
+    ...     float(np.float64(1e300) * 1e300)
+    inf
+    >>> with numeric_guard("the track"):
+    ...     2.0 ** 5000
+    Traceback (most recent call last):
+    ...
+    odomkit.errors.ModelError: the track: a number overflowed (Numerical result out of range); \
+check the units and the size of the inputs (robot file, log, flags)
+    """
+    with np.errstate(all="ignore"):
+        try:
+            yield
+        except OverflowError as exc:
+            reason = exc.args[-1] if exc.args else exc
+            raise ModelError(f"{what}: a number overflowed ({reason}); {_ADVICE}") from None
+        except (FloatingPointError, np.linalg.LinAlgError) as exc:
+            raise ModelError(f"{what}: the numerics failed ({exc}), a number is out of range; "
+                             f"{_ADVICE}") from None
+
+
+def check_result(what: str, values: Mapping[str, ArrayLike | None],
+                 covariances: Mapping[str, ArrayLike | None] | None = None) -> None:
+    """Raise if a returned number is not finite or a covariance is not symmetric PSD.
+
+    Parameters
+    ----------
+    what : str
+        The result, for the message (``"the track"``).
+    values : mapping of str to array_like, nested mapping or None
+        Named numbers or arrays that must be finite (None: not computed, skipped); a
+        nested mapping is checked entry by entry (``cg.cw``).
+    covariances : mapping of str to array_like or None, optional
+        Named covariances, shape (3, 3) or (N, 3, 3): all finite; the last one symmetric
+        and positive semi-definite to :data:`RESULT_RTOL` of its largest entry.
+
+    Raises
+    ------
+    ModelError
+        ``"{what}: {name} is not finite (inf); a number overflowed; check ..."`` or
+        ``"... is not a covariance ..."``.
+
+    Examples
+    --------
+    >>> check_result("the fit", {"k_left": 0.001, "mean": [0.0, 1.0]})
+    >>> check_result("the fit", {"k_left": 0.001, "mean": [0.0, float("nan")]})
+    Traceback (most recent call last):
+    ...
+    odomkit.errors.ModelError: the fit: mean is not finite (nan); a number overflowed or \
+lost all precision; check the units and the size of the inputs (robot file, log, flags)
+    """
+    for name, value in _flat({**values, **(covariances or {})}):
+        arr = np.asarray(value, dtype=float)
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            raise ModelError(f"{what}: {name} is not finite ({float(arr[bad].flat[0])!r}); a number "
+                             f"overflowed or lost all precision; {_ADVICE}")
+    for name, value in (covariances or {}).items():
+        if value is not None:
+            _check_psd(what, name, np.asarray(value, dtype=float))
+
+
+def _flat(values: Mapping[str, object], prefix: str = "") -> Iterator[tuple[str, ArrayLike]]:
+    """(name, array) pairs, nested dicts (``{"cg": {"cw": [x, y]}}``) named ``cg.cw``."""
+    for name, value in values.items():
+        if isinstance(value, Mapping):
+            yield from _flat(value, f"{prefix}{name}.")
+        elif value is not None:
+            yield f"{prefix}{name}", value  # type: ignore[misc]
+
+
+def _check_psd(what: str, name: str, cov: np.ndarray) -> None:
+    last = cov.reshape(-1, *cov.shape[-2:])[-1] if cov.ndim > 2 else cov
+    scale = float(np.max(np.abs(last))) if last.size else 0.0
+    if scale == 0.0:
+        return
+    asymmetric = float(np.max(np.abs(last - last.T))) > RESULT_RTOL * scale
+    if asymmetric or float(np.min(np.linalg.eigvalsh(0.5 * (last + last.T)))) < -RESULT_RTOL * scale:
+        raise ModelError(f"{what}: {name} is not a covariance (not symmetric positive "
+                         f"semi-definite: {last.tolist()}); the numerics lost all precision; {_ADVICE}")

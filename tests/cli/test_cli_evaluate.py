@@ -1,0 +1,155 @@
+"""``odomkit evaluate`` and ``odomkit track --truth/--initial-cov`` end to end; bad input exits 2."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from odomkit.data import builtin_data_path
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUN = builtin_data_path("230620202042_run-01.csv")
+
+
+def _gt(tmp_path, shift=(0.0, 0.0, 0.0), dt=0.0, heading=True, name="gt.csv"):
+    """The run's own OptiTrack truth as a separate file, moved rigidly by ``shift`` and
+    on a clock ``dt`` seconds ahead."""
+    data = np.loadtxt(RUN, delimiter=",")
+    c, s = np.cos(shift[2]), np.sin(shift[2])
+    x = c * data[:, 1] - s * data[:, 2] + shift[0]
+    y = s * data[:, 1] + c * data[:, 2] + shift[1]
+    cols = [data[:, 0] + dt, x, y] + ([data[:, 3] + shift[2]] if heading else [])
+    path = tmp_path / name
+    np.savetxt(path, np.column_stack(cols), delimiter=",",
+               header="t,x,y,theta" if heading else "t,x,y", comments="")
+    return path
+
+
+def test_text_reports_say_what_a_single_run_means(run_cli, tmp_path):
+    code, _, _ = run_cli("track", RUN, "--robot", ROBOT, "--out", tmp_path / "t.csv")
+    assert code == 0
+    code, out, err = run_cli("evaluate", tmp_path / "t.csv")
+    assert code == 0 and not err
+    note = [line for line in out.splitlines() if line.startswith("note:")]
+    assert len(note) == 1 and "one sample, not a statistic" in note[0] and "correlated" in note[0]
+    code, out, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "20s")
+    assert code == 0 and "this is the test to trust" in out
+
+
+def test_evaluate_json_keys(run_cli, tmp_path):
+    code, out, _ = run_cli("evaluate", RUN, builtin_data_path("230620202042_run-02.csv"), "--robot", ROBOT,
+                           "--window", "10s", "--rpe", "0.5,1", "--json")
+    assert code == 0
+    got = json.loads(out)
+    keys = {"rows_evaluated", "rows_skipped", "final_position_error", "max_position_error", "ate_rmse", "rpe",
+            "drift_percent", "windows", "nees_position_mean", "nees_position_median", "nees_bounds",
+            "coverage", "inside_95_fraction"}
+    assert set(got) == keys | {"per_log", "warnings"}
+    assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
+    assert [set(p) for p in got["per_log"]] == [keys | {"log"}] * 2
+    assert got["windows"] == sum(p["windows"] for p in got["per_log"])
+
+
+def test_track_truth_from_another_file_starts_there_and_is_carried(run_cli, tmp_path):
+    gt = _gt(tmp_path, shift=(1.0, -2.0, 0.5), dt=0.0)
+    code, out, _ = run_cli("track", RUN, "--robot", ROBOT, "--truth", gt, "--out", tmp_path / "a.csv",
+                           "--json")
+    assert code == 0
+    a = json.loads(out)
+    code, out, _ = run_cli("track", RUN, "--robot", ROBOT, "--initial-pose", "1,-2,0.5",
+                           "--out", tmp_path / "b.csv", "--json")
+    b = json.loads(out)
+    assert a["pose"] == pytest.approx(b["pose"], abs=1e-12)
+    table = np.genfromtxt(tmp_path / "a.csv", delimiter=",", names=True)
+    data = np.loadtxt(gt, delimiter=",", skiprows=1)
+    np.testing.assert_allclose(table["gt_x"], data[:, 1], atol=1e-15)
+    err = np.hypot(table["x"] - table["gt_x"], table["y"] - table["gt_y"])
+    assert a["final_position_error"] == pytest.approx(err[-1]) and a["max_position_error"] == pytest.approx(
+        err.max())
+    # the same figures through evaluate, from the carried gt_* columns
+    code, out, _ = run_cli("evaluate", tmp_path / "a.csv", "--json")
+    assert json.loads(out)["final_position_error"] == pytest.approx(err[-1])
+
+
+def test_track_truth_on_a_later_clock_leaves_rows_out(run_cli, tmp_path):
+    gt = _gt(tmp_path, dt=-2.0)  # truth ends 2 s before the log does
+    code, out, _ = run_cli("track", RUN, "--robot", ROBOT, "--truth", gt, "--out", tmp_path / "a.csv",
+                           "--json")
+    assert code == 0
+    table = np.genfromtxt(tmp_path / "a.csv", delimiter=",", names=True)
+    assert np.isnan(table["gt_x"][-40:]).all() and np.isfinite(table["gt_x"][:-40]).all()
+    inside = np.isfinite(table["gt_x"])
+    err = np.hypot(table["x"] - table["gt_x"], table["y"] - table["gt_y"])[inside]
+    assert json.loads(out)["final_position_error"] == pytest.approx(err[-1])
+
+
+def test_track_initial_cov_three_or_nine_numbers(run_cli, tmp_path):
+    for text, want in (("1e-4,2e-4,3e-4", np.diag([1e-4, 2e-4, 3e-4])),
+                       ("1e-4,1e-5,0,1e-5,2e-4,0,0,0,3e-4",
+                        [[1e-4, 1e-5, 0], [1e-5, 2e-4, 0], [0, 0, 3e-4]])):
+        path = tmp_path / f"c{len(text)}.csv"
+        code, _, _ = run_cli("track", RUN, "--robot", ROBOT, "--initial-cov", text, "--out", path)
+        assert code == 0
+        row = np.genfromtxt(path, delimiter=",", names=True)[0]
+        got = [[row["cov_xx"], row["cov_xy"], row["cov_xtheta"]],
+               [row["cov_xy"], row["cov_yy"], row["cov_ytheta"]],
+               [row["cov_xtheta"], row["cov_ytheta"], row["cov_thetatheta"]]]
+        np.testing.assert_allclose(got, want, rtol=1e-15)
+
+
+def test_track_position_only_truth_fits_the_start_heading(run_cli, tmp_path):
+    gt = _gt(tmp_path, shift=(0.0, 0.0, 1.0), heading=False)
+    # the robot stands still for its first second: no heading can be fitted there
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--truth", gt, "--json")
+    assert code == 2 and "give --initial-pose" in err and len(err.strip().splitlines()) == 1
+
+
+def test_position_only_truth_in_the_log_form_starts_once_the_robot_moves(run_cli, tmp_path):
+    gt = _gt(tmp_path, heading=False)
+    code, out, err = run_cli("evaluate", RUN, "--robot", ROBOT, "--truth", gt, "--window", "10s",
+                             "--truth-sigma", "0.001", "--json")
+    assert code == 0, err
+    got = json.loads(out)
+    assert got["rpe"]["1"] is None and got["windows"] > 0
+    assert any("starts at 1 s" in w for w in got["warnings"])
+    assert "odomkit: warning:" in err  # the same warnings on stderr
+    # the truth's own file, with heading, skips nothing
+    full = json.loads(run_cli("evaluate", RUN, "--robot", ROBOT, "--truth", _gt(tmp_path, name="h.csv"),
+                              "--json")[1])
+    assert full["rows_skipped"] == 0 and got["rows_skipped"] == 20  # the first second, standing
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["evaluate", "{track}", "--truth", "{late}"], "does not overlap"),
+    (["evaluate", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "does not overlap"),
+    (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "10min"], "longer than the log"),
+    (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "50m"], "longer than the log"),
+    (["evaluate", "{still}", "--robot", str(ROBOT), "--window", "10s"], "no motion"),
+    (["evaluate", "{track}", "--truth", "{nan}"], "line 3: column 2 is nan"),
+    (["evaluate", "{track}", "--window", "10s"], "needs --robot"),
+    (["evaluate", "{track}", "--align", "sim3"], "--align must be one of"),
+    (["evaluate", "{track}", "--rpe", "-1"], "--rpe expects positive"),
+    (["evaluate", "{track}", "--truth", "{late}", "--truth", "{late}"], "one --truth per log"),
+    (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "ten"], "--window must be"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "does not overlap"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--initial-cov", "1,2"], "3 variances"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--initial-cov", "1,2,3,4,5,6,7,8,9"], "symmetric"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--truth-sigma", "-1"], "--truth-sigma"),
+])
+def test_bad_input_is_one_line_and_exit_2(run_cli, tmp_path, args, message):
+    code, _, _ = run_cli("track", RUN, "--robot", ROBOT, "--out", tmp_path / "track.csv")
+    assert code == 0
+    _gt(tmp_path, dt=500.0, name="late.csv")
+    (tmp_path / "nan.csv").write_text("t,x,y\n0,0,0\n0.05,nan,0\n0.1,0,0\n")
+    data = np.loadtxt(RUN, delimiter=",")
+    data[:, 4:] = 0.0
+    still = tmp_path / "still_run-01.csv"  # an OptiOdom run name: read as OptiOdom
+    np.savetxt(still, data, delimiter=",")
+    argv = [a.format(track=tmp_path / "track.csv", late=tmp_path / "late.csv", nan=tmp_path / "nan.csv",
+                     still=still) for a in args]
+    code, out, err = run_cli(*argv)
+    assert code == 2, (out, err)
+    assert err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1, err
+    assert message in err and "Traceback" not in err

@@ -1,0 +1,199 @@
+"""One set of log options for every command that reads a log (issue 10 items 3, 5, 8).
+
+The independent truth is the built-in OptiOdom runs read in their own format: written out
+again as a CSV of cumulative counters (or gzip, or metres), they must give the same answers
+through ``--columns ... --cumulative``, in every command.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+
+import numpy as np
+import pytest
+import typer.main
+
+from odomkit.cli.application import app
+from odomkit.data import builtin_data_path
+from odomkit.io.optiodom import read_run
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
+LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-scale",
+             "--decimate"}
+CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
+LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
+
+
+def _log_params(command: str) -> dict[str, tuple[str | None, object]]:
+    from odomkit.cli import commands  # noqa: F401  (registers the commands)
+
+    click_command = typer.main.get_command(app).commands[command]  # type: ignore[attr-defined]
+    return {opt: (param.help, param.default) for param in click_command.params
+            for opt in param.opts if opt in LOG_FLAGS}
+
+
+def test_every_log_reading_command_takes_the_same_log_options():
+    reference = _log_params("track")
+    assert set(reference) == LOG_FLAGS
+    for command in LOG_COMMANDS[1:]:
+        assert _log_params(command) == reference, command
+
+
+def cumulative_csv(run, path, offset=1000, compress=False):
+    """The run as a CSV of cumulative tick counters starting at ``offset``, with its truth."""
+    log = read_run(run)
+    left = offset + np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]).astype(np.int64)
+    right = offset + np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]).astype(np.int64)
+    gt = log.ground_truth
+    lines = ["t,L,R,gx,gy,gth"] + [
+        f"{t!r},{a},{b},{x!r},{y!r},{th!r}"  # repr: every double exactly
+        for t, a, b, x, y, th in zip(log.t.tolist(), left.tolist(), right.tolist(),
+                                     *gt.T.tolist(), strict=True)]
+    text = ("\n".join(lines) + "\n").encode()
+    path.write_bytes(gzip.compress(text) if compress else text)
+    return path
+
+
+def run_json(run_cli, *args):
+    code, out, err = run_cli(*args, "--json")
+    assert code == 0, err
+    return json.loads(out), err
+
+
+def same_numbers(a, b, skip=("outputs", "warnings")):
+    if isinstance(a, dict):
+        assert a.keys() - set(skip) == b.keys() - set(skip)
+        for key in a.keys() - set(skip):
+            same_numbers(a[key], b[key])
+    elif isinstance(a, list):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            same_numbers(x, y)
+    elif isinstance(a, float):
+        assert a == pytest.approx(b, rel=1e-12, abs=1e-15)
+    else:
+        assert a == b
+
+
+@pytest.fixture(scope="module")
+def cumulative_runs(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("cumulative")
+    return [cumulative_csv(run, folder / f"c{i}.csv") for i, run in enumerate(RUNS)]
+
+
+@pytest.mark.parametrize("command, extra", [
+    ("calibrate", ["--side", "0.75"]),
+    ("calibrate-noise", []),
+    ("umbmark", ["--side", "0.75"]),
+])
+def test_cumulative_counters_calibrate_like_the_increments_they_count(run_cli, cumulative_runs,
+                                                                      command, extra):
+    """calibrate and calibrate-noise had no --cumulative: the counters were read as
+    increments without a word."""
+    runs = ["--runs", *cumulative_runs] if command == "umbmark" else cumulative_runs
+    plain = ["--runs", *RUNS] if command == "umbmark" else RUNS
+    expected, _ = run_json(run_cli, command, *plain, "--robot", ROBOT, *extra)
+    got, err = run_json(run_cli, command, *runs, "--robot", ROBOT, *extra,
+                        "--columns", CUMULATIVE, "--cumulative")
+    assert err == ""
+    same_numbers(got, expected)
+
+
+def test_counters_read_as_increments_are_warned_about_in_one_line_and_in_json(run_cli, cumulative_runs):
+    """On the square runs one wheel turns back in every spin, so its counter falls: only
+    run 2's left and run 6's right counter never decrease, and only they are flagged."""
+    runs = [cumulative_runs[1], cumulative_runs[5]]
+    out, err = run_json(run_cli, "calibrate", *runs, "--robot", ROBOT, "--columns", CUMULATIVE)
+    lines = err.strip().splitlines()
+    assert len(lines) == 2
+    assert all(line.startswith("odomkit: warning: ") and "--cumulative" in line for line in lines)
+    assert f"{runs[0]}: column 'L' (ticks_left) never decreases" in lines[0]
+    assert f"{runs[1]}: column 'R' (ticks_right) never decreases" in lines[1]
+    assert out["warnings"] == [line.removeprefix("odomkit: warning: ") for line in lines]
+
+
+def test_track_warning_reaches_json_and_stderr(run_cli, cumulative_runs):
+    out, err = run_json(run_cli, "track", cumulative_runs[1], "--robot", ROBOT, "--columns", CUMULATIVE,
+                        "--no-covariance")
+    assert len(out["warnings"]) == 1 and err.count("odomkit: warning:") == 1
+    code, text, err = run_cli("track", cumulative_runs[1], "--robot", ROBOT, "--columns", CUMULATIVE)
+    assert code == 0 and "never decreases" in err and "never decreases" not in text
+
+
+def test_64_bit_counters_gzip_through_track(run_cli, tmp_path):
+    """A 64-bit counter that wraps, in a gzip file: the same track as the increments."""
+    path = cumulative_csv(RUNS[0], tmp_path / "wrap.csv.gz", offset=2**63 - 20_000, compress=True)
+    expected, _ = run_json(run_cli, "track", RUNS[0], "--robot", ROBOT)
+    got, err = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", CUMULATIVE,
+                        "--cumulative", "--wrap-bits", "64")
+    assert err == ""
+    same_numbers(got, expected)
+
+
+def test_a_log_in_metres_is_not_scaled_by_the_robots_encoder(run_cli, tmp_path):
+    """optiodom_diff.toml has an encoder resolution; dist_* columns are metres all the same."""
+    n = 101
+    step = 0.004  # m per row and wheel: 0.4 m straight ahead
+    rows = "\n".join(f"{0.05 * i:.2f},{step if i else 0},{step if i else 0}" for i in range(n))
+    path = tmp_path / "metres.csv"
+    path.write_text("t,dl,dr\n" + rows + "\n")
+    out, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", "t=t,dist_left=dl,dist_right=dr")
+    assert out["path_length"] == pytest.approx(0.4, rel=1e-12)
+    assert out["pose"][0] == pytest.approx(0.4, rel=1e-12)
+
+
+@pytest.mark.parametrize("flags, message", [
+    (["--time-scale", "-1"], "--time-scale must be a positive number"),
+    (["--time-scale", "0"], "--time-scale must be a positive number"),
+    (["--time-scale", "nan"], "--time-scale must be a positive number"),
+    (["--period", "0"], "--period must be a positive number of seconds, got 0.0"),
+    (["--period", "-0.05"], "--period must be a positive number"),
+    (["--wrap-bits", "12"], "--wrap-bits must be one of 8, 16, 24, 32, 64, got 12"),
+    (["--decimate", "0"], "--decimate must be a positive integer"),
+    (["--format", "rosbag"], "--format must be one of"),
+    (["--cumulative"], "--cumulative does not apply to a optiodom log"),
+    (["--time-scale", "1e-3"], "--time-scale does not apply to a optiodom log"),
+    (["--columns", "t=t"], "--columns does not apply to a optiodom log"),
+])
+@pytest.mark.parametrize("command", LOG_COMMANDS)
+def test_bad_log_options_exit_2_with_one_line(run_cli, command, flags, message):
+    args = {"track": [RUNS[0]], "calibrate": RUNS[:2], "calibrate-noise": RUNS[:2],
+            "umbmark": ["--runs", *RUNS, "--side", "0.75"]}[command]
+    code, _, err = run_cli(command, *args, "--robot", ROBOT, *flags)
+    assert code == 2, err
+    assert message in err and err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1
+
+
+def test_period_applies_to_logs_without_time(run_cli, tmp_path):
+    khepera = tmp_path / "khepera1.txt"
+    khepera.write_text("0 0\n10 12\n20 25\n")
+    out, _ = run_json(run_cli, "track", khepera, "--robot", ROBOT, "--period", "0.25")
+    assert out["duration"] == pytest.approx(0.5, rel=1e-15)
+    code, _, err = run_cli("track", khepera, "--robot", ROBOT, "--period", "0")
+    assert code == 2 and "--period must be a positive number" in err
+
+
+def test_umbmark_log_options_need_runs(run_cli, tmp_path):
+    errors = tmp_path / "errors.csv"
+    errors.write_text("direction,x,y\ncw,0.1,0.1\ncw,0.1,0.1\nccw,0.1,0.1\nccw,0.1,0.1\n")
+    code, _, err = run_cli("umbmark", errors, "--side", "4", "--wheel-base", "0.3", "--cumulative")
+    assert code == 2 and "--cumulative applies to the logs of --runs" in err
+
+
+def test_reported_warnings_one_line_each_also_before_an_error(capsys):
+    import warnings
+
+    from odomkit.cli.log_options import reported_warnings, with_warnings
+
+    with pytest.raises(ValueError), reported_warnings() as warned:
+        warnings.warn("a: first\n  continued", stacklevel=1)
+        warnings.warn("a: first\n  continued", stacklevel=1)  # the same text once
+        warnings.warn("b: second", stacklevel=1)
+        raise ValueError
+    assert capsys.readouterr().err == "odomkit: warning: a: first continued\nodomkit: warning: b: second\n"
+    assert warned == ["a: first continued", "b: second"]
+    merged = with_warnings({"warnings": ["b: second"]}, warned)
+    assert merged == {"warnings": ["b: second", "a: first continued"]}
+    assert with_warnings({}, []) == {}

@@ -1,0 +1,88 @@
+"""Robot files as users write them (issue 10 item 8): every mistake is one line naming the
+file and the field, never a traceback and never a misleading "unknown field"."""
+
+from __future__ import annotations
+
+import gzip
+import math
+
+import pytest
+
+from odomkit.errors import InputError
+from odomkit.io.robotfile import read_robot
+from odomkit.robot import CompassOdometry, GyroOdometry, Tricycle
+
+DIFF = '[robot]\ntype = "diff"\nwheel_base = 0.3\n'
+
+
+def robot_file(tmp_path, body: str | bytes):
+    path = tmp_path / "robot.toml"
+    path.write_bytes(body if isinstance(body, bytes) else body.encode())
+    return path
+
+
+@pytest.mark.parametrize(("body", "message"), [
+    # the same wheel described twice
+    (DIFF + "wheel_diameter = 0.1\nwheel_radius = 0.05\n",
+     "wheel_diameter and wheel_radius both give the left wheel's size"),
+    (DIFF + "m_per_tick = 1e-4\nwheel_diameter = 0.1\n",
+     "m_per_tick and wheel_diameter both give the left wheel's size"),
+    (DIFF + "m_per_tick = 1e-4\nm_per_tick_right = 2e-4\n",
+     "m_per_tick and m_per_tick_right both give the right wheel's size"),
+    (DIFF + "wheel_radius_left = 0.05\nwheel_diameter_left = 0.1\nwheel_radius_right = 0.05\n",
+     "wheel_diameter_left and wheel_radius_left both give the left wheel's size"),
+    ('[robot]\ntype = "tricycle"\nwheel_to_axle = 0.7\nwheel_diameter = 0.1\nwheel_radius = 0.05\n',
+     "wheel_diameter and wheel_radius both give the front wheel's size"),
+    # encoder and gear belong to a wheel size, not to metres per tick
+    (DIFF + "m_per_tick = 1e-4\nencoder_resolution = 512\n",
+     "encoder_resolution applies to wheel_diameter or wheel_radius, not to m_per_tick"),
+    (DIFF + "m_per_tick = 1e-4\ngear_ratio = 10\n",
+     "gear_ratio applies to wheel_diameter or wheel_radius, not to m_per_tick"),
+    # tables that are not tables
+    (DIFF + "m_per_tick = 1.0\nnoise = [1, 2]\n", "[robot] has unknown field(s) noise"),
+    ("noise = [1, 2]\n" + DIFF + "m_per_tick = 1.0\n", "[noise] must be a table, got [1, 2]"),
+    (DIFF + "m_per_tick = 1.0\n[[noise]]\nk_left = 0.1\n", "[noise] must be a table"),
+    ("robot = 5\n", "needs a [robot] table"),
+    (DIFF + "m_per_tick = 1.0\n[noise]\nparameters = 5\n", "[noise] parameters must be a table"),
+    (DIFF + "m_per_tick = 1.0\n[noise]\nparameters = [1]\n", "[noise] parameters must be a table"),
+    (DIFF + "m_per_tick = 1.0\n[noise]\nk_left = [1]\nk_right = 1\n", "[noise] k_left must be a number"),
+    (DIFF + "m_per_tick = 1.0\n[noise.parameters]\nmode = 5\n", "mode must be"),
+    (DIFF + "m_per_tick = 1.0\n[noise.parameters]\nsigma_wheel_base = '0.1'\n",
+     "[noise.parameters] sigma_wheel_base must be a number"),
+    ('[robot]\ntype = ["diff"]\n', "type must be one of"),
+    (DIFF + "m_per_tick = nan\n", "must be a positive"),
+    # files that are not UTF-8 TOML text
+    (DIFF.encode() + b"m_per_tick = 1.0\n# r\xe9glage\n", "line 5: byte 0xe9 is not UTF-8"),
+    (b"\x00\x01\x02", "binary data"),
+])
+def test_bad_robot_files_name_the_field(tmp_path, body, message):
+    path = robot_file(tmp_path, body)
+    with pytest.raises(InputError) as info:
+        read_robot(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}") and message in text and "\n" not in text
+
+
+def test_a_gzip_robot_file_is_refused_by_name(tmp_path):
+    path = robot_file(tmp_path, gzip.compress((DIFF + "m_per_tick = 1.0\n").encode()))
+    with pytest.raises(InputError, match=r"robot\.toml: is gzip-compressed; a TOML robot file is plain text"):
+        read_robot(path)
+
+
+def test_per_side_wheel_sizes_still_read(tmp_path):
+    robot, _ = read_robot(robot_file(tmp_path, DIFF + "wheel_diameter_left = 0.1\nwheel_radius_right = 0.06\n"
+                                     "encoder_resolution = 100\ngear_ratio = 2\n"))
+    assert robot.m_per_tick_left == pytest.approx(math.pi * 0.1 / 200, rel=1e-15)
+    assert robot.m_per_tick_right == pytest.approx(math.pi * 0.12 / 200, rel=1e-15)
+
+
+@pytest.mark.parametrize(("kind", "cls", "extra"), [
+    ("gyro", GyroOdometry, ""), ("compass", CompassOdometry, ""),
+    ("tricycle", Tricycle, "wheel_to_axle = 0.7\n"),
+])
+def test_every_vehicle_takes_a_wheel_size(tmp_path, kind, cls, extra):
+    """A speed-and-gyro robot with an encoder is described like any other wheel."""
+    body = f'[robot]\ntype = "{kind}"\n{extra}wheel_diameter = 0.2\nencoder_resolution = 1000\n'
+    robot, _ = read_robot(robot_file(tmp_path, body))
+    assert isinstance(robot, cls)
+    assert robot.m_per_tick == pytest.approx(math.pi * 0.2 / 1000, rel=1e-15)

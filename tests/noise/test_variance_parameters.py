@@ -1,0 +1,108 @@
+"""Variance parameters of every noise model (what ``odomkit fit-noise`` fits).
+
+The independent truth is each model's own covariance: a model's contribution must be
+linear in each variance parameter (so a σ field must be squared and a psd field taken as
+it is); a wrong power would scale it quadratically and fail here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from odomkit.errors import ModelError
+from odomkit.kinematics import BodySteps, diff_body_steps, tricycle_body_steps
+from odomkit.noise import NOISE_MODELS, NoiseModel, ParameterUncertainty, WheelNoise
+from odomkit.noise.base import variance_power
+from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+
+M = 50
+
+
+def _steps(robot):
+    rng = np.random.default_rng(0)
+    dt = np.full(M, 0.1)
+    if isinstance(robot, DiffDrive):
+        dl, dr = rng.uniform(0.005, 0.02, (2, M))
+        dd, dth = diff_body_steps(dl, dr, robot.effective_wheel_base)
+        return BodySteps(dd, dth, dt, {"d_left": dl, "d_right": dr}, robot)
+    if isinstance(robot, Tricycle):
+        travel, steer = rng.uniform(0.005, 0.02, M), rng.uniform(-0.5, 0.5, M)
+        dd, dth = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+        return BodySteps(dd, dth, dt, {"travel": travel, "steer": steer}, robot)
+    dd = rng.uniform(0.005, 0.02, M)
+    if isinstance(robot, GyroOdometry):
+        rate = rng.normal(0, 0.3, M)
+        return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+    heading = np.cumsum(rng.normal(0, 0.05, M + 1))
+    return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
+
+
+ROBOTS = [DiffDrive(0.3), Tricycle(0.15), GyroOdometry(), CompassOdometry()]
+
+
+def _zero(cls: type[NoiseModel]) -> NoiseModel:
+    from dataclasses import fields
+
+    return cls(**{f.name: 0.0 for f in fields(cls) if not isinstance(f.default, str)})
+
+
+def _contribution(model: NoiseModel, steps: BodySteps) -> np.ndarray:
+    """Everything the engines take from a model, stacked."""
+    parts = [model.input_cov(steps, 0, M).ravel()] if model.kind == "white" else []
+    heading = model.heading_variances(steps)
+    if heading is not None:
+        parts.append(heading)
+    parts.append(model.bias_variances(steps.robot))
+    return np.concatenate(parts)
+
+
+@pytest.mark.parametrize("name", sorted(NOISE_MODELS))
+@pytest.mark.parametrize("robot", ROBOTS, ids=lambda r: r.type_name)
+def test_each_models_contribution_is_linear_in_each_variance_parameter(name, robot):
+    model = _zero(NOISE_MODELS[name])
+    try:
+        model.check_robot(robot)
+    except ModelError:
+        pytest.skip(f"{name} does not apply to a {robot.type_name} robot")
+    steps = _steps(robot)
+    params = model.variance_parameters(robot)
+    assert params, name
+    for key in params:
+        unit = _contribution(model.from_variances({key: 1.0}), steps)
+        assert np.any(unit), (name, key)
+        for v in (0.25, 7.0):
+            scaled = _contribution(model.from_variances({key: v}), steps)
+            np.testing.assert_allclose(scaled, v * unit, rtol=1e-12, atol=0)
+
+
+@pytest.mark.parametrize("name", sorted(NOISE_MODELS))
+def test_from_variances_inverts_variance_parameters(name):
+    model = _zero(NOISE_MODELS[name])
+    values = {k: 0.1 * (i + 1) for i, k in enumerate(model.variance_parameters())}
+    rebuilt = model.from_variances(values)
+    assert rebuilt.variance_parameters() == pytest.approx(values, rel=1e-15)
+    assert rebuilt.from_variances(rebuilt.variance_parameters()) == rebuilt
+
+
+def test_sigma_and_k_fields_are_squared_psd_and_alpha_are_not():
+    assert WheelNoise(0.01, 0.02).variance_parameters() == pytest.approx({"k_left": 1e-4, "k_right": 4e-4})
+    assert [variance_power(n) for n in ("sigma_x", "k_x", "var_x", "psd_x", "alpha_x")] == [2, 2, 1, 1, 1]
+    with pytest.raises(ModelError, match="neither"):
+        variance_power("scale")
+
+
+def test_only_parameters_that_apply_to_the_robot_are_listed():
+    pu = ParameterUncertainty()
+    assert set(pu.variance_parameters(DiffDrive(0.3))) == {"sigma_wheel_base", "sigma_scale_left",
+                                                           "sigma_scale_right"}
+    assert set(pu.variance_parameters(Tricycle(0.15))) == {"sigma_wheel_base", "sigma_scale_left"}
+    assert set(pu.variance_parameters(GyroOdometry())) == {"sigma_scale_left"}
+    assert "mode" not in pu.variance_parameters()
+
+
+def test_from_variances_refuses_unknown_fields_and_negative_variances():
+    with pytest.raises(ModelError, match="no field"):
+        WheelNoise(0, 0).from_variances({"k_middle": 1.0})
+    with pytest.raises(ModelError, match="non-negative"):
+        WheelNoise(0, 0).from_variances({"k_left": -1.0})

@@ -1,0 +1,125 @@
+"""Truth on its own clock: interpolation, gaps, log truth, headings fitted to positions."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from odomkit.errors import InputError
+from odomkit.log import OdometryLog
+from odomkit.truth import (
+    MAX_HEADING_SIGMA,
+    Truth,
+    heading_from_positions,
+    start_pose,
+    truth_at,
+    truth_from_log,
+)
+
+
+def _line_truth(t, heading=True):
+    """x = 2t, y = −t + 1, θ = 0.3 t: linear in t, so interpolation is exact."""
+    t = np.asarray(t, dtype=float)
+    return Truth(t, np.column_stack((2 * t, 1 - t)), 0.3 * t if heading else None)
+
+
+def test_interpolation_is_exact_for_linear_motion_at_any_clock():
+    truth = _line_truth(np.array([0.0, 0.13, 0.5, 0.71, 1.0]))
+    times = np.array([0.0, 0.05, 0.42, 0.9, 1.0])
+    s = truth_at(truth, times, max_gap=None)
+    assert s.valid.all() and s.outside == 0 and s.in_gaps == 0
+    np.testing.assert_allclose(s.poses, np.column_stack((2 * times, 1 - times, 0.3 * times)), atol=1e-15)
+
+
+def test_heading_interpolates_on_the_unwrapped_angle():
+    # Fixes at θ = 3.1 and 3.1 + 0.2 (past π): midway is 3.2, not the wrapped average ≈ 0.
+    truth = Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.array([3.1, 3.3]))
+    assert truth_at(truth, [0.5], max_gap=2.0).poses[0, 2] == pytest.approx(3.2)
+
+
+def test_outside_and_gaps_are_left_out_and_counted():
+    truth = _line_truth(np.array([0.0, 0.1, 0.2, 1.2, 1.3]))  # a 1 s gap from 0.2 to 1.2
+    times = np.array([-0.1, 0.05, 0.2, 0.5, 1.0, 1.25, 1.2, 1.4])
+    s = truth_at(truth, times, max_gap=0.5)
+    assert s.valid.tolist() == [False, True, True, False, False, True, True, False]
+    assert (s.outside, s.in_gaps) == (2, 2)
+    assert np.isnan(s.poses[~s.valid]).all()
+    # The fixes at both ends of the gap are kept, and no limit keeps the gap too.
+    assert truth_at(truth, times, max_gap=None).valid.sum() == 6
+
+
+def test_position_only_truth_gives_nan_heading():
+    s = truth_at(_line_truth([0.0, 1.0], heading=False), [0.5], max_gap=None)
+    assert s.valid[0] and np.isnan(s.poses[0, 2]) and s.poses[0, 0] == pytest.approx(1.0)
+
+
+def test_truth_rejects_bad_arrays():
+    with pytest.raises(InputError, match="strictly increasing"):
+        Truth(np.array([0.0, 0.0]), np.zeros((2, 2)))
+    with pytest.raises(InputError, match="NaN"):
+        Truth(np.array([0.0, 1.0]), np.array([[0.0, 0.0], [np.nan, 0.0]]))
+    with pytest.raises(InputError, match="shape"):
+        Truth(np.array([0.0, 1.0]), np.zeros((3, 2)))
+
+
+def test_truth_from_log_drops_repeated_times_and_keeps_the_first():
+    t = np.array([0.0, 0.1, 0.1, 0.2])
+    gt = np.array([[0, 0, 0], [1, 0, 0.1], [5, 5, 0.2], [2, 0, 0.3]], dtype=float)
+    log = OdometryLog(t, {"dist": np.zeros(4)}, gt, "log.csv")
+    truth = truth_from_log(log)
+    assert truth.t.tolist() == [0.0, 0.1, 0.2]
+    assert truth.xy[:, 0].tolist() == [0.0, 1.0, 2.0]
+    assert truth.source == "log.csv"
+    assert truth_from_log(OdometryLog(t, {"dist": np.zeros(4)})) is None
+
+
+def test_heading_fitted_on_an_arc_is_the_tangent():
+    # A circle of radius 2 at 0.5 rad/s: the tangent at φ is φ + π/2 (a chord would be off).
+    t = np.arange(0.0, 4.0, 0.01)
+    phi = 0.5 * t
+    truth = Truth(t, np.column_stack((2 * np.cos(phi), 2 * np.sin(phi))))
+    h, var = heading_from_positions(truth, 2.0, span=1.0)
+    assert h == pytest.approx(1.0 + np.pi / 2, abs=1e-5)
+    assert var < 1e-6  # from the cubic term the quadratic leaves in the residual
+
+
+def test_heading_variance_matches_monte_carlo():
+    """The reported variance is the spread of the fitted heading over noisy repeats."""
+    rng = np.random.default_rng(3)
+    t = np.arange(0.0, 2.0, 0.02)
+    clean = np.column_stack((0.4 * t, 0.1 * t))  # 0.41 m/s along atan2(1, 4)
+    sigma = 0.003
+    fits = [heading_from_positions(Truth(t, clean + rng.normal(0, sigma, clean.shape), sigma=sigma), 1.0)
+            for _ in range(2000)]
+    h = np.array([f[0] for f in fits])
+    var = np.array([f[1] for f in fits])
+    assert h.mean() == pytest.approx(np.arctan2(1, 4), abs=4 * h.std() / np.sqrt(h.size))
+    # The sample variance of 2000 draws is within ±10 % of the truth (sd ≈ 3.2 %).
+    assert h.var() == pytest.approx(np.median(var), rel=0.1)
+
+
+def test_no_heading_from_too_few_fixes_or_a_standing_robot():
+    t = np.arange(0.0, 2.0, 0.1)
+    moving = Truth(t, np.column_stack((t, 0 * t)))
+    assert heading_from_positions(moving, 1.0, span=0.25) is None  # 3 fixes
+    rng = np.random.default_rng(0)
+    still = Truth(t, rng.normal(0, 0.001, (t.size, 2)))
+    assert heading_from_positions(still, 1.0) is None
+    assert MAX_HEADING_SIGMA < 1.0
+    noisy = Truth(t, np.column_stack((t, rng.normal(0, 0.01, t.size))))
+    assert heading_from_positions(noisy, 1.0, max_residual=0.001) is None
+    assert heading_from_positions(noisy, 1.0) is not None
+
+
+def test_start_pose_from_truth_with_and_without_heading():
+    truth = _line_truth(np.arange(0.0, 3.0, 0.05))
+    pose, cov = start_pose(truth, 1.0)
+    np.testing.assert_allclose(pose, [2.0, 0.0, 0.3])
+    assert not cov.any()
+    noisy = Truth(truth.t, truth.xy, None, sigma=0.01)
+    pose, cov = start_pose(noisy, 1.0)
+    assert pose[2] == pytest.approx(np.arctan2(-1, 2))
+    assert cov[0, 0] == cov[1, 1] == pytest.approx(1e-4) and cov[2, 2] > 0
+    assert start_pose(noisy, 1.0, reverse=True)[0][2] == pytest.approx(np.arctan2(-1, 2) + np.pi)
+    with pytest.raises(InputError, match="outside the truth"):
+        start_pose(truth, 5.0)

@@ -1,0 +1,275 @@
+"""``odomkit evaluate`` workflows: metrics against a direct computation, evo, known noise."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy.stats import chi2
+
+from odomkit.errors import InputError
+from odomkit.integrate import dead_reckon
+from odomkit.io.trackio import read_track_csv
+from odomkit.workflows.evaluate import evaluate_logs, evaluate_tracks
+from odomkit.workflows.logs import LogOptions
+from odomkit.workflows.track import run_track
+from odomkit.workflows.truth import TruthOptions
+
+DATA = Path(__file__).resolve().parents[2] / "src" / "odomkit" / "data"
+RUN = DATA / "230620202042_run-01.csv"
+ROBOT = DATA / "optiodom_diff.toml"
+SIM_COLUMNS = "t=t,dist_left=L,dist_right=R"
+
+
+def _track_csv(path, t, poses, cov=None):
+    cols = "t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta"
+    rows = []
+    for i in range(t.size):
+        c = cov[i] if cov is not None else np.full((3, 3), np.nan)
+        cells = [t[i], *poses[i], c[0, 0], c[0, 1], c[0, 2], c[1, 1], c[1, 2], c[2, 2]]
+        rows.append(",".join("" if np.isnan(v) else repr(float(v)) for v in cells))
+    path.write_text(cols + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+@pytest.fixture()
+def synthetic(tmp_path):
+    """A curving track at 20 Hz and its truth on another clock (50 Hz, offset, one gap)."""
+    rng = np.random.default_rng(8)
+    truth_t = np.arange(-0.5, 31.0, 0.02)
+    truth_t = truth_t[(truth_t < 12.0) | (truth_t > 13.2)]  # a 1.2 s gap
+
+    def true_pose(t):
+        return np.column_stack((0.5 * t, np.sin(0.2 * t), np.arctan2(0.2 * np.cos(0.2 * t), 0.5)))
+
+    gt = true_pose(truth_t)
+    gt_path = tmp_path / "gt.csv"
+    np.savetxt(gt_path, np.column_stack((truth_t, gt)), delimiter=",", header="t,x,y,theta",
+               comments="")
+    t = np.arange(0.0, 32.0, 0.05)  # runs past the truth's end
+    est = true_pose(t) + np.cumsum(rng.normal(0, 0.003, (t.size, 3)), axis=0)
+    A = rng.normal(0, 0.02, (t.size, 3, 3))
+    cov = A @ A.transpose(0, 2, 1) + 1e-4 * np.eye(3)
+    cov[0] = 0.0  # the start: a singular covariance, left out of NEES
+    track = _track_csv(tmp_path / "track.csv", t, est, cov)
+    return track, gt_path, t, est, cov, truth_t, gt
+
+
+def _direct_keep(t, truth_t, max_gap=0.5):
+    """Rows inside the truth's span and not strictly inside a gap longer than max_gap."""
+    i = int(np.flatnonzero(np.diff(truth_t) > max_gap)[0])
+    return (t >= truth_t[0]) & (t <= truth_t[-1]) & ~((t > truth_t[i]) & (t < truth_t[i + 1]))
+
+
+def test_metrics_match_a_direct_numpy_computation(synthetic):
+    track, gt_path, t, est, cov, truth_t, gt = synthetic
+    out = evaluate_tracks([track], [TruthOptions(gt_path, max_gap=0.5)], rpe_distances=(1.0, 2.5))
+    keep = _direct_keep(t, truth_t)
+    ref = np.column_stack([np.interp(t[keep], truth_t, gt[:, k]) for k in range(3)])
+    e = est[keep, :2] - ref[:, :2]
+    d = np.linalg.norm(e, axis=1)
+    assert out["rows_evaluated"] == keep.sum() and out["rows_skipped"] == (~keep).sum()
+    assert out["ate_rmse"] == pytest.approx(np.sqrt(np.mean(d**2)), rel=1e-12)
+    assert out["final_position_error"] == pytest.approx(d[-1], rel=1e-12)
+    assert out["max_position_error"] == pytest.approx(d.max(), rel=1e-12)
+    travel = np.sum(np.linalg.norm(np.diff(ref[:, :2], axis=0), axis=1))
+    assert out["drift_percent"] == pytest.approx(100 * d[-1] / travel, rel=1e-12)
+    P = cov[keep][:, :2, :2]
+    regular = np.linalg.det(P) > 0
+    q = np.array([ei @ np.linalg.inv(Pi) @ ei for ei, Pi in zip(e[regular], P[regular], strict=True)])
+    assert out["nees_position_mean"] == pytest.approx(q.mean(), rel=1e-9)
+    assert out["nees_position_median"] == pytest.approx(np.median(q), rel=1e-9)
+    n = q.size
+    assert out["nees_bounds"] == pytest.approx([chi2.ppf(0.025, 2 * n) / n, chi2.ppf(0.975, 2 * n) / n])
+    for level in ("0.5", "0.9", "0.95", "0.99"):
+        assert out["coverage"][level] == pytest.approx(np.mean(q <= chi2.ppf(float(level), 2)))
+    assert out["inside_95_fraction"] == out["coverage"]["0.95"]
+    assert out["windows"] == 0 and out["per_log"][0]["log"] == str(track)
+    assert set(out["rpe"]) == {"1", "2.5"}
+
+
+def test_se2_alignment_minimises_the_ate(synthetic):
+    from scipy.optimize import minimize_scalar
+
+    track, gt_path, t, est, _, truth_t, gt = synthetic
+    opts = [TruthOptions(gt_path)]
+    ate = {a: evaluate_tracks([track], opts, align=a)["ate_rmse"] for a in ("none", "start")}
+    with pytest.warns(UserWarning, match="do not test the covariance"):
+        ate["se2"] = evaluate_tracks([track], opts, align="se2")["ate_rmse"]
+    keep = _direct_keep(t, truth_t)
+    ref = np.column_stack([np.interp(t[keep], truth_t, gt[:, k]) for k in range(2)])
+
+    def rms(phi):  # for a fixed rotation the best translation joins the centroids
+        c, s = np.cos(phi), np.sin(phi)
+        moved = est[keep, :2] @ np.array([[c, -s], [s, c]]).T
+        moved += ref.mean(axis=0) - moved.mean(axis=0)
+        return np.sqrt(np.mean(np.sum((moved - ref) ** 2, axis=1)))
+
+    best = minimize_scalar(rms, bounds=(-1.0, 1.0), method="bounded", options={"xatol": 1e-10})
+    assert ate["se2"] == pytest.approx(best.fun, rel=1e-9)
+    assert ate["se2"] <= min(ate["none"], ate["start"])
+
+
+@pytest.mark.filterwarnings("ignore:.*the track has no covariance")
+def test_ate_and_rpe_agree_with_evo(tmp_path):
+    """Same TUM files through evo (GPL: a test-only comparison, never a dependency)."""
+    pytest.importorskip("evo")
+    from evo.core import metrics, sync
+    from evo.tools import file_interface
+
+    rng = np.random.default_rng(9)
+    n = 800
+    t = np.arange(n) * 0.05
+    gt = np.column_stack((np.cumsum(np.full(n, 0.01)), np.sin(t / 5), 0.2 * np.sin(t / 3)))
+    est = gt + np.cumsum(rng.normal(0, 0.002, (n, 3)), axis=0) + [0.3, -0.2, 0.25]
+
+    def tum(path, p):
+        q = np.column_stack((np.zeros(n), np.zeros(n), np.sin(p[:, 2] / 2), np.cos(p[:, 2] / 2)))
+        np.savetxt(path, np.column_stack((t, p[:, :2], np.zeros(n), q)), fmt="%.17g")
+        return path
+
+    est_path, gt_path = tum(tmp_path / "est.tum", est), tum(tmp_path / "gt.tum", gt)
+    ref_traj, est_traj = sync.associate_trajectories(file_interface.read_tum_trajectory_file(str(gt_path)),
+                                                     file_interface.read_tum_trajectory_file(str(est_path)))
+    for align in ("none", "start", "se2"):
+        ours = evaluate_tracks([est_path], [TruthOptions(gt_path)], align=align, rpe_distances=(1.0, 2.0))
+        e = est_traj.__class__(poses_se3=est_traj.poses_se3, timestamps=est_traj.timestamps)
+        if align == "start":
+            e.align_origin(ref_traj)
+        elif align == "se2":
+            e.align(ref_traj)
+        ape = metrics.APE(metrics.PoseRelation.translation_part)
+        ape.process_data((ref_traj, e))
+        assert ours["ate_rmse"] == pytest.approx(ape.get_statistic(metrics.StatisticsType.rmse), rel=1e-9)
+        for delta in (1.0, 2.0):
+            rpe = metrics.RPE(metrics.PoseRelation.translation_part, delta=delta,
+                              delta_unit=metrics.Unit.meters, pairs_from_reference=True)
+            rpe.process_data((ref_traj, e))
+            assert ours["rpe"][f"{delta:g}"] == pytest.approx(rpe.get_statistic(metrics.StatisticsType.rmse),
+                                                              rel=1e-9)
+
+
+def test_track_with_truth_then_evaluate_equals_the_log_form(tmp_path):
+    """Whole-run figures: track --out (truth from the log) + evaluate TRACK.csv are the log form's."""
+    run_track(RUN, ROBOT, out=tmp_path / "track.csv")
+    assert read_track_csv(tmp_path / "track.csv").truth is not None
+    a = evaluate_tracks([tmp_path / "track.csv"], [TruthOptions()])
+    b = evaluate_logs([RUN], ROBOT, [TruthOptions()])
+    for key in ("rows_evaluated", "final_position_error", "max_position_error", "ate_rmse", "drift_percent"):
+        assert b[key] == pytest.approx(a[key], rel=1e-12), key
+    assert b["rpe"]["1"] == pytest.approx(a["rpe"]["1"], rel=1e-12)
+    assert b["windows"] == 1 and a["windows"] == 0  # one window per log without --window
+
+
+def _simulate(tmp_path, k_true, k_model, seconds=600.0, seed=11):
+    """A diff-drive log whose wheel noise is known: variance k²|d| per wheel and step."""
+    rng = np.random.default_rng(seed)
+    dt, B = 0.1, 0.4
+    t = np.arange(0.0, seconds + dt / 2, dt)
+    w = 0.4 * np.sin(0.05 * t)
+    dl, dr = (0.3 - w * B / 2) * dt, (0.3 + w * B / 2) * dt
+    dl[0] = dr[0] = 0.0
+    truth = dead_reckon((dl[1:] + dr[1:]) / 2, (dr[1:] - dl[1:]) / B, (0.0, 0.0, 0.0), "exact")
+    ml = dl + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dl))
+    mr = dr + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dr))
+    np.savetxt(tmp_path / "log.csv", np.column_stack((t, ml, mr)), delimiter=",", header="t,L,R",
+               comments="")
+    np.savetxt(tmp_path / "gt.csv", np.column_stack((t, truth)), delimiter=",", header="t,x,y,theta",
+               comments="")
+    (tmp_path / "robot.toml").write_text(
+        f'[robot]\ntype = "diff"\nwheel_base = {B}\nm_per_tick = 0.0001\n'
+        f"[noise]\nk_left = {k_model}\nk_right = {k_model}\n")
+    return tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "robot.toml"
+
+
+@pytest.mark.slow
+def test_windowed_coverage_is_right_when_the_noise_is_known(tmp_path):
+    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01)
+    out = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
+                        window="3s")
+    n = out["windows"]
+    assert n == 200
+    for level, got in out["coverage"].items():
+        p = float(level)
+        assert got == pytest.approx(p, abs=4 * np.sqrt(p * (1 - p) / n)), level
+    lo, hi = out["nees_bounds"]
+    assert lo < out["nees_position_mean"] < hi
+    # The same errors under a model with half the true noise (a quarter of the variance):
+    # the test must see it.
+    _simulate(tmp_path, k_true=0.01, k_model=0.005)
+    low = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
+                        window="3s")
+    assert low["coverage"]["0.95"] < 0.8 and low["nees_position_mean"] > hi
+
+
+def test_position_only_truth_and_truth_sigma_in_the_log_form(tmp_path):
+    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
+    data = np.loadtxt(gt, delimiter=",", skiprows=1)
+    np.savetxt(tmp_path / "xy.csv", data[:, :3], delimiter=",")  # t,x,y: no heading
+    opts = LogOptions(columns=SIM_COLUMNS)
+    full = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="10s")
+    with pytest.warns(UserWarning, match="no RPE over 1 m"):
+        xy = evaluate_logs([log], robot, [TruthOptions(tmp_path / "xy.csv", sigma=0.001)], log_options=opts,
+                           window="10s")
+    assert xy["windows"] == full["windows"] == 6
+    # fitted start headings add variance: the predicted ellipses only grow
+    assert xy["nees_position_mean"] < full["nees_position_mean"]
+    assert xy["rpe"]["1"] is None and any("no heading" in w for w in xy["warnings"])
+
+
+@pytest.mark.parametrize(("make", "match"), [
+    ("late_truth", "does not overlap"),
+    ("long_window", "longer than the log"),
+    ("standing", "no motion"),
+])
+def test_bad_log_form_input(tmp_path, make, match):
+    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=20.0)
+    window = "10s"
+    if make == "late_truth":
+        data = np.loadtxt(gt, delimiter=",", skiprows=1)
+        data[:, 0] += 100.0
+        np.savetxt(gt, data, delimiter=",")
+    elif make == "long_window":
+        window = "30s"
+    else:
+        data = np.loadtxt(log, delimiter=",", skiprows=1)
+        data[:, 1:] = 0.0
+        np.savetxt(log, data, delimiter=",", header="t,L,R", comments="")
+    with pytest.raises(InputError, match=match):
+        evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
+                      window=window)
+
+
+def test_track_form_bad_input(tmp_path, synthetic):
+    track, gt_path, t, est, *_ = synthetic
+    with pytest.raises(InputError, match="no truth"):
+        evaluate_tracks([track], [TruthOptions()])
+    still = _track_csv(tmp_path / "still.csv", t, np.zeros_like(est))
+    gt = tmp_path / "still_gt.csv"
+    np.savetxt(gt, np.column_stack((t, np.zeros((t.size, 3)))), delimiter=",")
+    with pytest.raises(InputError, match="standing still"):
+        evaluate_tracks([still], [TruthOptions(gt)])
+
+
+def test_track_csv_round_trip_with_truth_columns(tmp_path):
+    run = run_track(RUN, ROBOT, out=tmp_path / "t.csv")
+    back = read_track_csv(tmp_path / "t.csv")
+    np.testing.assert_array_equal(back.poses, run.track.poses)
+    np.testing.assert_array_equal(back.cov, run.track.cov)
+    np.testing.assert_array_equal(back.truth, run.log.ground_truth)
+
+
+@pytest.mark.slow
+def test_snowhite_whole_run_matches_the_data_notes(data_dir, tmp_path):
+    """SOURCE.md of the Halmstad data: integrating the handout's model from the first truth
+    pose ends 0.23 m from the truth (max 0.27 m); the log form finds the same from its gt."""
+    robot = tmp_path / "snowhite.toml"
+    robot.write_text('[robot]\ntype = "tricycle"\nwheel_to_axle = 0.68\n'
+                     "[noise]\nsigma_speed = 0.005\nsigma_steer = 0.01\nsigma_dt = 0.0001\n")
+    out = evaluate_logs([data_dir / "halmstad-khepera-snowhite" / "snowhite.txt"], robot, [TruthOptions()],
+                        window="20s")
+    assert out["rows_evaluated"] == 4050 and out["rows_skipped"] == 0
+    assert out["final_position_error"] == pytest.approx(0.228, abs=0.001)
+    assert out["max_position_error"] == pytest.approx(0.266, abs=0.001)
+    assert out["windows"] == 10
