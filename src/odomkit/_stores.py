@@ -30,9 +30,9 @@ __all__ = ["store_fence", "stream_store"]
 _X86 = platform.machine().lower() in ("x86_64", "amd64", "i386", "i686")
 
 
-@intrinsic
-def stream_store(typingctx: Any, array: Any, i: Any, j: Any, value: Any) -> Any:
-    """``array[i, j] = value`` for a 2-D float64 array, as a non-temporal store.
+def _stream_store(typingctx: Any, array: Any, i: Any, j: Any, value: Any) -> Any:
+    """``stream_store(array, i, j, value)``: ``array[i, j] = value`` for a 2-D float64
+    array, as a non-temporal store.
 
     No bounds check and no negative-index wraparound: the caller guarantees
     ``0 <= i < array.shape[0]`` and ``0 <= j < array.shape[1]``.
@@ -54,10 +54,9 @@ def stream_store(typingctx: Any, array: Any, i: Any, j: Any, value: Any) -> Any:
     return sig, codegen
 
 
-@intrinsic
-def store_fence(typingctx: Any) -> Any:
-    """Order all earlier (streaming) stores before any later one: ``sfence`` on x86, as
-    glibc's non-temporal ``memcpy`` ends; a full fence elsewhere."""
+def _store_fence(typingctx: Any) -> Any:
+    """``store_fence()``: order all earlier (streaming) stores before any later one:
+    ``sfence`` on x86, as glibc's non-temporal ``memcpy`` ends; a full fence elsewhere."""
     sig = types.void()
 
     def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
@@ -70,3 +69,8 @@ def store_fence(typingctx: Any) -> Any:
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+# Typed Any: a numba intrinsic is called without the typing context its definition takes.
+stream_store: Any = intrinsic(_stream_store)
+store_fence: Any = intrinsic(_store_fence)

@@ -6,7 +6,8 @@ Python loop runs per sample.
 
 With numba (``odomkit[fast]``) long logs go through one compiled pass per chunk instead
 (:mod:`odomkit._integrate_numba`), which reads the inputs once and writes the poses once:
-10^7 steps take ~25 ms, within 3x of copying the same bytes (``benchmarks/dead_reckoning.py``).
+10^7 steps take ~25 ms on a 2024 server core, within 3x of copying the same bytes
+(``benchmarks/dead_reckoning.py``).
 :func:`dead_reckon_wheels` folds the differential drive's wheel travels -> (Δd, Δθ) into
 that same pass, and both accept ``out=`` to write into a preallocated array.
 """

@@ -1,34 +1,30 @@
 """Maximum-likelihood noise variances from window-end errors (odomkit.calibrate.fit_noise).
 
-Independent truths: a dense multivariate normal over all windows of a log (the
-likelihood's Woodbury form must equal it), finite differences (gradient, observed
-information), the trace formula of the Fisher information on dense matrices, a brute-force
-profile likelihood by scipy, and synthetic logs simulated wheel by wheel with known white
-and bias variances (fitted back within the reported intervals).
+Independent truths: a brute-force profile likelihood by scipy, and synthetic logs
+simulated wheel by wheel with known white and bias variances (fitted back within the
+reported intervals); the likelihood itself is checked in test_window_likelihood.py.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from scipy.linalg import block_diag
 from scipy.optimize import minimize_scalar
 from scipy.stats import chi2
 
 from odomkit.calibrate.fit_noise import (
     DEFAULT_FIXED,
     FIRST_ORDER_SIGMA_THETA,
-    coverage_of,
     fit_noise,
     models_to_fit,
 )
-from odomkit.calibrate.window_likelihood import FLOOR, WindowLikelihood
+from odomkit.calibrate.window_likelihood import WindowLikelihood
 from odomkit.errors import ModelError
+from odomkit.evaluate import coverage
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import diff_body_steps
 from odomkit.log import OdometryLog
 from odomkit.noise import (
-    CompassNoise,
     GyroNoise,
     ParameterUncertainty,
     SpeedNoise,
@@ -73,72 +69,6 @@ def synthetic_bases(seed, *, n_logs=6, n=1200, bias=True, true=TRUE, window=10.0
             gt[:, 2] = np.nan
         bases.append(window_covariance_basis(log, ROBOT, models, gt, np.ones(n, bool), windows, truth=tr))
     return bases, models
-
-
-@pytest.fixture(scope="module")
-def mixed():
-    """Three logs with bias; the second has position-only truth."""
-    bases, models = synthetic_bases(7, n_logs=3, n=800, position_only=(1,))
-    v = np.array([TRUE[k] ** 2 for k in TRUE])
-    return WindowLikelihood(bases), bases, v
-
-
-def _dense(bases, v):
-    """Σ of each log over all its windows' observed components, and its parts."""
-    out = []
-    for b in bases:
-        mask = np.isfinite(b.error).reshape(-1)
-        D = b.fixed + np.einsum("j,wjab->wab", v[:2], b.white) + FLOOR * np.eye(3)
-        S = b.sens.reshape(-1, b.sens.shape[-1])
-        col = b.bias_weights.T @ v[2:]
-        sigma = (block_diag(*D) + S @ np.diag(col) @ S.T)[np.ix_(mask, mask)]
-        parts = [block_diag(*b.white[:, j])[np.ix_(mask, mask)] for j in range(2)]
-        parts += [np.outer(S[:, c], S[:, c])[np.ix_(mask, mask)] for c in range(S.shape[1])]
-        out.append((sigma, b.error.reshape(-1)[mask], parts))
-    return out
-
-
-def test_likelihood_equals_a_dense_gaussian_over_each_log(mixed):
-    lik, bases, v = mixed
-    expected = 0.0
-    quads = []
-    for sigma, e, _ in _dense(bases, v):
-        _, logdet = np.linalg.slogdet(sigma)
-        quad = e @ np.linalg.solve(sigma, e)
-        quads.append(quad)
-        expected += -0.5 * (logdet + quad + e.size * np.log(2 * np.pi))
-    val = lik(v)
-    assert val.loglik == pytest.approx(expected, rel=1e-11)
-    np.testing.assert_allclose(val.quad, quads, rtol=1e-9)
-
-
-def test_gradient_and_observed_information_match_finite_differences(mixed):
-    lik, _, v = mixed
-    val = lik(v, information=True)
-    hess = np.zeros((v.size, v.size))
-    for j in range(v.size):
-        h = v[j] * 1e-5
-        up, down = v.copy(), v.copy()
-        up[j] += h
-        down[j] -= h
-        fd = (lik(up, gradient=False).loglik - lik(down, gradient=False).loglik) / (2 * h)
-        assert val.gradient[j] == pytest.approx(fd, rel=1e-5)
-        hess[:, j] = (lik(up).gradient - lik(down).gradient) / (2 * h)
-    observed = -0.5 * (hess + hess.T)
-    # The average information is the mean of the observed and the expected information.
-    np.testing.assert_allclose(val.average, 0.5 * (observed + val.information),
-                               rtol=0, atol=1e-6 * np.abs(val.average).max())
-
-
-def test_expected_information_is_the_trace_formula_on_dense_matrices(mixed):
-    lik, bases, v = mixed
-    info = np.zeros((v.size, v.size))
-    for sigma, _, parts in _dense(bases, v):
-        inv = np.linalg.inv(sigma)
-        for i in range(v.size):
-            for j in range(v.size):
-                info[i, j] += 0.5 * np.trace(inv @ parts[i] @ inv @ parts[j])
-    np.testing.assert_allclose(lik(v, information=True).information, info, rtol=1e-9)
 
 
 def test_profile_interval_ends_where_the_brute_force_profile_crosses_chi2():
@@ -209,7 +139,8 @@ def test_parameters_the_data_cannot_tell_apart_are_warned_about():
     bases = []
     for _ in range(3):
         t = np.arange(1200) * 0.05
-        log = OdometryLog(t, {"dist": np.full(t.size, 0.01), "steer": 0.4 * np.sin(t / 3 + rng.uniform(0, 6))})
+        steer = 0.4 * np.sin(t / 3 + rng.uniform(0, 6))
+        log = OdometryLog(t, {"dist": np.full(t.size, 0.01), "steer": steer})
         steps = body_steps(robot, log)
         factor = NoiseSet.of(TricycleNoise(0.01, 0.03, 0.002)).input_factor(steps, 0, len(steps))
         noise = np.einsum("nij,nj->ni", factor, rng.standard_normal((len(steps), factor.shape[-1])))
@@ -264,7 +195,7 @@ def test_cross_validation_refits_without_each_log():
         held = WindowLikelihood([bases[k]])
         errors.append(held.error[:, :2])
         covs.append(held.window_covariance([rest.variances["k_left"], rest.variances["k_right"]])[:, :2, :2])
-    by_hand = coverage_of(np.concatenate(errors), np.concatenate(covs))
+    by_hand = coverage(np.concatenate(errors), np.concatenate(covs))
     for level, value in by_hand.items():
         assert cv["coverage"][level] == pytest.approx(value, abs=1.01 / fit.windows)
 
@@ -277,14 +208,6 @@ def test_fitted_models_carry_the_fitted_values_in_model_units():
     assert wheel.k_left**2 == pytest.approx(fit.variances["k_left"])
     assert fit.kinds == {"k_left": "white", "k_right": "white"}
     assert fit.to_dict()["interval95"]["k_left"] == list(fit.interval["k_left"])
-
-
-def test_coverage_counts_errors_inside_each_ellipse():
-    # Unit covariance: e inside the p-ellipse iff |e|² ≤ −2 ln(1 − p).
-    r = np.sqrt(-2 * np.log1p(-np.array([0.5, 0.9, 0.95, 0.99])))
-    errors = np.column_stack([r - 1e-9, np.zeros(4)])
-    cov = np.broadcast_to(np.eye(2), (4, 2, 2))
-    assert coverage_of(errors, cov) == {"0.5": 0.25, "0.9": 0.5, "0.95": 0.75, "0.99": 1.0}
 
 
 @pytest.mark.parametrize(("robot", "names"), [

@@ -21,7 +21,7 @@ from odomkit.io.optiodom import read_run
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
 LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-scale",
-             "--decimate"}
+             "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic"}
 CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
 LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
 
@@ -37,7 +37,7 @@ def _log_params(command: str) -> dict[str, tuple[str | None, object]]:
 def test_every_log_reading_command_takes_the_same_log_options():
     reference = _log_params("track")
     assert set(reference) == LOG_FLAGS
-    for command in LOG_COMMANDS[1:]:
+    for command in (*LOG_COMMANDS[1:], "fit-noise", "evaluate"):
         assert _log_params(command) == reference, command
 
 

@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-HEAVY = ("scipy", "numba", "matplotlib", "polars", "dask")
+HEAVY = ("scipy", "numba", "matplotlib", "polars", "dask", "rosbags")
 
 _PROBE = """
 import contextlib, io, json, sys

@@ -241,6 +241,28 @@ def test_wheel_noise_formed_in_the_kernel_equals_wheel_input_cov(parallel):
         assert np.array_equal(got, want)
 
 
+def test_long_track_written_in_place_with_streaming_stores_equals_the_chunks():
+    """A whole-track output of 2^18+ rows is written by the kernel in place with streaming
+    stores, in one chunk or many; every path must give the bits of the chunks that
+    iter_track_covariance yields (ordinary stores), and the lanes those of the
+    step-by-step path (chunks of 77 steps never hold a whole block of 128)."""
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(24)
+    m, noise = (1 << 18) + 300, WheelNoise(0.01, 0.02)
+    steps, poses = long_wheel_log(rng, m)
+    p0 = random_psd(rng, (3,), 1e-4)
+    want = np.concatenate([c for _, c in recursion.iter_track_covariance(steps, poses, noise, p0)])
+    for chunk in (10**6, 4096):
+        out = np.full((m + 1, 3, 3), np.nan)
+        assert track_covariance(steps, poses, noise, p0, chunk_size=chunk, out=out) is out
+        assert np.array_equal(out, want)
+    head = 20_000  # the step-by-step path is slow: a prefix is enough
+    short = BodySteps(steps.dd[:head], steps.dtheta[:head], steps.dt[:head],
+                      {k: v[:head] for k, v in steps.inputs.items()}, steps.robot)
+    by_step = track_covariance(short, poses[:head + 1], noise, p0, chunk_size=77)
+    assert np.array_equal(by_step, want[:head + 1])
+
+
 # --- a constant arc: the recursion converges to the continuous integral ---------------
 
 def arc_quadrature(left, right, base, k_left, k_right, nodes=200):

@@ -34,6 +34,7 @@ from scipy.stats import chi2
 
 from odomkit.calibrate.window_likelihood import WindowLikelihood
 from odomkit.errors import ModelError
+from odomkit.evaluate import coverage
 from odomkit.noise import NOISE_MODELS, NoiseModel, NoiseSet
 from odomkit.noise.base import variance_power
 
@@ -42,12 +43,11 @@ if TYPE_CHECKING:
     from odomkit.windows import WindowBasis
 
 __all__ = [
-    "COVERAGE_LEVELS",
+    "DEFAULT_FIXED",
     "DEFAULT_WHITE",
     "FIRST_ORDER_SIGMA_THETA",
     "NoiseFit",
     "NoiseParameter",
-    "coverage_of",
     "fit_noise",
     "noise_parameters",
     "models_to_fit",
@@ -67,7 +67,6 @@ DEFAULT_FIXED = frozenset({"sigma_dt"})
 #: σθ at a window end [rad] above which the first-order model is doubtful: the along-track
 #: second-order error (≈ D σθ²/2) reaches a tenth of the cross-track error (D σθ).
 FIRST_ORDER_SIGMA_THETA = 0.2
-COVERAGE_LEVELS = (0.5, 0.9, 0.95, 0.99)
 _CORRELATION = 0.95
 _U_MAX = 1e14  # upper bound of a variance in units of its starting scale
 _MAX_STEPS = 200
@@ -171,19 +170,6 @@ def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collecti
     return tuple(out)
 
 
-def coverage_of(errors_xy: NDArray[np.float64], cov_xy: NDArray[np.float64],
-                levels: Sequence[float] = COVERAGE_LEVELS) -> dict[str, float]:
-    """Fraction of errors (n, 2) inside the predicted ellipse (n, 2, 2) of each
-    probability: eᵀP⁻¹e ≤ χ²₂(p) = −2 ln(1 − p)."""
-    from odomkit.evaluate import nees
-
-    values = nees(errors_xy, cov_xy)
-    values = values[np.isfinite(values)]
-    if values.size == 0:
-        return {f"{p:g}": float("nan") for p in levels}
-    return {f"{p:g}": float(np.mean(values <= -2.0 * np.log1p(-p))) for p in levels}
-
-
 @dataclass(frozen=True)
 class NoiseFit:
     """Result of :func:`fit_noise` (values in each model's own units).
@@ -203,7 +189,7 @@ class NoiseFit:
     log_likelihood: float
     windows: int
     logs: int
-    coverage_in_sample: dict[str, float]
+    coverage_in_sample: dict[str, float | None]
     correlation: dict[str, dict[str, float]]
     per_log: list[dict[str, float | int | str]]
     warnings: list[str] = field(default_factory=list)
@@ -240,7 +226,6 @@ class _Problem:
     def __init__(self, lik: WindowLikelihood, v0: NDArray[np.float64], free: NDArray[np.intp],
                  scale: NDArray[np.float64]):
         self.lik, self.v0, self.free, self.scale = lik, v0, free, scale
-        self.steps = 0
 
     def maximise(self, base: NDArray[np.float64], idx: NDArray[np.intp],
                  start: NDArray[np.float64]) -> tuple[NDArray[np.float64], float]:
@@ -284,7 +269,6 @@ class _Problem:
             change = np.max(np.abs(accepted[idx] - v[idx]) / s / (1.0 + u))
             v = accepted
             val = self.lik(v, information=True)
-            self.steps += 1
             if gain <= _TOL_LL and change < 1e-6:
                 break
         return v, val.loglik
@@ -431,7 +415,7 @@ def fit_noise(
     for i, model in enumerate(models):
         mine = {p.name: float(v_hat[k]) for k, p in enumerate(params) if p.model == i}
         fitted.append(model.from_variances(mine) if mine else model)
-    per_log = []
+    per_log: list[dict[str, float | int | str]] = []
     for k, i in enumerate(used):
         dof = int(lik.nobs[k])
         per_log.append({"log": names[i], "windows": len(bases[i].windows), "quad": float(val.quad[k]),
@@ -447,7 +431,7 @@ def fit_noise(
         kinds={p.key: p.kind for p in params},
         models=tuple(fitted), level=level, log_likelihood=float(val.loglik),
         windows=lik.n_windows, logs=lik.n_logs,
-        coverage_in_sample=coverage_of(lik.error[:, :2], cov[:, :2, :2]),
+        coverage_in_sample=coverage(lik.error[:, :2], cov[:, :2, :2]),
         correlation={keys[a]: {keys[b]: float(corr[x, y]) for y, b in enumerate(informed)}
                      for x, a in enumerate(informed)},
         per_log=per_log, warnings=warnings, cross_validation=cv,
@@ -515,6 +499,6 @@ def _cross_validate(lik: WindowLikelihood, prob: _Problem, v_hat: NDArray[np.flo
         covs.append(held.window_covariance(v)[:, :2, :2])
         for j in prob.free:
             spread[params[j].key].append(params[j].to_value(v[j]))
-    return {"coverage": coverage_of(np.concatenate(errors), np.concatenate(covs)),
+    return {"coverage": coverage(np.concatenate(errors), np.concatenate(covs)),
             "folds": len(used), "windows": int(sum(e.shape[0] for e in errors)),
             "parameter_range": {k: [min(x), max(x)] for k, x in spread.items()}}

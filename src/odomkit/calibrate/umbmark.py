@@ -270,23 +270,14 @@ def umbmark(
         beta_y = (y_cw + y_ccw) / (-4.0 * L)
         alpha_x = (x_cw + x_ccw) / (-4.0 * L)
         alpha_y = (y_cw - y_ccw) / (-4.0 * L)
-    # Each estimator alone must describe a turn error below the model's limit (α: 90°, or
-    # 180° for Chong–Kleeman's c_b; β: a half-turn per leg): errors whose x and y estimates
-    # are far out of range but happen to average to a small α or β (±6e198 rad -> 0) would
-    # otherwise give a silently wrong E_d, E_b.
-    alpha_limit = 0.5 * math.pi if variant == "borenstein-feng" else math.pi
-    for name, value, limit in (("α_x", alpha_x, alpha_limit), ("α_y", alpha_y, alpha_limit),
-                               ("β_x", beta_x, math.pi), ("β_y", beta_y, math.pi)):
-        if not abs(value) < limit:
-            raise ModelError(
-                f"{name} = {value:.4g} rad (eq. 4.20/4.24 with L = {L:g} m) is not below "
-                f"{math.degrees(limit):.0f}°: the errors are too large for UMBmark (check units: "
-                "metres, the side L, and the CW/CCW labels)")
     # Averaging α and β (Chong–Kleeman eq. 7–8). Borenstein–Feng's footnote 2 averages
     # E_d,x/E_d,y and E_b,x/E_b,y instead; the two differ by O((β_x − β_y)²), far below
     # the noise that makes β_x ≠ β_y, and averaging α, β keeps R, E_d and E_b consistent.
     alpha = 0.5 * (alpha_x + alpha_y)
     beta = 0.5 * (beta_x + beta_y) + 0.0  # + 0.0 turns −0.0 into 0.0
+    if not all(math.isfinite(v) for v in (alpha_x, alpha_y, beta_x, beta_y, alpha, beta)):
+        raise ModelError(f"α and β overflow (return errors over a {L:g} m side): the errors are too "
+                         "large for UMBmark (check units: metres, and the side L)")
 
     s = math.sin(0.5 * beta)
     # Borenstein–Feng eq. (4.21); R is infinite on straight legs (β = 0).
@@ -309,6 +300,19 @@ def umbmark(
             raise ModelError(f"α = {alpha:.4g} rad is not below 180°")
         # Chong–Kleeman eq. (10) as printed; wrong by a factor 2 in (c_b − 1), see module doc.
         E_b = math.pi / (math.pi - alpha)
+    # Each estimator alone must describe a turn error below the model's limit (α: 90°, or
+    # 180° for Chong–Kleeman's c_b; β: a half-turn per leg): errors whose x and y estimates
+    # are far out of range but happen to average to a small α or β (±6e198 rad -> 0) would
+    # otherwise give a silently wrong E_d, E_b.
+    alpha_limit = 0.5 * math.pi if variant == "borenstein-feng" else math.pi
+    for name, value, limit in (("α_x", alpha_x, alpha_limit), ("α_y", alpha_y, alpha_limit),
+                               ("β_x", beta_x, math.pi), ("β_y", beta_y, math.pi)):
+        if not abs(value) < limit:
+            raise ModelError(
+                f"{name} = {value:.4g} rad (eq. 4.20/4.24 with L = {L:g} m) is not below "
+                f"{math.degrees(limit):.0f}°: the errors are too large for UMBmark (check units: "
+                "metres, the side L, and the CW/CCW labels)")
+
     c_left = 2.0 / (E_d + 1.0)  # eq. (4.31)
     c_right = 2.0 / (1.0 / E_d + 1.0)  # eq. (4.32) = E_d·c_L (Chong–Kleeman eq. 12)
 

@@ -4,7 +4,8 @@
 
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
-        [--ros-yaml params.yaml --wheel-radius R] [LOG OPTIONS] [--force] [--json]
+        [--ros-yaml params.yaml --wheel-radius R [--twist-speed V --controller-period T]]
+        [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
         [--known-mean] [--level 0.95] [LOG OPTIONS] [--json]
 
@@ -20,12 +21,16 @@ import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
+    BagTimeOption,
     ColumnsOption,
     CumulativeOption,
     DecimateOption,
     FormatOption,
+    JointsOption,
     PeriodOption,
     TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
     WrapBitsOption,
     log_options,
     reported_warnings,
@@ -52,9 +57,19 @@ def calibrate_command(
     out_robot: Annotated[Path | None, typer.Option(
         "--out-robot", help="Write the corrected robot file.")] = None,
     ros_yaml: Annotated[Path | None, typer.Option(
-        "--ros-yaml", help="Write ROS 2 diff_drive_controller parameters (YAML).")] = None,
+        "--ros-yaml", help="Write ROS 2 diff_drive_controller (tricycle: tricycle_controller) "
+                           "parameters (YAML).")] = None,
     wheel_radius: Annotated[float | None, typer.Option(
         "--wheel-radius", help="Nominal wheel radius [m] for --ros-yaml.")] = None,
+    twist_speed: Annotated[float | None, typer.Option(
+        "--twist-speed", help="--ros-yaml: add twist_covariance_diagonal from the robot file's [noise] "
+                              "at this speed [m/s].")] = None,
+    controller_period: Annotated[float | None, typer.Option(
+        "--controller-period", help="--twist-speed: the controller's update period [s] "
+                                    "(1/update_rate).")] = None,
+    velocity_window: Annotated[int, typer.Option(
+        "--velocity-window", help="--twist-speed: updates the published velocity averages "
+                                  "(velocity_rolling_window_size).")] = 10,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
     fmt: FormatOption = "auto",
     columns: ColumnsOption = None,
@@ -63,16 +78,23 @@ def calibrate_command(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
     from odomkit.workflows.calibration import calibrate_files
 
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.
         out = calibrate_files(runs, robot, method=method, source=source, side=side,
                               out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
+                              twist_speed=twist_speed, controller_period=controller_period,
+                              velocity_window=velocity_window,
                               overwrite=force, log_options=options, heading_weight=heading_weight)
     if json_out:
         print_json(with_warnings(out, warned))
@@ -119,6 +141,10 @@ def calibrate_noise_command(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Maximum-likelihood k_L, k_R (per-wheel noise, m^½) with profile-likelihood intervals."""
@@ -130,7 +156,8 @@ def calibrate_noise_command(
     kwargs: dict[str, Any] = {"components": comps, "level": level}
     if known_mean:
         kwargs["mean"] = [0.0] * len(comps)
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force, **kwargs)
     if json_out:

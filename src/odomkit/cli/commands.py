@@ -2,8 +2,10 @@
 
 from odomkit.cli import (
     calibrate,  # noqa: F401
+    check,  # noqa: F401
     demo,  # noqa: F401
     evaluate,  # noqa: F401
+    fit_amcl,  # noqa: F401
     fit_noise,  # noqa: F401
     predict,  # noqa: F401
     simulate,  # noqa: F401

@@ -15,12 +15,16 @@ import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
+    BagTimeOption,
     ColumnsOption,
     CumulativeOption,
     DecimateOption,
     FormatOption,
+    JointsOption,
     PeriodOption,
     TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
     WrapBitsOption,
     log_options,
     reported_warnings,
@@ -77,6 +81,10 @@ def evaluate_command(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
@@ -91,7 +99,8 @@ def evaluate_command(
     distances = _distances(rpe)
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_file = truth_options_per_log(base, list(truth or []), len(files))
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     if robot is None:
         if window is not None:
             raise InputError("--window re-runs dead reckoning, so it needs --robot (and FILES that are logs)")

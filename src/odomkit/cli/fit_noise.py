@@ -16,12 +16,16 @@ import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
+    BagTimeOption,
     ColumnsOption,
     CumulativeOption,
     DecimateOption,
     FormatOption,
+    JointsOption,
     PeriodOption,
     TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
     WrapBitsOption,
     log_options,
     reported_warnings,
@@ -76,6 +80,10 @@ def fit_noise_command(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --out file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
@@ -89,7 +97,8 @@ def fit_noise_command(
         raise InputError(f"--level must be in (0, 1), got {level}")
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_log = truth_options_per_log(base, list(truth or []), len(log))
     fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
@@ -119,7 +128,8 @@ def print_fit(out: dict[str, Any]) -> None:
           + " / ".join(f"{cov[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
     if "cross_validation" in out:
         cv = out["cross_validation"]["coverage"]
-        print("leave-one-log-out coverage: " + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
+        print("leave-one-log-out coverage: "
+              + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
     for w in out["warnings"]:
         print(f"warning: {w}")
     for kind, path in out["outputs"].items():

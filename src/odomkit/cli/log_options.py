@@ -1,10 +1,11 @@
 """The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
-files"): ``--format --columns --cumulative --wrap-bits --period --time-scale --decimate``,
-declared once here and parsed into :class:`odomkit.workflows.logs.LogOptions`; and the
-warnings that reading (or the work after it) raises, shown as one line each.
+files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-scale
+--decimate --topic --joints --bag-time --truth-topic``, declared once here and parsed into
+:class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
+it) raises, shown as one line each.
 
-``track``, ``calibrate``, ``calibrate-noise`` and ``umbmark --runs`` take these options alike
-(``tests/cli/test_log_options.py`` checks that no command lacks one).
+``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise`` and ``evaluate``
+take these options alike (``tests/cli/test_log_options.py`` checks that no command lacks one).
 """
 
 from __future__ import annotations
@@ -20,13 +21,14 @@ import typer
 from odomkit.workflows.logs import LOG_FORMATS, LogOptions
 
 __all__ = [
-    "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "log_options",
-    "PeriodOption", "reported_warnings", "TimeScaleOption", "with_warnings", "WrapBitsOption",
+    "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "JointsOption",
+    "log_options", "PeriodOption", "reported_warnings", "TimeScaleOption", "TopicOption", "TruthTopicOption",
+    "with_warnings", "WrapBitsOption",
 ]
 
 FormatOption = Annotated[str, typer.Option(
-    "--format", help=f"Log format: {', '.join(LOG_FORMATS)} (auto: from the file name). "
-                     "Plain or gzip (.gz) text.")]
+    "--format", help=f"Log format: {', '.join(LOG_FORMATS)} (auto: from the file name; a .bag, "
+                     ".db3, .mcap or ROS 2 bag folder is a bag). Plain or gzip (.gz) text.")]
 ColumnsOption = Annotated[str | None, typer.Option(
     "--columns", help="CSV column mapping, e.g. t=time,ticks_left=L,ticks_right=R.")]
 CumulativeOption = Annotated[bool, typer.Option(
@@ -40,12 +42,29 @@ TimeScaleOption = Annotated[float, typer.Option(
     "--time-scale", help="Seconds per unit of the CSV time column (1e-9 for ns stamps).")]
 DecimateOption = Annotated[int, typer.Option(
     "--decimate", help="Use every n-th row (increments summed, rates sampled).")]
+TopicOption = Annotated[list[str] | None, typer.Option(
+    "--topic", help="ROS bag topic (JointState, Odometry, Twist, TwistStamped, Imu); repeat it: the "
+                    "first gives the rows, a later one's channels replace an earlier one's.")]
+JointsOption = Annotated[str | None, typer.Option(
+    "--joints", help="ROS bag JointState wheel joints LEFT,RIGHT (or one); positions in rad, so the "
+                     "robot file's m_per_tick is the wheel radius.")]
+BagTimeOption = Annotated[bool, typer.Option(
+    "--bag-time", help="ROS bag: time messages by when the bag received them, not their header stamps.")]
+TruthTopicOption = Annotated[str | None, typer.Option(
+    "--truth-topic", help="ROS bag pose topic (Odometry, PoseStamped, PoseWithCovarianceStamped) that is "
+                          "the log's ground truth, e.g. motion capture.")]
 
 
 def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: int | None,
-                period: float | None, time_scale: float, decimate: int) -> LogOptions:
-    """The parsed log options; a bad value is one line naming its flag (exit 2)."""
-    return LogOptions(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+                period: float | None, time_scale: float, decimate: int, topic: list[str] | None = None,
+                joints: str | None = None, bag_time: bool = False,
+                truth_topic: str | None = None) -> LogOptions:
+    """The parsed log options; a bad value is one line naming its flag (exit 2). ``--topic``
+    may also be comma-separated; ``--joints`` is."""
+    topics = tuple(name.strip() for text in topic or () for name in text.split(","))
+    joint_names = tuple(name.strip() for name in joints.split(",")) if joints is not None else ()
+    return LogOptions(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                      topics, joint_names, bag_time, truth_topic)
 
 
 @contextmanager

@@ -137,6 +137,9 @@ def simulate_command(
     systematic: Annotated[str | None, Opt(
         "--systematic", help="Diff model: true E_d,E_b,E_s (Borenstein–Feng) of the robot.")] = None,
     alpha: Annotated[float, Opt("--alpha", help="Level of each consistency check.")] = 0.01,
+    max_work: Annotated[float | None, Opt(
+        "--max-work", help="Largest runs x partitions x segments to accept (default 1e10, "
+                           "a few minutes).")] = None,
     json_out: JsonOption = False,
 ) -> None:
     """Simulate noisy runs of a path and compare them with the predicted covariance."""
@@ -167,6 +170,7 @@ def simulate_command(
             pose0=problem.pose0, cov0=problem.cov0,
             systematic=sys_err, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress, compass_period=problem.compass_period,
+            max_work=max_work,
         )
     if json_out:
         print_json(result)

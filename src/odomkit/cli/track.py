@@ -9,12 +9,16 @@ import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
+    BagTimeOption,
     ColumnsOption,
     CumulativeOption,
     DecimateOption,
     FormatOption,
+    JointsOption,
     PeriodOption,
     TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
     WrapBitsOption,
     log_options,
     reported_warnings,
@@ -63,6 +67,10 @@ def track(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     initial_pose: Annotated[str | None, typer.Option(
         help="x,y,theta [m, m, rad]; default: first ground-truth pose or the origin")] = None,
     theta0_deg: Annotated[bool, typer.Option(help="Read theta of --initial-pose in degrees.")] = False,
@@ -80,13 +88,21 @@ def track(
         help="Covariance engine: recursion (step recursion) | transition (Kelly).")] = "recursion",
     out: Annotated[Path | None, typer.Option(help="Write the track as CSV here.")] = None,
     tum: Annotated[Path | None, typer.Option(help="Write a TUM trajectory here.")] = None,
+    bag_out: Annotated[Path | None, typer.Option(
+        help="Write nav_msgs/Odometry (pose and twist with covariance) as a ROS bag here: a .bag "
+             "path is ROS 1, any other path a ROS 2 bag folder.")] = None,
+    bag_format: Annotated[str | None, typer.Option(
+        help="ros1 | db3 | mcap (default: ros1 for a .bag path, else mcap).")] = None,
+    frame_id: Annotated[str, typer.Option(help="--bag-out header frame id.")] = "odom",
+    child_frame_id: Annotated[str, typer.Option(help="--bag-out child frame id (the body).")] = "base_link",
     force: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     from odomkit.workflows.track import run_track
 
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         result = run_track(
             log, robot, method=method,  # type: ignore[arg-type]
@@ -94,6 +110,7 @@ def track(
             cov0=parse_initial_cov(initial_cov),
             truth=truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap),
             with_covariance=covariance, engine=engine, out=out, tum=tum, overwrite=force,
+            bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
         )
         summary = result.summary()
     if json:

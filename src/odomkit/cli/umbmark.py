@@ -21,12 +21,16 @@ import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
+    BagTimeOption,
     ColumnsOption,
     CumulativeOption,
     DecimateOption,
     FormatOption,
+    JointsOption,
     PeriodOption,
     TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
     WrapBitsOption,
     log_options,
     reported_warnings,
@@ -89,13 +93,18 @@ def umbmark_command(
     period: PeriodOption = None,
     time_scale: TimeScaleOption = 1.0,
     decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
     from odomkit.workflows import umbmark as workflow
 
     positional = list(errors_csv or [])
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate)
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"--side must be a positive length in metres, got {side!r} "
                          "(it is required)")

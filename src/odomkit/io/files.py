@@ -84,9 +84,9 @@ def check_outputs(
             raise InputError(f"{other} and {flag} name the same file; give each its own",
                              source=str(path))
     for source in inputs:
-        flag = owner.get(_key(Path(source)))
-        if flag is not None:
-            raise InputError(f"{flag} would replace an input of this command; write elsewhere",
+        clash = owner.get(_key(Path(source)))
+        if clash is not None:
+            raise InputError(f"{clash} would replace an input of this command; write elsewhere",
                              source=str(source))
     made = {_key(asked[f]) for f in folders if f in asked}
     for flag, path in asked.items():

@@ -7,33 +7,42 @@ array and no per-step term array is ever materialised. The Jacobians are the sam
 :func:`odomkit.kinematics.step_jacobians` (and, for ``METHOD_CLASSICAL``,
 :func:`odomkit.propagate.inputs.classical_step_jacobians`); the tests compare them.
 
-Where the time went (10^7 wheel-noise steps, one core: ~70 ns a step before, ~19 ns now;
-benchmarks/propagation.py):
+How it runs (10^7 wheel-noise steps, one core; ``benchmarks/propagation.py --stages``
+times each stage: ~70 ns a step originally, ~17 ns with the turned heading vector below,
+~9 ns now, of which ~2.4 ns is writing the (N, 3, 3) output):
 
-* The per-step terms pass, mostly cos and sin of each heading (~42 ns). The heading is
-  now carried as a unit vector (cos, sin) turned by each step's half angle φ = Δθ/2,
-  whose sine and cosine come from Taylor polynomials (exact to rounding;
-  :func:`odomkit.angles.sin_cos_sinc`), as :mod:`odomkit._integrate_numba` does for dead
-  reckoning. This is valid only when the headings satisfy θ_{k+1} = θ_k + Δθ_k, which
-  the caller does not promise. So the kernel also carries the scalar sum θ_a + Σ Δθ
-  from the last anchor a and compares it with θ_k at every step (one subtraction). If
-  they differ by more than ``heading_tolerance(θ_k)``, the vector is re-anchored at that
-  step with a real cos/sin of θ_k. Arbitrary headings thus re-anchor at every step,
-  which is the exact per-step computation (~40 ns a step). A dead-reckoned track
+* The heading. Its cos and sin at every step cost ~42 ns. They are carried instead as a
+  unit vector (cos, sin) turned by each step's half angle φ = Δθ/2, whose sine and
+  cosine come from the series of :mod:`odomkit.angles`, as :mod:`odomkit._integrate_numba`
+  does for dead reckoning. This is valid only when the headings satisfy
+  θ_{k+1} = θ_k + Δθ_k, which the caller does not promise. So the kernel also carries
+  the scalar sum θ_a + Σ Δθ from the last anchor a and compares it with θ_k at every
+  step. If they differ by more than ``heading_tolerance(θ_k)``, the vector is re-anchored
+  at that step with a real cos/sin of θ_k. Arbitrary headings thus re-anchor at every
+  step, which is the exact per-step computation (~33 ns a step). A dead-reckoned track
   (:func:`odomkit.integrate.dead_reckon` sums headings in this same order) matches bit
   for bit and re-anchors only every ``ANCHOR`` steps, so the rounding of repeated
   rotations cannot build up.
+* SIMD lanes. Within a block of ``ANCHOR`` steps the turns form a chain, but the blocks
+  are independent: :func:`_lane_headings` turns :data:`LANES` blocks at once, one SIMD
+  lane each, and :func:`_block_terms` then forms each step's F and G Q G^T (~60 flops,
+  which set the pace at ~10 ns a step when done one step at a time) vectorised over the
+  steps. The lanes take a block only if every turn is below ``SHORT_BELOW`` (the short
+  series, branch-free) and every heading agrees with the carried sum; any other block
+  is redone step by step by :func:`_step`. Both paths perform the same operations, so
+  the numbers do not depend on which one ran.
 * The per-wheel input covariance: ``QMODE_WHEEL`` forms Q_k from (d_L, d_R) in the
   kernel, with the very operations of :func:`odomkit.noise.wheel.wheel_input_cov`,
   instead of a (n, 2, 2) numpy array per chunk (~8 ns a step).
-* A second pass over an (8, n) term array, and contiguous copies (~10 ns a step).
+* The output: an (N, 3, 3) array of a long log is written with streaming stores
+  (:mod:`odomkit._stores`), which do not first read each cache line they fill.
 
 Anchors sit at global step indices that are multiples of ``ANCHOR`` (plus the forced
 ones), and the carried (cos, sin, θ) passes from one chunk to the next in ``state``, so
-the numbers do not depend on the chunk size. No fastmath: without it LLVM may not
-contract a·b + c into an FMA, which keeps the serial kernel, the parallel kernel (terms
-stored, then the recurrence) and every chunking bit-identical. Contraction would save
-only ~11 % (18.6 -> 16.5 ns a step).
+the numbers do not depend on the chunk size. No fastmath: without it LLVM does not
+contract a·b + c into an FMA, which keeps the step-by-step path, the SIMD lanes, the
+parallel kernel (terms stored, then the recurrence) and every chunking bit-identical.
+(Contraction measured no faster here: it lengthens the recurrence's dependency chain.)
 
 Importing this module imports numba; :mod:`odomkit.propagate.recursion` loads it lazily
 through :func:`odomkit.jit.load` and falls back to a numpy loop when numba is missing.
@@ -52,8 +61,9 @@ from odomkit.angles import ANCHOR, SHORT_BELOW
 from odomkit.jit import njit
 
 __all__ = [
-    "METHOD_CLASSICAL", "METHOD_EULER", "METHOD_EXACT", "METHOD_MIDPOINT", "QMODE_ARRAY", "QMODE_WHEEL",
-    "STATE_SIZE", "heading_tolerance", "recurrence_kernel", "recursion_kernel", "recursion_kernel_parallel"
+    "CHUNK", "LANES", "METHOD_CLASSICAL", "METHOD_EULER", "METHOD_EXACT", "METHOD_MIDPOINT", "QMODE_ARRAY",
+    "QMODE_WHEEL", "STATE_SIZE", "WORK", "heading_tolerance", "recurrence_kernel", "recursion_kernel",
+    "recursion_kernel_parallel"
 ]
 
 # Method codes shared with recursion.py.
@@ -92,12 +102,14 @@ LANES = 8
 CHUNK = LANES * ANCHOR
 
 # Work buffer of the lanes, one array with compile-time offsets so that LLVM can prove
-# the rows disjoint and vectorise (see odomkit._integrate_numba): inputs θ, Δθ, Δd, q00,
-# q01, q11 and the heading (hc, hs) of each step's displacement, in step order; per lane
-# the heading vector, the heading sum and the count of steps the lanes cannot take. The
-# terms go to a second array, (8, CHUNK): the loop that forms them reads only the first
-# and writes only the second, which LLVM then vectorises (with both in one buffer it
-# cannot rule out that a store feeds a later load).
+# the rows disjoint and vectorise (see odomkit._integrate_numba): θ and Δθ in step order;
+# the heading (hc, hs) of each step's displacement in step order (QMODE_ARRAY only) and
+# lane-major, as the lanes write it ([j * LANES + lane] for step lane * ANCHOR + j); per
+# lane the heading vector, the heading sum and the count of steps the lanes cannot take.
+# (With the lane-major rows right after the rows the lanes read, LLVM did not vectorise
+# the lanes.) The terms go to a second array, (8, CHUNK): the loops that form them read
+# the first and the inputs and write only the second, which LLVM then vectorises (with
+# both in one buffer it cannot rule out that a store feeds a later load).
 _TH, _A, _HC, _HS, _LC, _LS = (i * CHUNK for i in range(6))
 _C = 6 * CHUNK
 _S = _C + LANES
@@ -318,17 +330,16 @@ def _lane_headings(w: np.ndarray, method: int) -> None:
             w[_MISS + lane] += 1.0 if miss else 0.0
 
 
+# LLVM's vectoriser is easily put off here: the wheel loop below vectorises only as
+# written (one function, loop counters as indices, views per block, the headings read
+# across the lanes); variants that split it into functions, indexed whole-chunk views or
+# read the headings the same way in the array loop were 3-4x slower.
 @njit
 def _block_terms(w, t, method, nb, k0, dd, cov_input, d_left, d_right, wheel, qmode):
     """The eight terms of the steps of those of the first ``nb`` blocks that the lanes
     took (no miss), from their headings (:func:`_lane_headings`), into ``t`` (8, CHUNK);
     Δd and Q straight from the inputs (global steps k0 + …). Vectorised over the steps
     of a block: it reads ``w`` and the inputs and writes only ``t``."""
-    # The headings from lane-major (as the lanes stored them) into step order.
-    for lane in range(nb):
-        for j in range(ANCHOR):
-            w[_HC + lane * ANCHOR + j] = w[_LC + j * LANES + lane]
-            w[_HS + lane * ANCHOR + j] = w[_LS + j * LANES + lane]
     # f, f' and w of _turned; only the exact arc's depend on the step.
     exact = method == METHOD_EXACT
     wgt = 0.5 if exact or method == METHOD_MIDPOINT else (1.0 if method == METHOD_CLASSICAL else 0.0)
@@ -343,25 +354,29 @@ def _block_terms(w, t, method, nb, k0, dd, cov_input, d_left, d_right, wheel, qm
         if qmode == QMODE_WHEEL:
             left, right = d_left[b:b + ANCHOR], d_right[b:b + ANCHOR]
             for j in range(ANCHOR):
-                u = 0.5 * w[_A + b0 + j]
+                i = b0 + j
+                u = 0.5 * w[_A + i]
                 _, _, sinc = sin_cos_sinc_short(u)
                 dsinc = sinc_derivative_short(u)  # computed always: a select, not a branch
                 q00, q01, q11 = _wheel_q(left[j], right[j], kl2, kr2, j00_2, j01_j11, j11_2)
-                (t[0, b0 + j], t[1, b0 + j], t[2, b0 + j], t[3, b0 + j], t[4, b0 + j],
-                 t[5, b0 + j], t[6, b0 + j], t[7, b0 + j]) = _step_terms(
-                    d_v[j], q00, q01, q11, w[_HC + b0 + j], w[_HS + b0 + j],
+                (t[0, i], t[1, i], t[2, i], t[3, i], t[4, i], t[5, i], t[6, i], t[7, i]) = _step_terms(
+                    d_v[j], q00, q01, q11, w[_LC + j * LANES + lane], w[_LS + j * LANES + lane],
                     sinc if exact else 1.0, 0.5 * dsinc if exact else 0.0, wgt)
         else:
             q = cov_input[b:b + ANCHOR]
+            # The headings into step order first (reading them across the lanes here
+            # stopped LLVM from vectorising the wheel loop above as well).
             for j in range(ANCHOR):
-                u = 0.5 * w[_A + b0 + j]
+                w[_HC + b0 + j] = w[_LC + j * LANES + lane]
+                w[_HS + b0 + j] = w[_LS + j * LANES + lane]
+            for j in range(ANCHOR):
+                i = b0 + j
+                u = 0.5 * w[_A + i]
                 _, _, sinc = sin_cos_sinc_short(u)
                 dsinc = sinc_derivative_short(u)
-                (t[0, b0 + j], t[1, b0 + j], t[2, b0 + j], t[3, b0 + j], t[4, b0 + j],
-                 t[5, b0 + j], t[6, b0 + j], t[7, b0 + j]) = _step_terms(
-                    d_v[j], q[j, 0, 0], 0.5 * (q[j, 0, 1] + q[j, 1, 0]), q[j, 1, 1],
-                    w[_HC + b0 + j], w[_HS + b0 + j], sinc if exact else 1.0,
-                    0.5 * dsinc if exact else 0.0, wgt)
+                (t[0, i], t[1, i], t[2, i], t[3, i], t[4, i], t[5, i], t[6, i], t[7, i]) = _step_terms(
+                    d_v[j], q[j, 0, 0], 0.5 * (q[j, 0, 1] + q[j, 1, 0]), q[j, 1, 1], w[_HC + i],
+                    w[_HS + i], sinc if exact else 1.0, 0.5 * dsinc if exact else 0.0, wgt)
 
 
 @njit
@@ -372,14 +387,14 @@ def _redo_block(k0, lane, theta, dd, dtheta, cov_input, d_left, d_right, wheel, 
     c, s, th = 1.0, 0.0, 0.0
     anchors = 0
     for j in range(ANCHOR):
-        i = k0 + lane * ANCHOR + j
-        q00, q01, q11 = _q(i, cov_input, d_left, d_right, wheel, qmode)
+        g = k0 + lane * ANCHOR + j
+        q00, q01, q11 = _q(g, cov_input, d_left, d_right, wheel, qmode)
         (u0, u1, b00, b01, b11, b02, b12, b22, c, s, th, anchored) = _step(
-            theta[i], dd[i], dtheta[i], q00, q01, q11, method, c, s, th, j == 0)
+            theta[g], dd[g], dtheta[g], q00, q01, q11, method, c, s, th, j == 0)
         anchors += anchored
-        k = lane * ANCHOR + j
-        t[0, k], t[1, k], t[2, k], t[3, k] = u0, u1, b00, b01
-        t[4, k], t[5, k], t[6, k], t[7, k] = b11, b02, b12, b22
+        i = lane * ANCHOR + j
+        t[0, i], t[1, i], t[2, i], t[3, i] = u0, u1, b00, b01
+        t[4, i], t[5, i], t[6, i], t[7, i] = b11, b02, b12, b22
     return c, s, th, anchors
 
 

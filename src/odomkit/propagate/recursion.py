@@ -6,12 +6,14 @@ rotate-then-translate map are also available). The recurrence runs in a numba ke
 (:mod:`odomkit.propagate._numba`) over bounded chunks; without numba a numpy loop runs
 instead, with a warning (about 100× slower).
 
-The kernel is fastest (about 19 ns a step) when the headings are those of the steps,
-θ_{k+1} = θ_k + Δθ_k, as on a track from :func:`odomkit.integrate.dead_reckon`: it then
-turns a heading vector instead of calling cos/sin at every step. Any other headings are
-detected step by step and get a real cos/sin (about 30 ns a step); the results are the
-same to rounding either way. Per-wheel noise alone (:class:`odomkit.noise.WheelNoise`)
-has its input covariance formed inside the kernel.
+The kernel is fastest (about 9 ns a step, SIMD lanes) when the headings are those of the
+steps, θ_{k+1} = θ_k + Δθ_k, as on a track from :func:`odomkit.integrate.dead_reckon`: it
+then turns a heading vector instead of calling cos/sin at every step. Any other headings
+are detected step by step and get a real cos/sin (about 30 ns a step); the results are
+the same to rounding either way. Per-wheel noise alone (:class:`odomkit.noise.WheelNoise`)
+has its input covariance formed inside the kernel. :func:`track_covariance` has the kernel
+write straight into the output, with streaming stores when it is large
+(``benchmarks/propagation.py`` compares it with copying the same bytes).
 
 :func:`track_covariance` is the entry point of ``odomkit track``: a log's body steps and a
 noise model (or a tuple of them) in, the covariance of every pose out.

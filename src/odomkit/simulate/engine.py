@@ -13,6 +13,7 @@ workers never changes a number.
 from __future__ import annotations
 
 import os
+import re
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor, as_completed
@@ -31,7 +32,22 @@ from odomkit.simulate.blocks import make_tasks, run_task
 from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.plan import Plan, SystematicErrors, make_plan
 
-__all__ = ["Engine", "MonteCarloRuns", "Progress", "simulate_runs"]
+__all__ = ["check_scheduler", "check_size", "Engine", "MAX_MEMORY", "MAX_WORK", "MonteCarloRuns",
+           "Progress", "simulate_runs"]
+
+#: Default limit on runs × partitions × segments, the partition steps one simulation
+#: integrates. Chong–Kleeman's experiment, 10⁴ runs × 10⁴ partitions of one arc, is 10⁸
+#: steps and takes about 1.5 s; the limit is about 100 times the largest of their tables.
+MAX_WORK = 1e10
+#: Default limit on the memory the runs' poses take [bytes] (final poses, segment ends, and
+#: the copies the statistics make).
+MAX_MEMORY = 4 * 2**30
+# Seconds per partition step, to turn the work into a rough time in the message.
+_SECONDS_PER_STEP = 1.5e-8
+# Bytes per run and per stored pose: 3 float64, held about 4 times (blocks, their
+# concatenation, the statistics' centred copy and its products).
+_BYTES_PER_POSE = 4 * 3 * 8
+_ADDRESS = re.compile(r"^(?:[a-z][a-z0-9+.-]*://)?(?:\[[0-9a-fA-F:.]+\]|[^\s:/\[\]]+):\d+$")
 
 Engine = Literal["auto", "numba", "numpy"]
 Progress = Callable[[int], None]
@@ -62,6 +78,77 @@ class MonteCarloRuns:
     seed: int
     seconds: float
     engine: str
+
+
+def check_size(runs: int, partitions: int, segments: int, *, segment_ends: bool = False,
+               max_work: float = MAX_WORK, max_memory: float = MAX_MEMORY) -> None:
+    """Refuse a simulation that would run for hours or exhaust the memory, before it starts.
+
+    Parameters
+    ----------
+    runs, partitions, segments : int
+        N runs of a path of S segments, each cut into K partitions.
+    segment_ends : bool
+        The pose at every segment end is kept too (N·S poses).
+    max_work : float
+        Largest N·K·S allowed (``--max-work``); :data:`MAX_WORK` by default.
+    max_memory : float
+        Largest memory for the poses [bytes]; :data:`MAX_MEMORY` by default.
+
+    Raises
+    ------
+    ModelError
+        With the estimate, the limit, and how to go on.
+
+    Examples
+    --------
+    >>> check_size(10_000, 10_000, 1)          # Chong–Kleeman Table 1: allowed
+    >>> check_size(10**9, 1000, 1)
+    Traceback (most recent call last):
+    ...
+    odomkit.errors.ModelError: 1e+09 runs × 1000 partitions × 1 segment = 1e+12 partition \
+steps, above the limit 1e+10 (this would take about 4 h); lower --runs or --partitions, or \
+raise the limit with --max-work 1e+12
+    """
+    runs = validate.positive_int(runs, "runs")
+    partitions = validate.positive_int(partitions, "partitions")
+    limit = validate.positive(max_work, "max_work")
+    work = float(runs) * float(partitions) * float(segments)
+    if work > limit:
+        plural = "s" if segments != 1 else ""
+        raise ModelError(
+            f"{runs:.4g} runs × {partitions:.4g} partitions × {segments} segment{plural} = "
+            f"{work:.3g} partition steps, above the limit {limit:.3g} (this would take about "
+            f"{_duration(work * _SECONDS_PER_STEP)}); lower --runs or --partitions, or raise the "
+            f"limit with --max-work {work:.3g}")
+    memory = float(runs) * (1 + (segments if segment_ends else 0)) * _BYTES_PER_POSE
+    if memory > max_memory:
+        raise ModelError(
+            f"{runs:.4g} runs need about {memory / 2**30:.3g} GiB of memory for their poses, above "
+            f"the limit {max_memory / 2**30:.3g} GiB; simulate fewer runs at a time (the same "
+            "--seed and more runs extend the same experiment)")
+
+
+def _duration(seconds: float) -> str:
+    for unit, size in (("days", 86400.0), ("h", 3600.0), ("min", 60.0)):
+        if seconds >= size:
+            return f"{seconds / size:.2g} {unit}"
+    return f"{seconds:.2g} s"
+
+
+def check_scheduler(scheduler: Scheduler) -> None:
+    """A scheduler given as text must be a Dask address ``[protocol://]host:port``.
+
+    >>> check_scheduler("tcp://10.0.0.5:8786")
+    >>> check_scheduler("")
+    Traceback (most recent call last):
+    ...
+    odomkit.errors.ModelError: --scheduler must be a Dask scheduler address host:port \
+(e.g. tcp://10.0.0.5:8786), got ''
+    """
+    if isinstance(scheduler, str) and not _ADDRESS.match(scheduler):
+        raise ModelError("--scheduler must be a Dask scheduler address host:port "
+                         f"(e.g. tcp://10.0.0.5:8786), got {scheduler!r}")
 
 
 def _pick_engine(engine: Engine) -> str:
@@ -98,6 +185,7 @@ def simulate_runs(
     engine: Engine = "auto",
     progress: Progress | None = None,
     compass_period: float | None = None,
+    max_work: float = MAX_WORK,
 ) -> MonteCarloRuns:
     """Simulate ``runs`` noisy runs of ``path`` and return their poses.
 
@@ -139,6 +227,8 @@ def simulate_runs(
     engine : {"auto", "numba", "numpy"}
     progress : callable, optional
         Called with the number of runs just finished, after each task.
+    max_work : float
+        Largest runs × partitions × segments allowed (:func:`check_size`).
     compass_period : float, optional
         Compass model only: sample period T [s] of the compass (default
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
@@ -160,7 +250,12 @@ def simulate_runs(
     [-0.38357, -0.286535, -5.0]
     """
     start = time.perf_counter()
+    path = list(path)
+    check_scheduler(scheduler)
+    check_size(runs, partitions, len(path), segment_ends=segment_ends, max_work=max_work)
     plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic, compass_period)
+    # A compass path may be cut finer than asked (whole steps per compass reading).
+    check_size(runs, plan.partitions, len(path), segment_ends=segment_ends, max_work=max_work)
     seed_used = _resolve_seed(seed)
     engine_used = _pick_engine(engine)
     if plan.kind != "increment":
@@ -176,6 +271,11 @@ def simulate_runs(
                                    workers, progress)
     blocks = [r for task in results for r in task]
     final = np.concatenate([f for f, _ in blocks])
+    # The statistics need the spread of the runs too: its 3×3 scatter must be finite.
+    dev = final - final.mean(axis=0) if np.all(np.isfinite(final)) else final
+    if not np.all(np.isfinite(dev.T @ dev)):
+        raise ModelError("the simulated poses (or their spread) are not finite: a number overflowed; "
+                         "check the units and the size of the path, noise and initial covariance")
     ends = np.concatenate([e for _, e in blocks]) if segment_ends else None  # type: ignore[misc]
     return MonteCarloRuns(final, ends, int(runs), plan.partitions, seed_used,
                           time.perf_counter() - start, engine_used)

@@ -14,7 +14,7 @@ from odomkit.noise import NoiseSet
 from odomkit.path import Segment
 from odomkit.propagate.plan import NoiseArg
 from odomkit.simulate.distributed import Scheduler
-from odomkit.simulate.engine import Engine, Progress, simulate_runs
+from odomkit.simulate.engine import MAX_WORK, Engine, Progress, check_scheduler, check_size, simulate_runs
 from odomkit.simulate.plan import SystematicErrors, resolve_model
 from odomkit.simulate.stats import compare, correlations
 
@@ -71,6 +71,7 @@ def monte_carlo(
     engine: Engine = "auto",
     progress: Progress | None = None,
     compass_period: float | None = None,
+    max_work: float = MAX_WORK,
 ) -> dict[str, Any]:
     """Simulate ``runs`` runs of ``path`` and check them against the linear prediction.
 
@@ -109,6 +110,9 @@ def monte_carlo(
     >>> r["verdict"]
     'consistent'
     """
+    # Too large a request is refused before the prediction, which may also take K steps.
+    check_scheduler(scheduler)
+    check_size(runs, partitions, len(path), max_work=max_work)
     cov0 = _cov_matrix(cov0)
     if theory is None:
         pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions,
@@ -117,10 +121,14 @@ def monte_carlo(
         pose_p, cov_p = _theory_arrays(theory)
         pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period)
         summary = theory_summary(pose_p, cov_p)
+    # NaN marks a component the theory leaves undefined; inf, or nothing defined, is overflow.
+    if np.isinf(cov_p).any() or not np.isfinite(np.diag(cov_p)).any():
+        raise ModelError("the predicted covariance is not finite: a number overflowed; check the "
+                         "units and the size of the path, noise and initial covariance")
     mc = simulate_runs(path, noise, wheel_base, runs=runs, partitions=partitions, seed=seed,
                        pose0=pose0, cov0=cov0, systematic=systematic, workers=workers,
                        chunk_runs=chunk_runs, scheduler=scheduler, engine=engine,
-                       progress=progress, compass_period=compass_period)
+                       progress=progress, compass_period=compass_period, max_work=max_work)
     # θ continuous in every statistic (DESIGN): the simulated mean θ stays continuous;
     # only the theory's pose is shown wrapped
     result = compare(mc.final, pose_p, cov_p, alpha)

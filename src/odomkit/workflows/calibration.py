@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from odomkit.calibrate.exact import calibrate_exact
+from odomkit.calibrate.export import twist_covariance
 from odomkit.calibrate.noise_fit import fit_wheel_noise_from_runs
 from odomkit.calibrate.realdata import (
     SquareRow,
@@ -26,7 +27,7 @@ from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
-from odomkit.robot import DiffDrive
+from odomkit.robot import DiffDrive, Tricycle
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 
@@ -43,6 +44,9 @@ def calibrate_files(
     out_robot: str | Path | None = None,
     ros_yaml: str | Path | None = None,
     wheel_radius: float | None = None,
+    twist_speed: float | None = None,
+    controller_period: float | None = None,
+    velocity_window: int = 10,
     overwrite: bool = False,
     log_options: LogOptions | None = None,
     **exact_kwargs: Any,
@@ -62,6 +66,13 @@ def calibrate_files(
         all outputs are checked before anything is read or computed.
     wheel_radius : nominal wheel radius for the ROS snippet [m]; default the radius the
         robot file gives (``wheel_radius``/``wheel_diameter``), and an error if it differs.
+        The snippet is a ``diff_drive_controller``'s or, for a tricycle, a
+        ``tricycle_controller``'s.
+    twist_speed, controller_period, velocity_window : with ``twist_speed`` [m/s] the
+        snippet also gets ``twist_covariance_diagonal``, the twist covariance the robot
+        file's white ``[noise]`` implies at that speed for a controller updating every
+        ``controller_period`` [s] and averaging ``velocity_window`` updates
+        (:func:`odomkit.calibrate.export.twist_covariance`).
     log_options : :class:`odomkit.workflows.logs.LogOptions`.
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
@@ -85,12 +96,16 @@ def calibrate_files(
     exact_kwargs = {k: v for k, v in exact_kwargs.items() if v is not None}
     if wheel_radius is not None and ros_yaml is None:
         raise InputError("--wheel-radius applies to --ros-yaml only (the controller's nominal radius)")
+    if ros_yaml is None and (twist_speed is not None or controller_period is not None):
+        raise InputError("--twist-speed and --controller-period apply to --ros-yaml only")
     robot, noise = read_robot(robot_path)
     if ros_yaml is not None:
-        if not isinstance(robot, DiffDrive):
-            raise InputError(f"--ros-yaml writes diff_drive_controller parameters; the robot file "
-                             f"describes a {robot.type_name!r} robot", source=str(robot_path))
+        if not isinstance(robot, DiffDrive | Tricycle):
+            raise InputError(f"--ros-yaml writes diff_drive_controller or tricycle_controller parameters; "
+                             f"the robot file describes a {robot.type_name!r} robot", source=str(robot_path))
         wheel_radius = _controller_radius(robot_path, wheel_radius)
+        if twist_speed is not None or controller_period is not None:
+            _check_twist(twist_speed, controller_period, noise, robot_path)
     if method == "umbmark" and not isinstance(robot, DiffDrive):
         raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
                          source=str(robot_path))
@@ -119,8 +134,16 @@ def calibrate_files(
         outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite))
     if ros_yaml is not None:
         assert wheel_radius is not None
+        twist = None
+        if twist_speed is not None:
+            assert controller_period is not None
+            twist = twist_covariance(new_robot, noise, twist_speed, controller_period, window=velocity_window)
+            summary["twist_covariance"] = {"speed": twist.speed, "var_speed": twist.var_speed,
+                                           "var_yaw_rate": twist.var_yaw_rate,
+                                           "cov_speed_yaw_rate": twist.cov_speed_yaw_rate,
+                                           "controller_period": twist.period, "velocity_window": twist.window}
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
-                                                  overwrite=overwrite))
+                                                  overwrite=overwrite, twist=twist))
     summary["method"] = method
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
@@ -129,6 +152,20 @@ def calibrate_files(
 
 # The CLI flag of each keyword argument of calibrate_exact, for messages.
 _EXACT_FLAGS = {"heading_weight": "--heading-weight"}
+
+
+def _check_twist(speed: float | None, period: float | None, noise: Sequence[object],
+                 robot_path: str | Path) -> None:
+    """The twist-covariance flags come together, are positive, and the file has white noise."""
+    if speed is None or period is None:
+        raise InputError("--twist-speed and --controller-period go together: the twist covariance holds at "
+                         "one speed and depends on how often the controller measures")
+    if not (speed >= 0 and period > 0):
+        raise InputError(f"--twist-speed must be >= 0 m/s and --controller-period > 0 s, got {speed!r}, "
+                         f"{period!r}")
+    if not any(getattr(m, "kind", None) == "white" for m in noise):
+        raise InputError("--twist-speed needs a white [noise] model in the robot file (odomkit fit-noise "
+                         "writes one)", source=str(robot_path))
 
 
 def _controller_radius(robot_path: str | Path, given: float | None) -> float:
@@ -157,13 +194,14 @@ def _file_wheel_radius(robot_path: str | Path) -> float | None:
 
     table = tomllib.loads(Path(robot_path).read_text(encoding="utf-8")).get("robot", {})
     radii = []
-    for side in ("left", "right"):
+    sides = ("front",) if table.get("type") == "tricycle" else ("left", "right")
+    for side in sides:
         for key, factor in ((f"wheel_radius_{side}", 1.0), ("wheel_radius", 1.0),
                             (f"wheel_diameter_{side}", 0.5), ("wheel_diameter", 0.5)):
             if key in table:
                 radii.append(factor * float(table[key]))
                 break
-    return sum(radii) / len(radii) if len(radii) == 2 else None
+    return sum(radii) / len(radii) if len(radii) == len(sides) else None
 
 
 def noise_files(

@@ -11,6 +11,7 @@ fitted ``[noise]``.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import time
 from collections.abc import Callable, Sequence
@@ -127,7 +128,10 @@ def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: 
                 client.close()
     if workers <= 1 or len(tasks) < 2:
         return [fn(t) for t in tasks]
-    with ProcessPoolExecutor(max_workers=min(workers, len(tasks))) as pool:
+    # Spawned, not forked: a fork copies numba's and OpenBLAS's threads' locks mid-use and
+    # can hang the child.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=context) as pool:
         return list(pool.map(fn, tasks, chunksize=max(1, len(tasks) // (4 * workers))))
 
 
@@ -175,13 +179,15 @@ def fit_noise_files(
 
     Returns
     -------
-    dict: the JSON output of ``odomkit fit-noise`` (see DESIGN.md).
+    dict: the JSON output of ``odomkit fit-noise`` (see DESIGN.md); an interval's upper
+    bound is ``inf`` (JSON null) where the data do not bound the parameter.
     """
     from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
     from odomkit.io.files import refuse_overwrite
     from odomkit.io.robotfile import read_robot, write_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.results import check_result, numeric_guard
 
     started = time.perf_counter()
     if not logs:
@@ -214,8 +220,14 @@ def fit_noise_files(
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
-    fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
-                    level=level, log_names=[p.name for p in used], cross_validate=cross_validate)
+    with numeric_guard("the noise fit"):
+        fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
+                        level=level, log_names=[p.name for p in used], cross_validate=cross_validate)
+    # An interval's upper bound may be infinite (the data do not bound it; JSON null).
+    check_result("the noise fit", {"parameters": list(fit.parameters.values()),
+                                   "variances": list(fit.variances.values()),
+                                   "log_likelihood": fit.log_likelihood,
+                                   "lower bounds": [lo for lo, _ in fit.interval.values()]})
     written = write_robot(out, robot, fit.models, overwrite=overwrite)
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)

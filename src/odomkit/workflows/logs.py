@@ -1,5 +1,6 @@
 """Reading a log in any supported format: the log options every log-reading command shares
-(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``).
+(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise``, ``evaluate``).
+A ROS bag (:mod:`odomkit.io.bag`) is one more format.
 
 The readers are imported inside :func:`load_log`, so that a command module may import
 :class:`LogOptions` and :data:`LOG_FORMATS` at start-up for nothing (``--help`` stays fast).
@@ -21,7 +22,7 @@ if TYPE_CHECKING:
 
 __all__ = ["LOG_FORMATS", "LogOptions", "detect_format", "load_log"]
 
-LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom")
+LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom", "bag")
 
 # Counter widths whose wrap-around can be undone (odomkit.io.table.COUNTER_BITS, repeated
 # here so that importing this module loads no reader; tests/io checks they agree).
@@ -33,19 +34,25 @@ _APPLIES = {
     "khepera": {"cumulative", "wrap_bits", "period"},  # cumulative counts by definition
     "snowhite": {"period"},
     "optiodom": set(),
+    "bag": {"topic", "joints", "bag_time", "truth_topic"},
 }
 _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
-          "period": "--period", "time_scale": "--time-scale"}
+          "period": "--period", "time_scale": "--time-scale", "topic": "--topic", "joints": "--joints",
+          "bag_time": "--bag-time", "truth_topic": "--truth-topic"}
+_BAG_SUFFIXES = (".bag", ".db3", ".mcap")  # odomkit.io.bag.is_bag, without importing it
 
 
 def detect_format(path: Path) -> str:
-    """Guess a log format from its file name (a ``.gz`` suffix is looked through).
+    """Guess a log format from its file name (a ``.gz`` suffix is looked through); a
+    ``.bag``/``.db3``/``.mcap`` file or a folder with a ``metadata.yaml`` is a ROS bag.
 
     >>> detect_format(Path("230620202042_run-01.csv")), detect_format(Path("log.csv.gz"))
     ('optiodom', 'csv')
     >>> detect_format(Path("230620202042_run-01.csv.gz"))
     'optiodom'
     """
+    if path.suffix.lower() in _BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file()):
+        return "bag"
     name = path.name.lower().removesuffix(".gz")
     if name.startswith("snowhite"):
         return "snowhite"
@@ -69,6 +76,10 @@ class LogOptions:
     period : sample period [s] of a log without a time column (khepera, snowhite)
     time_scale : seconds per unit of the CSV time column (1e-3 for ms, 1e-9 for ns)
     decimate : use every n-th row (increments summed, rates sampled)
+    topic : ROS bag topics, the first giving the rows (bag only; :func:`odomkit.io.bag.read_bag`)
+    joints : JointState wheel joints, ``(left, right)`` or one (bag only)
+    bag_time : time each message by when the bag received it, not its header stamp (bag only)
+    truth_topic : a ROS bag pose topic that is the log's ground truth (bag only)
     """
 
     format: str = "auto"
@@ -78,6 +89,10 @@ class LogOptions:
     period: float | None = None
     time_scale: float = 1.0
     decimate: int = 1
+    topic: tuple[str, ...] = ()
+    joints: tuple[str, ...] = ()
+    bag_time: bool = False
+    truth_topic: str | None = None
 
     def __post_init__(self) -> None:
         if self.format not in LOG_FORMATS:
@@ -92,6 +107,12 @@ class LogOptions:
                              f"got {self.time_scale!r}")
         if isinstance(self.decimate, bool) or not isinstance(self.decimate, int) or self.decimate < 1:
             raise InputError(f"--decimate must be a positive integer, got {self.decimate!r}")
+        if any(not isinstance(name, str) or not name.strip("/ ") for name in self.topic):
+            raise InputError(f"--topic must name topics, e.g. /joint_states; got {list(self.topic)!r}")
+        if self.joints and (len(self.joints) > 2 or len(set(self.joints)) != len(self.joints)
+                            or any(not isinstance(j, str) or not j.strip() for j in self.joints)):
+            raise InputError("--joints takes LEFT,RIGHT or one joint name, "
+                             f"got {','.join(map(str, self.joints))!r}")
 
     def given(self) -> list[str]:
         """The flags set to something other than their default, e.g. ``["--cumulative"]``."""
@@ -133,9 +154,15 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions())
     from odomkit.robot import DiffDrive
 
     path = Path(path)
+    fmt = detect_format(path) if options.format == "auto" else options.format
+    if fmt == "bag":
+        from odomkit.io.bag import read_bag
+
+        options.check_format(fmt, str(path))
+        log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic)
+        return log.decimate(options.decimate)
     if not path.is_file():
         raise InputError("no such file", source=str(path))
-    fmt = detect_format(path) if options.format == "auto" else options.format
     options.check_format(fmt, str(path))
     if fmt == "khepera":
         log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)

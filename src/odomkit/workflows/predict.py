@@ -12,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 from numpy.typing import ArrayLike
 
+from odomkit.errors import ModelError
 from odomkit.io.ros import ros_pose_covariance
 from odomkit.path import Segment
 from odomkit.workflows.results import check_result, numeric_guard
@@ -19,7 +20,12 @@ from odomkit.workflows.results import check_result, numeric_guard
 if TYPE_CHECKING:
     from odomkit.propagate.plan import NoiseArg
 
-__all__ = ["add_ros_pose_covariance", "run_predict"]
+__all__ = ["add_ros_pose_covariance", "MAX_STEPS", "run_predict"]
+
+#: Largest partitions × segments a prediction takes: the recursion and transition engines
+#: hold every step (a 3×3 covariance and its step data, ~150 bytes), so 10⁷ steps use about
+#: 1.5 GB; 10⁹ would need 150 GB.
+MAX_STEPS = 10**7
 
 
 def add_ros_pose_covariance(summary: dict[str, Any]) -> dict[str, Any]:
@@ -57,6 +63,10 @@ def run_predict(
     """
     from odomkit.propagate.predict import predict
 
+    if partitions is not None and partitions * max(len(segments), 1) > MAX_STEPS:
+        raise ModelError(f"--partitions {partitions} × {len(segments)} segment(s) = "
+                         f"{partitions * len(segments):.3g} steps, above the limit {MAX_STEPS:.0e} "
+                         "(memory); lower --partitions (the closed engine needs none)")
     with numeric_guard("the prediction"):
         result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
                          engine=engine,  # type: ignore[arg-type]

@@ -91,9 +91,9 @@ lost all precision; check the units and the size of the inputs (robot file, log,
         if bad.any():
             raise ModelError(f"{what}: {name} is not finite ({float(arr[bad].flat[0])!r}); a number "
                              f"overflowed or lost all precision; {_ADVICE}")
-    for name, value in (covariances or {}).items():
-        if value is not None:
-            _check_psd(what, name, np.asarray(value, dtype=float))
+    for name, cov in (covariances or {}).items():
+        if cov is not None:
+            _check_psd(what, name, np.asarray(cov, dtype=float))
 
 
 def _flat(values: Mapping[str, object], prefix: str = "") -> Iterator[tuple[str, ArrayLike]]:

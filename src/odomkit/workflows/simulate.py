@@ -40,16 +40,19 @@ def run_simulate(
     scheduler: str | object | None = None,
     progress: Callable[[int], None] | None = None,
     compass_period: float | None = None,
+    max_work: float | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` noisy runs of ``segments`` and check them against the closed-form
     prediction: the ``--json`` object.
 
     Parameters are those of :func:`odomkit.simulate.monte_carlo` (``scheduler``: a Dask
-    scheduler address or ``dask.distributed.Client``). Returns its result with
+    scheduler address or ``dask.distributed.Client``; ``max_work``: the largest runs ×
+    partitions × segments, default :data:`odomkit.simulate.engine.MAX_WORK`). Returns its result with
     ``ros_pose_covariance`` added to ``theory``.
     """
     # The Monte Carlo stack (scipy.stats, numba, dask) loads only when a simulation runs.
     from odomkit.simulate import monte_carlo
+    from odomkit.simulate.engine import MAX_WORK
 
     with numeric_guard("the simulation"):
         result = monte_carlo(
@@ -57,6 +60,7 @@ def run_simulate(
             runs=runs, partitions=partitions, seed=seed, pose0=pose0, cov0=cov0,
             systematic=systematic, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress, compass_period=compass_period,
+            max_work=MAX_WORK if max_work is None else max_work,
         )
     theory, simulation = result["theory"], result["simulation"]
     check_result("the simulation", {"the predicted pose": theory["pose"],

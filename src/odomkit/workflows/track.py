@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 from odomkit.angles import wrap_angle
 from odomkit.errors import InputError
 from odomkit.evaluate import evaluate_track
+from odomkit.io.bag_writer import check_bag_out, write_track_bag
 from odomkit.io.files import check_outputs
 from odomkit.io.robotfile import read_robot
 from odomkit.io.ros import ros_pose_covariance
@@ -80,6 +81,10 @@ def run_track(
     out: str | Path | None = None,
     tum: str | Path | None = None,
     overwrite: bool = False,
+    bag_out: str | Path | None = None,
+    bag_format: str | None = None,
+    frame_id: str = "odom",
+    child_frame_id: str = "base_link",
 ) -> TrackRun:
     """Read a robot file and a log, dead-reckon, write the requested outputs.
 
@@ -90,10 +95,14 @@ def run_track(
     With truth the track starts at the truth pose at the first log time unless ``pose0``
     is given, and ``cov0`` defaults to that pose's uncertainty (``--truth-sigma``, and the
     variance of a heading fitted to position-only truth); the CSV gets ``gt_*`` columns.
+    ``bag_out`` writes ``nav_msgs/Odometry`` (:mod:`odomkit.io.bag_writer`; ``bag_format``
+    ros1, db3 or mcap, default from the path) with ``frame_id``/``child_frame_id``.
     """
     options = truth or TruthOptions()
-    check_outputs({"--out": out, "--tum": tum}, overwrite=overwrite,
-                  inputs=[p for p in (log_path, robot_path, options.path) if p is not None])
+    inputs = [p for p in (log_path, robot_path, options.path) if p is not None]
+    bag = None if bag_out is None else check_bag_out(bag_out, bag_format, overwrite=overwrite, inputs=inputs)
+    check_outputs({"--out": out, "--tum": tum, "--bag-out": None if bag is None else bag.file_check},
+                  overwrite=overwrite, inputs=inputs)
     robot, noise = read_robot(robot_path)
     log = load_log(log_path, robot, log_options or LogOptions())
     found = load_truth(options, log)
@@ -120,4 +129,7 @@ def run_track(
         outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
     if tum is not None:
         outputs["tum"] = str(write_tum(tum, track, overwrite))
+    if bag is not None:
+        outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
+                                             child_frame_id=child_frame_id))
     return TrackRun(track, log, outputs, truth_rows)

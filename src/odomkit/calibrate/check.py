@@ -1,0 +1,564 @@
+"""A data check before calibrating (``odomkit check``): is a log fit to calibrate from, and
+what to record next.
+
+Each check is a pure function of a log (and the robot, and the truth when there is one)
+returning :class:`Finding`\\ s, each ``ok``, ``warn`` or ``fail`` with a message in the
+log's own numbers and, where something is missing or wrong, what to do about it:
+
+* :func:`check_values` — NaN or infinite values (the file readers refuse them already, so
+  this guards logs built in Python);
+* :func:`check_time` — repeated or decreasing timestamps, and time jumps (a step more
+  than :data:`GAP_FACTOR` times the median period);
+* :func:`check_counters` — counter wraps (an increment within a few typical steps of
+  ±2^b for a b-bit counter) and other implausible spikes;
+* :func:`check_stuck` — a wheel (or any distance channel) reading nothing while the other
+  wheel, or the truth, moves;
+* :func:`check_channels` — left and right swapped or a sign flipped: against the truth
+  (the channel mapping that reproduces the truth's motion best), or from a spin in a known
+  direction, or, with neither, the hint a flipped sign leaves (a robot that spins all
+  the time);
+* :func:`check_motion` — distance and turning both ways;
+* :func:`check_identifiable` — how well each calibration parameter is pinned by this
+  log's motion: the track change a 1 % (0.01 rad) error of it makes that no other
+  parameter can mimic, turned into a standard error with the truth's noise.
+
+:func:`check_log` runs them all; :func:`next_steps` collects the advice.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.log import INCREMENT_CHANNELS, OdometryLog
+from odomkit.robot import DiffDrive, GyroOdometry, Robot, Tricycle
+from odomkit.truth import Truth, truth_at
+
+__all__ = [
+    "check_channels", "check_counters", "check_identifiable", "check_log", "check_motion", "check_stuck",
+    "check_time", "check_values", "Finding", "GAP_FACTOR", "next_steps", "Status",
+]
+
+Status = Literal["ok", "warn", "fail"]
+#: A step longer than this many median periods is a time jump.
+GAP_FACTOR = 5.0
+# A wheel (distance channel) silent this long while the robot moves is stuck [s].
+_STUCK_SECONDS = 1.0
+# Relative standard errors above which a parameter is weakly / not identified.
+_WEAK, _UNIDENTIFIED = 0.002, 0.01
+# Position noise assumed for the identifiability figures when the truth states none [m]:
+# motion-capture noise plus the odometry's own random drift between samples.
+_DEFAULT_SIGMA = 0.005
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One result of a check.
+
+    Parameters
+    ----------
+    check : str
+        Which check (``time``, ``values``, ``counters``, ``stuck``, ``channels``, ``distance``,
+        ``turning``, ``identifiable``, ``reading``).
+    status : {"ok", "warn", "fail"}
+    message : str
+        What was found, in the log's numbers.
+    advice : str, optional
+        What to do or record next.
+    value : float, optional
+        The figure the status was judged on, where there is one (``identifiable``: the
+        relative standard error, or rad for a steering offset; ``channels``: the misfit of
+        the mapping as given).
+    """
+
+    check: str
+    status: Status
+    message: str
+    advice: str | None = None
+    value: float | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (an unbounded ``value`` is None)."""
+        value = None if self.value is None or not math.isfinite(self.value) else float(self.value)
+        return {"check": self.check, "status": self.status, "message": self.message, "advice": self.advice,
+                "value": value}
+
+
+def _rows(index: NDArray[np.intp], limit: int = 5) -> str:
+    shown = ", ".join(str(int(i) + 1) for i in index[:limit])
+    return shown + (f" and {index.size - limit} more" if index.size > limit else "")
+
+
+def check_values(log: OdometryLog) -> list[Finding]:
+    """NaN or infinite times or channel values (row numbers count from 1)."""
+    found = []
+    for name, values in [("time", log.t), *log.channels.items()]:
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            found.append(Finding("values", "fail", f"{name} is NaN or infinite at row(s) {_rows(bad)}",
+                                 "drop or interpolate those rows before calibrating"))
+    return found or [Finding("values", "ok", "every value is a finite number")]
+
+
+def check_time(log: OdometryLog) -> list[Finding]:
+    """Repeated or decreasing timestamps, and jumps of more than :data:`GAP_FACTOR` median periods."""
+    if len(log) < 2:
+        return [Finding("time", "fail", f"the log has {len(log)} row(s): nothing to calibrate from",
+                        "record a longer log")]
+    dt = np.diff(log.t)
+    found = []
+    back = np.flatnonzero(dt < 0)
+    if back.size:
+        found.append(Finding("time", "fail", f"time goes backwards at {back.size} row(s) ({_rows(back + 1)})",
+                             "sort the rows by time or fix the logger's clock"))
+    same = np.flatnonzero(dt == 0)
+    if same.size:
+        found.append(Finding("time", "warn", f"{same.size} repeated timestamp(s) (rows {_rows(same + 1)}): "
+                             "zero-length steps", "check the logger: two samples with one time stamp"))
+    positive = dt[dt > 0]
+    if positive.size:
+        median = float(np.median(positive))
+        jumps = np.flatnonzero(dt > GAP_FACTOR * median)
+        if jumps.size:
+            worst = int(jumps[np.argmax(dt[jumps])])
+            found.append(Finding(
+                "time", "warn", f"{jumps.size} time jump(s) longer than {GAP_FACTOR:g}x the median period "
+                f"{median:.4g} s; the longest {dt[worst]:.4g} s at t = {log.t[worst]:.6g} s "
+                f"(row {worst + 2})",
+                "a dropped-out logger loses motion: record again, or split the log at the jumps"))
+    return found or [Finding("time", "ok", f"{len(log)} rows, steady period {np.median(dt):.4g} s, "
+                                         "no repeated stamps or jumps")]
+
+
+def check_counters(log: OdometryLog) -> list[Finding]:
+    """Counter wraps and spikes in the tick channels (increments per row)."""
+    found = []
+    for name in sorted(c for c in log.channels if c.startswith("ticks")):
+        x = np.asarray(log.channels[name][1:], dtype=float)
+        if x.size < 10:
+            continue
+        typical = max(float(np.percentile(np.abs(x), 99)), 1.0)
+        big = np.flatnonzero(np.abs(x) > 20.0 * typical)
+        if not big.size:
+            continue
+        for bits in (8, 16, 24, 32, 64):
+            near = np.abs(np.abs(x[big]) - 2.0**bits) <= 4.0 * typical
+            if near.all():
+                found.append(Finding(
+                    "counters", "fail", f"{name} jumps by about ±2^{bits} at {big.size} row(s) "
+                    f"({_rows(big + 1)}): a {bits}-bit counter wrapping",
+                    f"read the raw counter with --cumulative --wrap-bits {bits}"))
+                break
+        else:
+            found.append(Finding(
+                "counters", "warn", f"{name} has {big.size} spike(s) over 20x its typical step {typical:.4g} "
+                f"(rows {_rows(big + 1)}), largest {np.max(np.abs(x[big])):.4g}",
+                "check the encoder wiring or the logger: such steps are not wheel motion"))
+    if not any(c.startswith("ticks") for c in log.channels):
+        return [Finding("counters", "ok", "no tick channels to check")]
+    return found or [Finding("counters", "ok", "no counter wraps or spikes in the tick channels")]
+
+
+def _distance_channels(log: OdometryLog) -> list[str]:
+    return sorted(c for c in log.channels if c in INCREMENT_CHANNELS or c == "speed")
+
+
+def _streaks(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """(start, stop) of every run of True in ``mask``."""
+    edges = np.diff(np.concatenate(([0], mask.astype(np.int8), [0])))
+    return list(zip(np.flatnonzero(edges == 1).tolist(), np.flatnonzero(edges == -1).tolist(), strict=True))
+
+
+def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
+                max_gap: float | None = 0.5) -> list[Finding]:
+    """A distance channel that reads nothing while the robot moves, for at least 1 s.
+
+    A wheel of a differential drive is stuck where it reads 0 and the other wheel turns
+    (a pivot about that wheel does that too: with truth the pivot is told apart, since
+    the truth then turns as the odometry says, within 30 %); any channel is stuck where the
+    truth moves and the channel does not.
+    """
+    found = []
+    t = log.t
+    step_t = np.diff(t)
+    channels = _distance_channels(log)
+    values = {c: (log.channels[c][1:] if c in INCREMENT_CHANNELS else log.channels[c][:-1]) for c in channels}
+    for c in channels:
+        if values[c].size and not np.any(values[c]):
+            found.append(Finding("stuck", "fail", f"{c} is zero in every row",
+                                 "check the channel mapping (--columns) and the encoder"))
+    pairs = [("ticks_left", "ticks_right"), ("dist_left", "dist_right")]
+    truth_turn = odo_turn = None
+    if truth is not None and truth.has_heading:
+        from odomkit.kinematics import body_steps
+
+        s = truth_at(truth, t, max_gap)
+        truth_turn = np.where(s.valid, s.poses[:, 2], np.nan)
+        odo_turn = np.concatenate(([0.0], np.cumsum(body_steps(robot, log).dtheta)))
+    for a, b in pairs:
+        if a not in values or b not in values:
+            continue
+        for quiet, busy in ((a, b), (b, a)):
+            mask = (values[quiet] == 0) & (values[busy] != 0)
+            for i, j in _streaks(mask):
+                if float(np.sum(step_t[i:j])) < _STUCK_SECONDS or not np.any(values[quiet]):
+                    continue
+                span = f"from t = {t[i]:.6g} s to {t[j]:.6g} s"
+                if (truth_turn is not None and odo_turn is not None and np.isfinite(truth_turn[i])
+                        and np.isfinite(truth_turn[j])):
+                    turned, said = truth_turn[j] - truth_turn[i], odo_turn[j] - odo_turn[i]
+                    if abs(turned - said) <= 0.3 * abs(said):
+                        continue  # the truth turns as the odometry says: a pivot about the quiet wheel
+                    found.append(Finding("stuck", "fail", f"{quiet} reads 0 {span} while {busy} turns: the "
+                                         f"odometry turns {said:+.3g} rad there, the truth {turned:+.3g} "
+                                         "rad: a stuck encoder or a slipping wheel",
+                                         "check the encoder and its cable, then record again"))
+                else:
+                    found.append(Finding("stuck", "warn", f"{quiet} reads 0 {span} while {busy} turns: a "
+                                         "stuck encoder, or a pivot about that wheel",
+                                         "give --truth to tell a pivot from a stuck encoder"))
+                break
+    if truth is not None and channels:
+        s = truth_at(truth, t, max_gap)
+        silent = np.all([values[c] == 0 for c in channels], axis=0) & s.valid[:-1] & s.valid[1:]
+        for i, j in _streaks(silent):
+            # The net displacement, not the summed steps: those add up the truth's own jitter.
+            moved = float(np.hypot(*(s.poses[j, :2] - s.poses[i, :2])))
+            if float(np.sum(step_t[i:j])) >= _STUCK_SECONDS and moved > max(0.05, 10 * truth.sigma):
+                found.append(Finding("stuck", "fail", f"the odometry reads no motion from t = {t[i]:.6g} s "
+                                     f"to {t[j]:.6g} s while the truth moves {moved:.3g} m: a stuck encoder, "
+                                     "or a truth whose clock lags the odometry's",
+                                     "check the encoders, and the time offset between truth and log"))
+                break
+    return found or [Finding("stuck", "ok", "no channel sits at zero while the robot moves")]
+
+
+# --- channels: swapped or sign-flipped -------------------------------------------------
+
+def _hypotheses(robot: Robot) -> list[tuple[str, dict[str, Any]]]:
+    """(description, channel changes) for each wrong mapping a robot's log can have."""
+    if isinstance(robot, DiffDrive):
+        # After a swap the left wheel is read from the right channel (times "left") and the
+        # right wheel from the left channel (times "right"); the words say what each given
+        # channel holds.
+        out = []
+        for swap in (False, True):
+            for sl in (1, -1):
+                for sr in (1, -1):
+                    if not swap:
+                        flipped = [side for side, sign in (("left", sl), ("right", sr)) if sign < 0]
+                        one = f"the {flipped[0] if flipped else ''} channel's sign flipped"
+                        words = {0: "as given", 1: one, 2: "both channels' signs flipped"}[len(flipped)]
+                    else:
+                        negated = [side for side, sign in (("left", sr), ("right", sl)) if sign < 0]
+                        words = "left and right swapped" + {
+                            0: "", 1: f", with the {negated[0] if negated else ''} channel also negated",
+                            2: ", with both channels also negated"}[len(negated)]
+                    out.append((words, {"swap": swap, "left": sl, "right": sr}))
+        return out
+    if isinstance(robot, Tricycle):
+        return [(d, {"distance": sd, "steer": ss}) for d, sd, ss in (
+            ("as given", 1, 1), ("the steering sign flipped", 1, -1),
+            ("the traction sign flipped", -1, 1), ("both signs flipped", -1, -1))]
+    if isinstance(robot, GyroOdometry):
+        return [(d, {"distance": sd, "yaw_rate": ss}) for d, sd, ss in (
+            ("as given", 1, 1), ("the yaw-rate sign flipped", 1, -1),
+            ("the distance sign flipped", -1, 1), ("both signs flipped", -1, -1))]
+    return [(d, {"distance": sd, "heading": ss}) for d, sd, ss in (
+        ("as given", 1, 1), ("the heading sign flipped", 1, -1),
+        ("the distance sign flipped", -1, 1), ("both signs flipped", -1, -1))]
+
+
+def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
+    ch = dict(log.channels)
+    if "swap" in change:
+        for base in ("ticks", "dist"):
+            left, right = f"{base}_left", f"{base}_right"
+            if left in ch and right in ch:
+                a, b = ch[left], ch[right]
+                if change["swap"]:
+                    a, b = b, a
+                ch[left], ch[right] = change["left"] * a, change["right"] * b
+    else:
+        for name in ("ticks", "dist", "speed"):
+            if name in ch:
+                ch[name] = change["distance"] * ch[name]
+        for name in ("steer", "yaw_rate", "heading"):
+            if name in change and name in ch:
+                ch[name] = change[name] * ch[name]
+    return OdometryLog(log.t, ch, None, log.source, log.meta)
+
+
+def _motion(log: OdometryLog, robot: Robot, every: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(Δd, Δθ) over windows of ``every`` steps; for a measured heading, its change."""
+    from odomkit.kinematics import body_steps
+
+    steps = body_steps(robot, log)
+    n = (len(steps) // every) * every
+    dd = steps.dd[:n].reshape(-1, every).sum(axis=1)
+    dth = steps.dtheta[:n].reshape(-1, every).sum(axis=1)
+    return dd, dth
+
+
+def _truth_motion(truth: Truth, t: NDArray[np.float64], every: int, max_gap: float | None
+                  ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """The truth's forward travel and turn over the same windows (NaN-free where valid)."""
+    n = ((t.size - 1) // every) * every
+    times = t[: n + 1 : every]
+    s = truth_at(truth, times, max_gap)
+    p = s.poses
+    d = np.diff(p[:, :2], axis=0)
+    if truth.has_heading:
+        mid = 0.5 * (p[:-1, 2] + p[1:, 2])
+        forward = d[:, 0] * np.cos(mid) + d[:, 1] * np.sin(mid)
+        turn = np.diff(p[:, 2])
+    else:  # the direction of travel: no reversing can be told, so compare sizes of moves only
+        forward = np.hypot(d[:, 0], d[:, 1])
+        heading = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
+        turn = np.concatenate(([0.0], np.diff(heading)))
+    ok = s.valid[:-1] & s.valid[1:]
+    return np.where(ok, forward, 0.0), np.where(ok, turn, 0.0), ok
+
+
+def check_channels(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spin: str | None = None,
+                   max_gap: float | None = 0.5) -> list[Finding]:
+    """Are the channels mapped right (left/right, signs)?
+
+    With truth: every mapping a robot's log can get wrong (differential: swapped, either
+    sign flipped; otherwise each sign) is dead-reckoned over half-second windows and
+    compared with the truth's travel and turn; a mapping that fits the truth clearly
+    better (under half the misfit) than the one given is reported. With ``spin``
+    ("ccw" or "cw": the log is a spin in place that way) a differential robot's wheels
+    must turn opposite ways, the right one forward for ccw. With neither, only the mark a
+    flipped wheel sign leaves is looked for: wheels turning opposite ways almost all the
+    time.
+    """
+    if truth is not None:
+        return _channels_against_truth(log, robot, truth, max_gap)
+    if spin is not None:
+        return _channels_from_spin(log, robot, spin)
+    if isinstance(robot, DiffDrive):
+        left, right = _wheel_travel(log, robot)
+        moving = (left != 0) | (right != 0)
+        if moving.sum() >= 10:
+            opposite = float(np.mean(np.sign(left[moving]) * np.sign(right[moving]) < 0))
+            if opposite > 0.8:
+                return [Finding("channels", "warn", "the wheels turn opposite ways in "
+                                f"{100 * opposite:.0f} % of moving rows: the robot spins in place almost all "
+                                "the time, or one wheel's sign is flipped",
+                                "give --truth, or record a spin and check it with --spin ccw")]
+    return [Finding("channels", "ok", "not checked against anything: without truth (or, for a differential "
+                    "drive, a spin) the channel mapping and signs cannot be told",
+                    "give --truth, or record a spin in place and run odomkit check --spin ccw|cw")]
+
+
+def _wheel_travel(log: OdometryLog, robot: DiffDrive) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    from odomkit.kinematics import body_steps
+
+    s = body_steps(robot, log)
+    return s.inputs["d_left"], s.inputs["d_right"]
+
+
+def _channels_from_spin(log: OdometryLog, robot: Robot, spin: str) -> list[Finding]:
+    if spin not in ("ccw", "cw"):
+        from odomkit.errors import InputError
+
+        raise InputError(f"--spin must be ccw or cw, got {spin!r}")
+    if not isinstance(robot, DiffDrive):
+        return [Finding("channels", "ok", f"a spin checks a differential drive's wheels; this is a "
+                        f"{robot.type_name} robot")]
+    left, right = (float(np.sum(x)) for x in _wheel_travel(log, robot))
+    sign = 1.0 if spin == "ccw" else -1.0  # ccw: right wheel forward, left backward
+    r_ok, l_ok = sign * right > 0, sign * left < 0
+    said = f"over the {spin} spin the left wheel travels {left:+.4g} m and the right {right:+.4g} m"
+    if r_ok and l_ok:
+        return [Finding("channels", "ok", said + ", as a " + spin + " spin should")]
+    if not r_ok and not l_ok:
+        return [Finding("channels", "fail", said + ": left and right look swapped (or both signs flipped, "
+                        "which a spin cannot tell apart)", "swap the left and right columns; then drive "
+                        "forward: if that reads backwards, flip both signs instead")]
+    wrong = "left" if not l_ok else "right"
+    return [Finding("channels", "fail", said + f": the {wrong} wheel's sign looks flipped",
+                    f"negate the {wrong} channel")]
+
+
+def _channels_against_truth(log: OdometryLog, robot: Robot, truth: Truth,
+                            max_gap: float | None) -> list[Finding]:
+    dt = np.diff(log.t)
+    period = float(np.median(dt[dt > 0])) if np.any(dt > 0) else 1.0
+    every = max(1, int(round(0.5 / period)))
+    fwd, turn, ok = _truth_motion(truth, log.t, every, max_gap)
+    if ok.sum() < 4 or np.sum(np.abs(fwd[ok])) < 0.05:
+        return [Finding("channels", "ok", "the truth barely moves while it overlaps the log: channels not "
+                        "checked", "record motion inside the truth's coverage")]
+    scores = []
+    for words, change in _hypotheses(robot):
+        dd, dth = _motion(_remapped(log, change), robot, every)
+        dd, dth = dd[ok], dth[ok]
+        if not truth.has_heading:
+            dd = np.abs(dd)
+        # Each misfit relative to the motion itself, plus a floor of 5 mm and 0.01 rad a
+        # window so that a log that hardly turns is not judged on the truth's jitter.
+        m = int(ok.sum())
+        e_d = np.sum((dd - fwd[ok]) ** 2) / (np.sum(fwd[ok] ** 2) + m * 0.005**2)
+        e_t = np.sum((dth - turn[ok]) ** 2) / (np.sum(turn[ok] ** 2) + m * 0.01**2)
+        scores.append((float(e_d + e_t), words))
+    given = scores[0][0]
+    best, words = min(scores)
+    if words != "as given" and best < 0.5 * given:
+        return [Finding("channels", "fail", f"the channels look mapped wrong: with {words} the odometry "
+                        f"matches the truth (misfit {best:.3g}) far better than as given ({given:.3g})",
+                        f"fix the channel mapping ({words}) and check again", given)]
+    if given > 0.5:
+        return [Finding("channels", "warn", f"the odometry matches the truth poorly (misfit {given:.3g}; 0 "
+                        "is a perfect match) and no other channel mapping does better",
+                        "check the robot file (wheel size, wheel base) and the truth's clock", given)]
+    other, other_words = sorted(s for s in scores if s[1] != "as given")[0]
+    close = (": the log turns too little to tell the mappings apart well" if other < 4 * max(given, 0.05)
+             else "")
+    return [Finding("channels", "ok", f"the channels as given match the truth (misfit {given:.3g}; the best "
+                    f"other mapping, {other_words}, misfits {other:.3g}){close}", value=given)]
+
+
+# --- motion and identifiability ----------------------------------------------------------
+
+def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
+    """Distance driven and turning each way (from the odometry)."""
+    from odomkit.kinematics import body_steps
+
+    steps = body_steps(robot, log)
+    travel = float(np.sum(np.abs(steps.dd)))
+    ccw = float(np.sum(np.clip(steps.dtheta, 0, None)))
+    cw = abs(float(np.sum(np.clip(steps.dtheta, None, 0))))
+    found = []
+    if travel < 0.2:
+        found.append(Finding("distance", "fail", f"the robot travels {travel:.3g} m: too little to calibrate "
+                             "from", "drive at least 2 m"))
+    elif travel < 2.0:
+        found.append(Finding("distance", "warn", f"the robot travels {travel:.3g} m", "drive at least 2 m"))
+    else:
+        found.append(Finding("distance", "ok", f"the robot travels {travel:.4g} m"))
+    turns = f"it turns {ccw:.3g} rad counter-clockwise and {cw:.3g} rad clockwise"
+    if max(ccw, cw) < 0.5 * math.pi:
+        found.append(Finding("turning", "warn", f"{turns}: hardly any turning",
+                             "drive turns both ways, at least a half turn each (e.g. a square each way)"))
+    elif min(ccw, cw) < 0.5 * math.pi:
+        way = "clockwise" if cw < ccw else "counter-clockwise"
+        found.append(Finding("turning", "warn", f"{turns}: almost all one way",
+                             f"also drive at least a half turn {way}: turning one way lets a wheel-size "
+                             "ratio and a wheel-base error mimic each other at the run's end, so an endpoint "
+                             "fit (UMBmark, --from endpoints) needs both ways; a fit to the whole trajectory "
+                             "copes if 'identifiable' says so"))
+    else:
+        found.append(Finding("turning", "ok", turns))
+    return found
+
+
+def _design(log: OdometryLog, robot: DiffDrive | Tricycle
+            ) -> tuple[NDArray[np.float64], list[str], list[float]]:
+    """Position sensitivities at about 1 s intervals, (2n, p), with the parameter names and
+    the size of the change each column stands for."""
+    from odomkit.calibrate.residuals import calibration_model, integrate_with_sensitivity
+
+    model = calibration_model(robot, [log])
+    dd, dth, ddd, ddt = model.steps(model.p0, 0)
+    _, dposes = integrate_with_sensitivity(dd, dth, ddd, ddt, np.zeros(3))
+    dt = np.diff(log.t)
+    period = float(np.median(dt[dt > 0])) if np.any(dt > 0) else 1.0
+    rows = np.arange(0, len(log), max(1, int(round(1.0 / period))))[1:]
+    J = dposes[rows, :2, :]  # (n, 2, 3): x and y only, as the default calibration fits
+    if isinstance(robot, DiffDrive):
+        cols = np.stack([J[..., 0] + J[..., 1], 0.5 * (J[..., 1] - J[..., 0]), J[..., 2]], axis=-1)
+        names = ["wheel scale E_s", "wheel-diameter ratio E_d", "wheel base E_b"]
+        sizes = [0.01, 0.01, 0.01]
+    else:
+        cols = J.copy()
+        names = ["traction scale c_scale", "steering offset", "wheel-to-axle distance"]
+        sizes = [0.01, 0.01, 0.01 * robot.wheel_to_axle]
+    return cols.reshape(-1, 3), names, sizes
+
+
+def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | None = None) -> list[Finding]:
+    """How well this log's motion pins each calibration parameter (trajectory fit).
+
+    With J the sensitivity of the positions (about one a second) to the parameters, the
+    part of parameter i's column that the others cannot reproduce, r_i (the residual of its
+    least-squares projection on them), gives its standard error σ/‖r_i‖ for independent
+    position errors of σ per axis (``sigma``, default 5 mm: the truth's noise and the
+    odometry's own drift). Relative errors above 1 % (0.01 rad for a steering offset) are
+    "not identifiable", above 0.2 % "weak". Differential drive: E_s (both wheels), E_d
+    (their ratio), E_b (wheel base); tricycle: c_scale, steering offset, L.
+    """
+    if not isinstance(robot, DiffDrive | Tricycle):
+        return [Finding("identifiable", "ok", f"a {robot.type_name} robot's calibration is not checked here")]
+    sigma = _DEFAULT_SIGMA if not sigma else float(sigma)
+    A, names, sizes = _design(log, robot)
+    if A.shape[0] < 6:
+        return [Finding("identifiable", "fail", "the log is shorter than a few seconds",
+                        "record a longer log")]
+    found = []
+    norms = np.linalg.norm(A, axis=0)
+    for i, name in enumerate(names):
+        others = np.delete(A, i, axis=1)
+        coef, *_ = np.linalg.lstsq(others, A[:, i], rcond=None)
+        unique = float(np.linalg.norm(A[:, i] - others @ coef))
+        rel = math.inf if unique == 0 else sigma / unique / (sizes[i] / 0.01)
+        unit = "rad" if "offset" in name else "%"
+        shown = f"±{rel:.2g} rad" if unit == "rad" else f"±{100 * rel:.2g} %"
+        shown = "unbounded" if not math.isfinite(rel) else shown
+        ratio = unique / norms[i] if norms[i] > 0 else 0.0
+        why = (" (its effect on the track is almost all one that the other parameters can mimic)"
+               if ratio < 0.1 and norms[i] > 0 else "")
+        if rel > _UNIDENTIFIED:
+            found.append(Finding("identifiable", "fail", f"{name}: not identifiable from this log (standard "
+                                 f"error {shown} with {1000 * sigma:g} mm position noise){why}",
+                                 _ADVICE[name], rel))
+        elif rel > _WEAK:
+            found.append(Finding("identifiable", "warn", f"{name}: weakly identified (standard error "
+                                 f"{shown}){why}", _ADVICE[name], rel))
+        else:
+            found.append(Finding("identifiable", "ok", f"{name}: identified (standard error {shown})",
+                                 value=rel))
+    return found
+
+
+_ADVICE = {
+    "wheel scale E_s": "drive longer straight runs away from the start (a closed loop's end says nothing "
+                       "of scale)",
+    "wheel-diameter ratio E_d": "drive straight runs, and turns both ways",
+    "wheel base E_b": "turn more: spins in place or a square driven both ways",
+    "traction scale c_scale": "drive longer straight runs away from the start",
+    "steering offset": "drive straight and gentle curves both ways",
+    "wheel-to-axle distance": "drive tight curves both ways",
+}
+
+
+def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spin: str | None = None,
+              max_gap: float | None = 0.5) -> list[Finding]:
+    """Every check, in the order a user fixes things: values and time, counters, stuck
+    channels, the channel mapping, then what the motion can identify."""
+    found = check_values(log)
+    if any(f.status == "fail" for f in found):
+        return found
+    found += check_time(log)
+    if len(log) < 2 or any(f.status == "fail" and f.check == "time" for f in found):
+        return found
+    found += check_counters(log)
+    found += check_stuck(log, robot, truth, max_gap)
+    found += check_channels(log, robot, truth, spin=spin, max_gap=max_gap)
+    if any(f.status == "fail" and f.check == "channels" for f in found):
+        return found  # what the motion identifies means nothing until the channels are right
+    found += check_motion(log, robot)
+    found += check_identifiable(log, robot, truth.sigma if truth is not None else None)
+    return found
+
+
+def next_steps(findings: list[Finding]) -> list[str]:
+    """The advice of every finding that is not ok, failures first, without repeats."""
+    ordered = sorted((f for f in findings if f.status != "ok" and f.advice),
+                     key=lambda f: 0 if f.status == "fail" else 1)
+    return list(dict.fromkeys(f.advice for f in ordered if f.advice))

@@ -1,0 +1,115 @@
+"""``odomkit fit-amcl``: nav2 AMCL α1–α4 (α5 for omni) from odometry with ground truth.
+
+::
+
+    odomkit fit-amcl ODOM [ODOM ...] [--truth GT ...] [--robot ROBOT.toml] [--model diff|omni]
+        [--update-min-d 0.25] [--update-min-a 0.2] [--yaml-out amcl.yaml] [--force] [--json]
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from odomkit.cli.application import app
+from odomkit.cli.log_options import (
+    BagTimeOption,
+    ColumnsOption,
+    CumulativeOption,
+    DecimateOption,
+    FormatOption,
+    JointsOption,
+    PeriodOption,
+    TimeScaleOption,
+    TopicOption,
+    TruthTopicOption,
+    WrapBitsOption,
+    log_options,
+    reported_warnings,
+    with_warnings,
+)
+from odomkit.cli.output import print_json
+from odomkit.cli.truth_options import (
+    MaxGapOption,
+    TruthColumnsOption,
+    TruthFormatOption,
+    TruthListOption,
+    TruthSigmaOption,
+    TruthTimeUnitOption,
+    truth_options,
+)
+
+__all__ = ["fit_amcl_command", "print_fit"]
+
+
+@app.command("fit-amcl")
+def fit_amcl_command(
+    odometry: Annotated[list[Path], typer.Argument(
+        help="Odometry pose tracks (odomkit track --out, TUM, t,x,y,theta), or logs with --robot.")],
+    robot: Annotated[Path | None, typer.Option(
+        "--robot", help="Robot file (TOML): ODOM files are raw logs, dead-reckoned with it.")] = None,
+    model: Annotated[str, typer.Option("--model", help="AMCL motion model: diff | omni.")] = "diff",
+    update_min_d: Annotated[float, typer.Option(
+        "--update-min-d", help="AMCL's update_min_d [m]: an update when |dx| or |dy| exceeds it.")] = 0.25,
+    update_min_a: Annotated[float, typer.Option(
+        "--update-min-a", help="AMCL's update_min_a [rad]: an update when the turn exceeds it.")] = 0.2,
+    level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
+    yaml_out: Annotated[Path | None, typer.Option(
+        "--yaml-out", help="Write the nav2 amcl parameter snippet (YAML).")] = None,
+    truth: TruthListOption = None,
+    truth_format: TruthFormatOption = "auto",
+    truth_columns: TruthColumnsOption = None,
+    truth_time_unit: TruthTimeUnitOption = "s",
+    truth_sigma: TruthSigmaOption = 0.0,
+    max_gap: MaxGapOption = 0.5,
+    format: FormatOption = "auto",
+    columns: ColumnsOption = None,
+    cumulative: CumulativeOption = False,
+    wrap_bits: WrapBitsOption = None,
+    period: PeriodOption = None,
+    time_scale: TimeScaleOption = 1.0,
+    decimate: DecimateOption = 1,
+    topic: TopicOption = None,
+    joints: JointsOption = None,
+    bag_time: BagTimeOption = False,
+    truth_topic: TruthTopicOption = None,
+    method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler (logs)")] = "exact",
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --yaml-out file.")] = False,
+    json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+) -> None:
+    """Maximum-likelihood nav2 AMCL motion-model alphas, with profile-likelihood intervals,
+    from AMCL's own differential or omni model between its update thresholds."""
+    from odomkit.errors import InputError
+    from odomkit.workflows.fit_amcl import fit_amcl_files
+    from odomkit.workflows.truth import truth_options_per_log
+
+    if not 0 < level < 1:
+        raise InputError(f"--level must be in (0, 1), got {level}")
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+                          topic, joints, bag_time, truth_topic)
+    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    per_file = truth_options_per_log(base, list(truth or []), len(odometry))
+    with reported_warnings() as warned:
+        out = fit_amcl_files(odometry, per_file, robot_path=robot, log_options=options, model=model,
+                             update_min_d=update_min_d, update_min_a=update_min_a, level=level,
+                             method=method, yaml_out=yaml_out, overwrite=force)
+    out = with_warnings(out, warned)
+    if json_out:
+        print_json(out)
+        return
+    print_fit(out)
+
+
+def print_fit(out: dict[str, Any]) -> None:
+    """The short text report of ``odomkit fit-amcl``."""
+    key = next(k for k in out if k.startswith("interval"))
+    print(f"AMCL {out['model']} motion model from {out['updates']} updates "
+          f"(update_min_d {out['update_min_d']:g} m, update_min_a {out['update_min_a']:g} rad)")
+    for name, value in out["alpha"].items():
+        lo, hi = out[key][name]
+        print(f"  {name} = {value:.4g}   ({key.removeprefix('interval')} % interval {lo:.4g} .. "
+              f"{'unbounded' if hi is None else format(hi, '.4g')})")
+    for kind, path in out["outputs"].items():
+        print(f"wrote {kind}: {path}")

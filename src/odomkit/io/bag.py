@@ -1,0 +1,544 @@
+"""ROS bags in: ROS 1 ``.bag``, ROS 2 ``.db3`` and ``.mcap`` (a ROS 2 bag is its folder),
+read through ``rosbags`` (the ``ros`` extra; no ROS install), imported only when a bag is read.
+
+**Messages and the channels they give** (:mod:`odomkit.log`):
+
+=============================  =============================================================
+message                        channels
+=============================  =============================================================
+``sensor_msgs/JointState``     two joints (``--joints left,right``): ``ticks_left``,
+                               ``ticks_right``; one joint: ``ticks``. A joint position is the
+                               wheel angle [rad], so one "tick" is one radian and the robot
+                               file's metres per tick is the wheel radius: ``m_per_tick =
+                               0.033``, or ``wheel_radius = 0.033`` with ``encoder_resolution
+                               = 6.283185307179586`` (2π "ticks" a turn). Positions are
+                               differenced; without positions, velocities [rad/s] are
+                               integrated over each step.
+``nav_msgs/Odometry``          ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
+``geometry_msgs/Twist``,       ``speed``, ``yaw_rate`` (a command; Twist has no header, so
+``geometry_msgs/TwistStamped`` its time is always the bag's)
+``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro), and ``heading`` (yaw
+                               of the orientation) when the IMU gives one (its
+                               ``orientation_covariance[0]`` is not −1)
+=============================  =============================================================
+
+A diff robot reads the two joints; a gyro robot reads ``speed`` + ``yaw_rate`` (Odometry,
+Twist, TwistStamped, or one of them with an Imu for the rate); a compass robot ``speed`` +
+an Imu's ``heading``; a gyro or tricycle robot one joint as its ``ticks``.
+
+**Time.** Each message's header stamp (``--bag-time``: the time the bag received it).
+Stamps that go backwards are an error naming the message, and so are stamps that never
+change (a publisher that does not fill them in). Times are seconds as in the bag (epoch
+seconds for a real robot), as a truth file (TUM) has them.
+
+**Several topics** (``--topic /odom --topic /imu``): the first topic's messages are the
+log's rows; every other topic is resampled at those times, and a channel given by two
+topics is taken from the one named last (so ``/imu``'s gyro replaces ``/odom``'s yaw
+rate). Rows outside another topic's span are left out, with a warning. A rate is resampled
+as the mean of its signal over each step (exact for the signal below), a wheel angle or a
+heading by linear interpolation.
+
+**Ground truth** (``--truth-topic /mocap``): a pose topic (Odometry, PoseStamped,
+PoseWithCovarianceStamped) becomes the log's ground truth, as a text log's ``gt_*`` columns
+do: ``track``, ``calibrate``, ``fit-noise`` and ``evaluate`` use it where a truth file is
+not given.
+
+**What a rate means over a step** (row k's rate holds from row k to row k+1, as in
+:mod:`odomkit.log`): a command (Twist, TwistStamped) holds from its stamp to the next one
+(step k uses message k); an Odometry twist is the controller's estimate over the interval
+*ending* at its stamp (``diff_drive_controller`` divides the last wheel motion by the last
+period), so step k uses message k+1; an IMU or joint velocity is a sample of a smooth
+signal: step k uses the mean of both ends (trapezoid rule, second order).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.angles import unwrap_angle
+from odomkit.errors import InputError, OdomkitError
+from odomkit.log import INCREMENT_CHANNELS, OdometryLog
+
+__all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_topics", "is_bag", "read_bag", "read_bag_odometry",
+           "require_rosbags", "TRUTH_TYPES"]
+
+#: The message types odomkit reads, by their ROS 2 names (rosbags names ROS 1 types alike).
+MESSAGE_TYPES = {
+    "sensor_msgs/msg/JointState": "JointState",
+    "nav_msgs/msg/Odometry": "Odometry",
+    "geometry_msgs/msg/Twist": "Twist",
+    "geometry_msgs/msg/TwistStamped": "TwistStamped",
+    "sensor_msgs/msg/Imu": "Imu",
+}
+#: The pose messages a ground-truth topic may hold (``--truth-topic``, e.g. motion capture).
+TRUTH_TYPES = {
+    "nav_msgs/msg/Odometry": "Odometry",
+    "geometry_msgs/msg/PoseStamped": "PoseStamped",
+    "geometry_msgs/msg/PoseWithCovarianceStamped": "PoseWithCovarianceStamped",
+}
+_BAG_SUFFIXES = (".bag", ".db3", ".mcap")
+
+
+def require_rosbags() -> Any:
+    """The ``rosbags`` package, or one line saying how to install it."""
+    try:
+        import rosbags.highlevel
+        import rosbags.rosbag1
+        import rosbags.rosbag2
+        import rosbags.typesys
+    except ImportError:
+        raise InputError("ROS bags need the rosbags package: pip install 'odomkit[ros]'") from None
+    return rosbags
+
+
+def is_bag(path: str | Path) -> bool:
+    """A ``.bag``, ``.db3`` or ``.mcap`` name, or a folder with a ROS 2 ``metadata.yaml``.
+
+    >>> is_bag("run.bag"), is_bag("rosbag2_2024_05_01/rosbag2_2024_05_01_0.mcap"), is_bag("log.csv")
+    (True, True, False)
+    """
+    path = Path(path)
+    return path.suffix.lower() in _BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file())
+
+
+@contextmanager
+def _bag_errors(source: str) -> Iterator[None]:
+    """rosbags' own errors (a bad magic, a missing metadata key, a truncated chunk) become
+    one line naming the bag."""
+    try:
+        yield
+    except OdomkitError:
+        raise
+    except FileNotFoundError:
+        raise InputError("no such file or folder", source=source) from None
+    except Exception as err:  # rosbags raises many kinds; all mean "not a readable bag"
+        raise InputError(f"not a readable ROS bag ({type(err).__name__}: {err})", source=source) from None
+
+
+@contextmanager
+def _open(path: Path) -> Iterator[Any]:
+    """An open rosbags ``AnyReader`` on ``path`` (a storage file inside a ROS 2 bag folder
+    opens the folder)."""
+    rosbags = require_rosbags()
+    source = str(path)
+    if not path.exists():
+        raise InputError("no such file or folder", source=source)
+    storage_file = path.is_file() and path.suffix.lower() in (".db3", ".mcap")
+    if storage_file and (path.parent / "metadata.yaml").is_file():
+        path = path.parent
+    stores = rosbags.typesys
+    with _bag_errors(source):
+        # The default types serve a ROS 2 bag without message definitions (db3 before Iron);
+        # the messages odomkit reads are the same in every ROS 2 release.
+        reader = rosbags.highlevel.AnyReader(
+            [path], default_typestore=stores.get_typestore(stores.Stores.ROS2_HUMBLE))
+        reader.open()
+    try:
+        yield reader
+    finally:
+        reader.close()
+
+
+def bag_topics(path: str | Path) -> dict[str, str]:
+    """Every topic of a bag and its message type (``{"/odom": "nav_msgs/msg/Odometry"}``)."""
+    with _open(Path(path)) as reader, _bag_errors(str(path)):
+        return {name: str(info.msgtype) for name, info in reader.topics.items()}
+
+
+def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -> str:
+    readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if t in types]
+    others = len(topics) - len(readable)
+    what = "topics odomkit reads" if types is MESSAGE_TYPES else "pose topics"
+    text = f"{what}: " + (", ".join(readable) if readable else "none")
+    return text + (f"; {others} other topic(s)" if others else "")
+
+
+def _find_topic(topics: dict[str, str], wanted: str, source: str,
+                types: dict[str, str] = MESSAGE_TYPES) -> str:
+    for name in (wanted, "/" + wanted.lstrip("/")):
+        if name in topics:
+            if topics[name] not in types:
+                raise InputError(f"topic {name} is {topics[name]}; odomkit reads "
+                                 f"{', '.join(types.values())} ({_topic_list(topics, types)})",
+                                 source=source)
+            return name
+    raise InputError(f"no topic {wanted} in the bag; {_topic_list(topics, types)}", source=source)
+
+
+def _choose_topics(topics: dict[str, str], wanted: Sequence[str], source: str) -> list[str]:
+    if wanted:
+        chosen = [_find_topic(topics, w, source) for w in wanted]
+        if len(set(chosen)) != len(chosen):
+            raise InputError(f"--topic names a topic twice: {', '.join(wanted)}", source=source)
+        return chosen
+    readable = sorted(n for n, t in topics.items() if t in MESSAGE_TYPES)
+    if len(readable) == 1:
+        return readable
+    raise InputError(f"a bag log needs --topic; {_topic_list(topics)}", source=source)
+
+
+@dataclass
+class _Stream:
+    """One topic's samples: times (M,) [ns] and its signals (channel, kind, values (M,)); kind is
+    ``angle`` (cumulative, interpolated), ``absolute`` (an angle, interpolated unwrapped) or
+    a rate signal: ``forward``, ``backward`` or ``linear`` (see the module docstring)."""
+
+    topic: str
+    ns: NDArray[np.int64]
+    signals: list[tuple[str, str, NDArray[np.float64]]] = field(default_factory=list)
+
+
+def _seconds(ns: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Seconds plus a correctly rounded fraction: a stamp written from a float epoch time t
+    (odomkit's own bags) reads back as exactly t."""
+    return (ns // 1_000_000_000).astype(float) + (ns % 1_000_000_000) / 1e9
+
+
+def _stamps(reader: Any, conns: list[Any], receive_time: bool, topic: str,
+            source: str) -> tuple[list[Any], NDArray[np.int64]]:
+    """The topic's messages and their times [ns] (header stamp, or the bag's time)."""
+    messages, stamps = [], []
+    with _bag_errors(source):
+        for conn, bag_ns, raw in reader.messages(connections=conns):
+            msg = reader.deserialize(raw, conn.msgtype)
+            header = getattr(msg, "header", None)
+            if receive_time or header is None:
+                stamps.append(int(bag_ns))
+            else:
+                stamps.append(int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec))
+            messages.append(msg)
+    if len(messages) < 2:
+        raise InputError(f"topic {topic} has {len(messages)} message(s); a log needs two or more",
+                         source=source)
+    ns = np.array(stamps, dtype=np.int64)
+    t = _seconds(ns)
+    back = np.flatnonzero(np.diff(ns) < 0)
+    hint = "pass --bag-time to use the time the bag received each message"
+    if back.size:
+        i = int(back[0]) + 1
+        raise InputError(f"{topic}: header stamps go backwards at message {i + 1} ({t[i]:.9f} s after "
+                         f"{t[i - 1]:.9f} s); {hint}", source=source)
+    if ns[-1] == ns[0]:
+        raise InputError(f"{topic}: every stamp is {t[0]:.9f} s (never filled in?); {hint}", source=source)
+    return messages, ns
+
+
+def _finite(values: NDArray[np.float64], what: str, topic: str, source: str) -> NDArray[np.float64]:
+    bad = np.flatnonzero(~np.isfinite(values))
+    if bad.size:
+        raise InputError(f"{topic}: message {bad[0] + 1} has a {what} that is not a finite number",
+                         source=source)
+    return values
+
+
+def _joint_signals(messages: list[Any], ns: NDArray[np.int64], joints: Sequence[str], topic: str,
+                   source: str) -> _Stream:
+    names: dict[str, None] = {}
+    for msg in messages:
+        names.update(dict.fromkeys(msg.name))
+    if not joints:
+        left = [n for n in names if "left" in n.lower()]
+        right = [n for n in names if "right" in n.lower()]
+        if len(left) == 1 and len(right) == 1:
+            joints = (left[0], right[0])
+        elif len(names) == 1:
+            joints = tuple(names)
+        else:
+            raise InputError(f"{topic}: name the wheel joints with --joints LEFT,RIGHT (or one joint); "
+                             f"its joints are {', '.join(names) or 'none'}", source=source)
+    missing = [j for j in joints if j not in names]
+    if missing:
+        raise InputError(f"{topic}: no joint named {missing[0]!r}; its joints are {', '.join(names)}",
+                         source=source)
+    keep, positions, velocities = [], [], []
+    for k, msg in enumerate(messages):
+        index = {n: i for i, n in enumerate(msg.name)}
+        if not all(j in index for j in joints):
+            continue  # a message for other joints (drivers may publish joint groups apart)
+        keep.append(k)
+        pos, vel = np.asarray(msg.position, dtype=float), np.asarray(msg.velocity, dtype=float)
+        positions.append([pos[index[j]] for j in joints] if pos.size == len(msg.name) else None)
+        velocities.append([vel[index[j]] for j in joints] if vel.size == len(msg.name) else None)
+    if len(keep) < 2:
+        raise InputError(f"{topic}: fewer than two messages carry joints {', '.join(joints)}", source=source)
+    if all(p is not None for p in positions):
+        kind, values = "angle", np.array(positions, dtype=float)
+        what = "joint position"
+    elif all(v is not None for v in velocities):
+        kind, values = "linear", np.array(velocities, dtype=float)
+        what = "joint velocity"
+    else:
+        raise InputError(f"{topic}: the messages carry neither a position nor a velocity for every "
+                         f"one of {', '.join(joints)}", source=source)
+    _finite(values, what, topic, source)
+    if kind == "angle" and np.any(np.abs(np.diff(values, axis=0)) > math.pi):
+        warnings.warn(f"{source}: {topic}: a joint position jumps by more than π rad between two "
+                      "messages; odomkit reads positions as a continuous wheel angle, not wrapped",
+                      stacklevel=2)
+    channels = ("ticks_left", "ticks_right") if len(joints) == 2 else ("ticks",)
+    stream = _Stream(topic, ns[keep])
+    stream.signals = [(c, kind, values[:, i]) for i, c in enumerate(channels)]
+    return stream
+
+
+def _yaw(q: Any) -> float:
+    """Yaw of a quaternion (rotation about z of a Z-Y-X Euler decomposition), REP 103."""
+    return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+
+
+def _twist_signals(messages: list[Any], ns: NDArray[np.int64], kind: str, topic: str,
+                   source: str) -> _Stream:
+    if kind == "Odometry":
+        twists = [m.twist.twist for m in messages]
+    elif kind == "TwistStamped":
+        twists = [m.twist for m in messages]
+    else:
+        twists = messages
+    speed = _finite(np.array([w.linear.x for w in twists], dtype=float), "linear x", topic, source)
+    rate = _finite(np.array([w.angular.z for w in twists], dtype=float), "angular z", topic, source)
+    signal = "backward" if kind == "Odometry" else "forward"
+    return _Stream(topic, ns, [("speed", signal, speed), ("yaw_rate", signal, rate)])
+
+
+def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source: str) -> _Stream:
+    rate = _finite(np.array([m.angular_velocity.z for m in messages], dtype=float), "angular velocity z",
+                   topic, source)
+    stream = _Stream(topic, ns, [("yaw_rate", "linear", rate)])
+    # sensor_msgs/Imu: orientation_covariance[0] = -1 means "no orientation estimate".
+    if all(float(m.orientation_covariance[0]) != -1.0 for m in messages):
+        heading = _finite(np.array([_yaw(m.orientation) for m in messages]), "orientation", topic, source)
+        stream.signals.append(("heading", "absolute", unwrap_angle(heading)))
+    return stream
+
+
+def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str) -> _Stream:
+    """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
+    messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
+                           topic, source)
+    kind = TRUTH_TYPES[msgtype]
+    poses = [m.pose if kind == "PoseStamped" else m.pose.pose for m in messages]
+    xyt = _finite(np.array([[p.position.x, p.position.y, _yaw(p.orientation)] for p in poses], dtype=float),
+                  "pose", topic, source)
+    return _Stream(topic, ns, [("gt_x", "absolute", xyt[:, 0]), ("gt_y", "absolute", xyt[:, 1]),
+                               ("gt_theta", "absolute", unwrap_angle(xyt[:, 2]))])
+
+
+def _read_stream(reader: Any, topic: str, msgtype: str, joints: Sequence[str], receive_time: bool,
+                 source: str) -> _Stream:
+    conns = [c for c in reader.connections if c.topic == topic]
+    messages, ns = _stamps(reader, conns, receive_time, topic, source)
+    kind = MESSAGE_TYPES[msgtype]
+    if kind == "JointState":
+        return _joint_signals(messages, ns, joints, topic, source)
+    if kind == "Imu":
+        return _imu_signals(messages, ns, topic, source)
+    return _twist_signals(messages, ns, kind, topic, source)
+
+
+def _integral_at(s: NDArray[np.float64], v: NDArray[np.float64], kind: str,
+                 times: NDArray[np.float64]) -> NDArray[np.float64]:
+    """∫ from s[0] to each time of the rate signal of samples (s, v) (times inside [s0, s_end])."""
+    h = np.diff(s)
+    seg = {"forward": v[:-1], "backward": v[1:], "linear": 0.5 * (v[:-1] + v[1:])}[kind] * h
+    cum = np.concatenate(([0.0], np.cumsum(seg)))
+    j = np.clip(np.searchsorted(s, times, side="right") - 1, 0, s.size - 2)
+    tau = times - s[j]
+    if kind == "forward":
+        part = v[j] * tau
+    elif kind == "backward":
+        part = v[j + 1] * tau
+    else:
+        slope = np.divide(v[j + 1] - v[j], h[j], out=np.zeros_like(tau), where=h[j] > 0)
+        part = v[j] * tau + 0.5 * slope * tau**2
+    return cum[j] + part
+
+
+def _value_at(s: NDArray[np.float64], v: NDArray[np.float64], kind: str,
+              times: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The rate signal just after each time (for zero-length steps and the last row)."""
+    j = np.clip(np.searchsorted(s, times, side="right") - 1, 0, s.size - 1)
+    if kind == "forward":
+        return v[j]
+    if kind == "backward":
+        return v[np.minimum(j + 1, s.size - 1)]
+    return np.interp(times, s, v)
+
+
+def _step_means(v: NDArray[np.float64], kind: str) -> NDArray[np.float64]:
+    """Rows = the samples: the mean of the signal over each step, exactly (no division)."""
+    out = v.astype(float).copy()
+    if kind == "backward":
+        out[:-1] = v[1:]
+    elif kind == "linear":
+        out[:-1] = 0.5 * (v[:-1] + v[1:])
+    return out
+
+
+def _channel(s: NDArray[np.float64], name: str, kind: str, v: NDArray[np.float64], rows: NDArray[np.float64],
+             own: bool) -> NDArray[np.float64]:
+    """Channel ``name`` at the log's ``rows`` from a stream's samples (``s``, ``v``); ``own``:
+    the rows are the samples. Times [s] from one origin near them (exact differences)."""
+    if kind == "angle":
+        cum = v if own else np.interp(rows, s, v)
+        return np.concatenate(([0.0], np.diff(cum)))
+    if kind == "absolute":
+        return v if own else np.interp(rows, s, v)
+    if name in INCREMENT_CHANNELS:  # a joint velocity integrated over each step
+        if own:
+            return np.concatenate(([0.0], _step_means(v, kind)[:-1] * np.diff(rows)))
+        return np.concatenate(([0.0], np.diff(_integral_at(s, v, kind, rows))))
+    if own:
+        return _step_means(v, kind)
+    dt = np.diff(rows)
+    mean = np.divide(np.diff(_integral_at(s, v, kind, rows)), dt, out=np.zeros_like(dt), where=dt > 0)
+    out = _value_at(s, v, kind, rows)
+    out[:-1] = np.where(dt > 0, mean, out[:-1])
+    return out
+
+
+def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
+    primary = streams[0]
+    keep = np.ones(primary.ns.size, dtype=bool)
+    for other in streams[1:]:
+        inside = (primary.ns >= other.ns[0]) & (primary.ns <= other.ns[-1])
+        if not inside.all():
+            span = _seconds(other.ns[[0, -1]])
+            warnings.warn(f"{source}: {int((~inside).sum())} of {inside.size} {primary.topic} messages fall "
+                          f"outside {other.topic}'s time span ({span[0]:.9f}..{span[1]:.9f} s) and "
+                          "are left out", stacklevel=3)
+        keep &= inside
+    if keep.sum() < 2:
+        raise InputError(f"topics {', '.join(s.topic for s in streams)} overlap in fewer than two "
+                         f"{primary.topic} messages", source=source)
+    first, last = np.flatnonzero(keep)[[0, -1]]
+    origin = primary.ns[first]
+    # Resampled on times from one origin: epoch seconds as floats are only good to 0.24 µs.
+    rows = (primary.ns[first:last + 1] - origin) / 1e9
+    channels: dict[str, NDArray[np.float64]] = {}
+    for stream in streams:  # later topics replace earlier ones' channels
+        own = stream is primary
+        s = rows if own else (stream.ns - origin) / 1e9
+        for name, kind, values in stream.signals:
+            v = values[first:last + 1] if own else values
+            channels[name] = _channel(s, name, kind, v, rows, own)
+    return _seconds(primary.ns[first:last + 1]), channels
+
+
+def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
+             receive_time: bool = False, truth_topic: str | None = None) -> OdometryLog:
+    """Read a ROS bag's odometry topics as a log (module docstring: messages, time, topics).
+
+    Parameters
+    ----------
+    path : a ROS 1 ``.bag``, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file
+    topics : topic names, the first giving the rows; empty: the bag's one readable topic
+    joints : JointState joint names, ``(left, right)`` or one; empty: the joints whose
+        names contain "left" and "right", or the only joint
+    receive_time : use the time the bag received each message instead of header stamps
+    truth_topic : a pose topic (:data:`TRUTH_TYPES`, e.g. motion capture) that becomes the
+        log's ground truth, interpolated at the rows (θ on the unwrapped yaw); rows outside
+        its span are left out, with a warning
+
+    Returns
+    -------
+    OdometryLog
+        ``t`` [s], the channels and the ground truth; ``meta`` names the topics and the
+        time source.
+
+    Raises
+    ------
+    InputError
+        Not a bag, no such topic or joint (listing the ones there are), stamps that go
+        backwards or are zero, values that are not finite, rosbags not installed.
+    """
+    path = Path(path)
+    source = str(path)
+    with _open(path) as reader:
+        with _bag_errors(source):
+            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        chosen = _choose_topics(available, topics, source)
+        if joints and not any(MESSAGE_TYPES[available[c]] == "JointState" for c in chosen):
+            raise InputError("--joints applies to a JointState topic; none is read", source=source)
+        streams = [_read_stream(reader, c, available[c], joints, receive_time, source) for c in chosen]
+        if truth_topic:
+            name = _find_topic(available, truth_topic, source, TRUTH_TYPES)
+            streams.append(_truth_stream(reader, name, available[name], receive_time, source))
+    t, channels = _merge(streams, source)
+    truth = None
+    if truth_topic:
+        truth = np.column_stack([channels.pop(c) for c in ("gt_x", "gt_y", "gt_theta")])
+    meta = {"format": "bag", "topics": chosen, "time": "bag" if receive_time else "header"}
+    return OdometryLog(t, channels, truth, source, meta)
+
+
+@dataclass(frozen=True)
+class BagOdometry:
+    """A ``nav_msgs/Odometry`` topic read back (e.g. ``odomkit track --bag-out``).
+
+    Parameters
+    ----------
+    t : ndarray, shape (N,)
+        Header stamps [s].
+    poses : ndarray, shape (N, 3)
+        ``[x, y, θ]`` [m, m, rad]; θ is the yaw of the orientation, unwrapped.
+    pose_covariance, twist_covariance : ndarray, shape (N, 36)
+        The messages' row-major 6×6 covariances, as stored (:mod:`odomkit.io.ros`).
+    twist : ndarray, shape (N, 2)
+        Linear x [m/s] and angular z [rad/s] of the twist.
+    frame_id, child_frame_id : str
+        Of the first message.
+    """
+
+    t: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    pose_covariance: NDArray[np.float64]
+    twist: NDArray[np.float64]
+    twist_covariance: NDArray[np.float64]
+    frame_id: str
+    child_frame_id: str
+
+    @property
+    def cov(self) -> NDArray[np.float64]:
+        """The planar pose covariance (N, 3, 3) over (x, y, yaw): ROS indices 0, 1, 5."""
+        index = np.array([0, 1, 5])
+        return self.pose_covariance.reshape(-1, 6, 6)[:, index[:, None], index]
+
+
+def read_bag_odometry(path: str | Path, topic: str | None = None, receive_time: bool = False) -> BagOdometry:
+    """Read a ``nav_msgs/Odometry`` topic: poses, twists and their covariances.
+
+    ``topic`` None takes the bag's one Odometry topic.
+    """
+    path = Path(path)
+    source = str(path)
+    with _open(path) as reader:
+        with _bag_errors(source):
+            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        if topic is None:
+            odometry = [n for n, t in available.items() if t == "nav_msgs/msg/Odometry"]
+            if len(odometry) != 1:
+                raise InputError(f"name the Odometry topic; {_topic_list(available)}", source=source)
+            topic = odometry[0]
+        name = _find_topic(available, topic, source)
+        if available[name] != "nav_msgs/msg/Odometry":
+            raise InputError(f"topic {name} is {available[name]}, not nav_msgs/msg/Odometry", source=source)
+        messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == name], receive_time,
+                               name, source)
+    poses = np.array([[m.pose.pose.position.x, m.pose.pose.position.y, _yaw(m.pose.pose.orientation)]
+                      for m in messages], dtype=float)
+    poses[:, 2] = unwrap_angle(poses[:, 2])
+    return BagOdometry(
+        _seconds(ns), poses,
+        np.array([m.pose.covariance for m in messages], dtype=float),
+        np.array([[m.twist.twist.linear.x, m.twist.twist.angular.z] for m in messages], dtype=float),
+        np.array([m.twist.covariance for m in messages], dtype=float),
+        str(messages[0].header.frame_id), str(messages[0].child_frame_id))

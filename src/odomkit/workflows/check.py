@@ -1,0 +1,88 @@
+"""``odomkit check``: read a log (and its truth) and run the data checks of
+:mod:`odomkit.calibrate.check` before calibrating.
+
+A log the readers refuse (NaN values, text in a number column, a wrong ``--columns``) is
+itself a finding, not a crash: the reader's one-line message (file, line, column) becomes a
+``fail`` and the other checks are skipped. The readers' warnings (rows out of time order,
+a cumulative counter read as increments) become ``warn`` findings.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["check_file"]
+
+
+def check_file(
+    log_path: str | Path,
+    robot_path: str | Path,
+    truth: TruthOptions,
+    *,
+    log_options: LogOptions | None = None,
+    spin: str | None = None,
+) -> dict[str, Any]:
+    """Check one log before calibrating.
+
+    Parameters
+    ----------
+    log_path : the log (any format :func:`odomkit.workflows.logs.load_log` reads)
+    robot_path : its robot file (TOML)
+    truth : truth options (``path`` None: the log's own ``gt_*`` columns, if any)
+    log_options : how to read the log
+    spin : "ccw" or "cw" when the log is a spin in place that way (checks the wheels
+        without truth)
+
+    Returns
+    -------
+    dict
+        ``log``, ``ok`` (no finding failed), ``findings`` [{check, status, message,
+        advice}], ``next`` [what to record or fix next], ``truth`` (where it came from or None).
+    """
+    from odomkit.calibrate.check import Finding, check_log, next_steps
+    from odomkit.io.robotfile import read_robot
+    from odomkit.workflows.logs import LogOptions, load_log
+    from odomkit.workflows.truth import load_truth
+
+    if spin is not None and spin not in ("ccw", "cw"):
+        raise InputError(f"--spin must be ccw or cw, got {spin!r}")
+    path = Path(log_path)
+    if not path.is_file():
+        raise InputError("no such file", source=str(path))
+    robot, _ = read_robot(robot_path)
+    findings: list[Finding] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        try:
+            log = load_log(path, robot, log_options or LogOptions())
+        except InputError as exc:
+            log = None
+            findings.append(Finding("reading", "fail", str(exc),
+                                    "fix the rows or the --columns mapping the message names"))
+    for item in caught:
+        if issubclass(item.category, UserWarning):
+            findings.append(Finding("reading", "warn", " ".join(str(item.message).split()),
+                                    "read the log as the message says, then check again"))
+        else:  # not ours: show it as Python would
+            warnings.showwarning(item.message, item.category, item.filename, item.lineno)
+    found_truth = None
+    if log is not None:
+        found_truth = load_truth(truth, log)
+        if spin is not None and found_truth is not None:
+            spin = None  # the truth says more than the spin's stated direction
+        findings += check_log(log, robot, found_truth, spin=spin, max_gap=truth.max_gap)
+    return {
+        "log": str(path),
+        "ok": not any(f.status == "fail" for f in findings),
+        "findings": [f.to_dict() for f in findings],
+        "next": next_steps(findings) or ["nothing: the log is fit to calibrate from"],
+        "truth": None if found_truth is None else found_truth.source,
+    }

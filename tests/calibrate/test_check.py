@@ -1,0 +1,189 @@
+"""The data checks before calibrating (issue 12 item 7), on logs made to have each fault.
+
+Each log is built from known wheel motion (and its truth dead-reckoned from the same
+motion by the library's integrator), then spoilt in exactly one way; the check for that
+fault must name it and the others must stay quiet.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.check import (
+    check_channels,
+    check_counters,
+    check_identifiable,
+    check_log,
+    check_motion,
+    check_stuck,
+    check_time,
+    check_values,
+    next_steps,
+)
+from odomkit.log import OdometryLog
+from odomkit.robot import DiffDrive, Tricycle
+from odomkit.track import dead_reckon_log
+from odomkit.truth import Truth
+
+ROBOT = DiffDrive(0.3, 1e-4, 1e-4)
+PERIOD = 0.05
+
+
+def square_both_ways() -> tuple[NDArrayPair, NDArrayPair]:
+    """Wheel ticks per row of a 1 m square driven counter-clockwise, then clockwise."""
+    straight = np.full(40, 250.0)  # 40 rows of 2.5 cm: 1 m
+    turn = np.full(30, math.pi / 2 * 0.15 / 30 / 1e-4)  # a quarter spin in 30 rows
+    left, right = [0.0], [0.0]
+    for direction in (1, -1):
+        for _ in range(4):
+            left += list(straight)
+            right += list(straight)
+            left += list(-direction * turn)
+            right += list(direction * turn)
+    return np.array(left), np.array(right)
+
+
+NDArrayPair = np.ndarray
+
+
+def make_log(left, right, robot=ROBOT):
+    t = PERIOD * np.arange(len(left))
+    return OdometryLog(t, {"ticks_left": np.asarray(left, float), "ticks_right": np.asarray(right, float)})
+
+
+def truth_of(log, robot=ROBOT, sigma=0.0):
+    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    return Truth(log.t, poses[:, :2].copy(), poses[:, 2].copy(), sigma)
+
+
+def statuses(findings, check):
+    return [f.status for f in findings if f.check == check]
+
+
+def test_a_clean_square_both_ways_passes_every_check():
+    log = make_log(*square_both_ways())
+    found = check_log(log, ROBOT, truth_of(log))
+    assert all(f.status == "ok" for f in found), [f for f in found if f.status != "ok"]
+    assert next_steps(found) == []
+
+
+def test_values_and_time():
+    left, right = square_both_ways()
+    log = make_log(left, right)
+    t = log.t.copy()
+    t[100:] += 2.0  # a 2 s dropout
+    t[50] = t[49]  # a repeated stamp
+    found = check_time(OdometryLog(t, log.channels))
+    assert sorted(statuses(found, "time")) == ["warn", "warn"]
+    assert any("2.05 s" in f.message for f in found)
+    back = t.copy()
+    back[60] = back[58]
+    assert "fail" in statuses(check_time(OdometryLog(back, log.channels)), "time")
+    bad = dict(log.channels, ticks_left=np.where(np.arange(len(t)) == 7, np.nan, log.channels["ticks_left"]))
+    found = check_values(OdometryLog(log.t, bad))
+    assert statuses(found, "values") == ["fail"] and "row(s) 8" in found[0].message
+
+
+def test_counter_wrap_names_the_counter_width():
+    left, right = square_both_ways()
+    wrapped = left.copy()
+    wrapped[200] -= 2**16  # a differenced 16-bit counter that wrapped, read without --wrap-bits
+    found = check_counters(make_log(wrapped, right))
+    assert statuses(found, "counters") == ["fail"]
+    assert "--wrap-bits 16" in found[0].advice and "ticks_left" in found[0].message
+    spiked = left.copy()
+    spiked[200] += 9000.0  # a glitch, not a power of two
+    found = check_counters(make_log(spiked, right))
+    assert statuses(found, "counters") == ["warn"] and "spike" in found[0].message
+
+
+def test_stuck_wheel_told_from_a_pivot_by_the_truth():
+    left, right = square_both_ways()
+    log = make_log(left, right)
+    truth = truth_of(log)
+    stuck = left.copy()
+    stuck[5:45] = 0.0  # the left encoder reads nothing for 2 s of straight driving
+    bad = make_log(stuck, right)
+    assert statuses(check_stuck(bad, ROBOT), "stuck") == ["warn"]  # without truth: stuck or pivot
+    assert statuses(check_stuck(bad, ROBOT, truth), "stuck") == ["fail"]  # the truth drove straight
+    # a real pivot: the left wheel stands, the right turns, and the truth turns with it
+    pivot_left = np.concatenate((left[:41], np.zeros(40), left[41:]))
+    pivot_right = np.concatenate((right[:41], np.full(40, 100.0), right[41:]))
+    pivot = make_log(pivot_left, pivot_right)
+    assert statuses(check_stuck(pivot, ROBOT, truth_of(pivot)), "stuck") == ["ok"]
+    # every channel silent while the truth moves
+    early = np.arange(len(left)) < 60
+    silent = make_log(np.where(early, 0.0, left), np.where(early, 0.0, right))
+    assert "fail" in statuses(check_stuck(silent, ROBOT, truth), "stuck")
+
+
+@pytest.mark.parametrize(("spoil", "words"), [
+    (lambda le, r: (r, le), "left and right swapped"),
+    (lambda le, r: (-le, r), "the left channel's sign flipped"),
+    (lambda le, r: (le, -r), "the right channel's sign flipped"),
+    (lambda le, r: (-le, -r), "both channels' signs flipped"),
+    (lambda le, r: (-r, le), "left and right swapped, with the left channel also negated"),
+    (lambda le, r: (r, -le), "left and right swapped, with the right channel also negated"),
+])
+def test_channel_mapping_against_truth(spoil, words):
+    left, right = square_both_ways()
+    truth = truth_of(make_log(left, right))
+    found = check_channels(make_log(*spoil(left, right)), ROBOT, truth)
+    assert statuses(found, "channels") == ["fail"]
+    assert f"with {words} the odometry" in found[0].message
+
+
+def test_channel_mapping_from_a_spin():
+    spin_left, spin_right = np.r_[0.0, np.full(100, -200.0)], np.r_[0.0, np.full(100, 200.0)]  # ccw
+    assert statuses(check_channels(make_log(spin_left, spin_right), ROBOT, spin="ccw"), "channels") == ["ok"]
+    found = check_channels(make_log(spin_right, spin_left), ROBOT, spin="ccw")
+    assert statuses(found, "channels") == ["fail"] and "swapped" in found[0].message
+    found = check_channels(make_log(-spin_left, spin_right), ROBOT, spin="ccw")
+    assert "left wheel's sign" in found[0].message
+    found = check_channels(make_log(spin_left, -spin_right), ROBOT, spin="cw")
+    assert "left wheel's sign" in found[0].message  # cw: the left wheel must go forward
+    # no truth, no spin: a flipped wheel makes a robot that mostly drives straight spin all the time
+    left = np.r_[0.0, np.full(300, 250.0), np.full(30, -100.0)]
+    right = np.r_[0.0, np.full(300, 250.0), np.full(30, 100.0)]
+    found = check_channels(make_log(-left, right), ROBOT)
+    assert statuses(found, "channels") == ["warn"] and "opposite" in found[0].message
+
+
+def test_straight_only_log_cannot_identify_the_wheel_base():
+    n = 400
+    log = make_log(np.r_[0.0, np.full(n, 250.0)], np.r_[0.0, np.full(n, 250.0)])
+    found = check_identifiable(log, ROBOT, sigma=0.005)
+    by_name = {f.message.split(":")[0]: f for f in found}
+    assert by_name["wheel base E_b"].status == "fail" and by_name["wheel base E_b"].value == math.inf
+    # The scale moves only x, along the line, by x_k per unit scale; nothing else does, so
+    # its standard error is σ/‖x‖ over the positions sampled once a second.
+    x = 0.025 * np.arange(0, n + 1, 20)[1:]
+    assert by_name["wheel scale E_s"].value == pytest.approx(0.005 / np.linalg.norm(x), rel=1e-9)
+    assert statuses(check_motion(log, ROBOT), "turning") == ["warn"]
+
+
+def test_one_way_circle_confounds_wheel_base_and_diameter_ratio():
+    """A constant-curvature circle one way: a wheel-base error and a wheel-size ratio error
+    bend it alike; driving it back the other way separates them."""
+    one_way = make_log(np.r_[0.0, np.full(600, 200.0)], np.r_[0.0, np.full(600, 260.0)])
+    both = make_log(np.r_[0.0, np.full(300, 200.0), np.full(300, 260.0)],
+                    np.r_[0.0, np.full(300, 260.0), np.full(300, 200.0)])
+    se_one = {f.message.split(":")[0]: f.value for f in check_identifiable(one_way, ROBOT)}
+    se_both = {f.message.split(":")[0]: f.value for f in check_identifiable(both, ROBOT)}
+    assert se_one["wheel base E_b"] > 5 * se_both["wheel base E_b"]
+    assert statuses(check_motion(one_way, ROBOT), "turning") == ["warn"]
+    assert statuses(check_motion(both, ROBOT), "turning") == ["ok"]
+
+
+def test_tricycle_steering_sign_against_truth():
+    robot = Tricycle(0.15, 1e-4)
+    t = PERIOD * np.arange(400)
+    log = OdometryLog(t, {"ticks": np.full(t.size, 200.0), "steer": 0.3 * np.sin(t / 3)})
+    truth = truth_of(log, robot)
+    flipped = OdometryLog(t, {"ticks": log.channels["ticks"], "steer": -log.channels["steer"]})
+    assert statuses(check_channels(log, robot, truth), "channels") == ["ok"]
+    found = check_channels(flipped, robot, truth)
+    assert statuses(found, "channels") == ["fail"] and "steering sign flipped" in found[0].message

@@ -1,0 +1,75 @@
+"""ROS bags for the tests, written with rosbags' own writers (ROS 1, ROS 2 SQLite, ROS 2 MCAP)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+BAG_FORMATS = ("ros1", "db3", "mcap")
+
+
+def _build(store: Any, msgtype: str, values: dict[str, Any]) -> Any:
+    """A message of ``msgtype`` with ``values`` (nested dicts) and zeros/empties elsewhere."""
+    from rosbags.interfaces import Nodetype
+
+    _, fields = store.fielddefs[msgtype]
+    kwargs: dict[str, Any] = {}
+    for name, (node, desc) in fields:
+        given = values.get(name)
+        if node == Nodetype.NAME:
+            kwargs[name] = _build(store, desc, given or {})
+        elif node == Nodetype.BASE:
+            base = desc[0]
+            default: Any = "" if base == "string" else 0.0 if base.startswith("float") else 0
+            kwargs[name] = default if given is None else given
+        else:  # ARRAY (fixed length) or SEQUENCE
+            (sub_node, sub_desc), length = desc
+            if sub_node == Nodetype.BASE and sub_desc[0] == "string":
+                kwargs[name] = list(given or [])
+            else:
+                default_array = np.zeros(length) if node == Nodetype.ARRAY else np.zeros(0)
+                kwargs[name] = default_array if given is None else np.asarray(given, dtype=float)
+    return store.types[msgtype](**kwargs)
+
+
+def write_bag(path: Path, fmt: str, messages: Iterable[tuple[str, str, int, dict[str, Any]]]) -> Path:
+    """Write ``(topic, msgtype, bag time [ns], fields)`` messages; returns the bag's path
+    (a ``.bag`` file for ros1, a folder for db3 and mcap)."""
+    from rosbags.rosbag1 import Writer as Writer1
+    from rosbags.rosbag2 import StoragePlugin
+    from rosbags.rosbag2 import Writer as Writer2
+    from rosbags.typesys import Stores, get_typestore
+
+    ros1 = fmt == "ros1"
+    store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    path = path.with_suffix(".bag") if ros1 else path
+    plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
+    writer = Writer1(path) if ros1 else Writer2(path, version=9, storage_plugin=plugin)
+    serialize = store.serialize_ros1 if ros1 else store.serialize_cdr
+    conns: dict[str, Any] = {}
+    with writer:
+        for topic, msgtype, ns, values in sorted(messages, key=lambda m: m[2]):
+            if topic not in conns:
+                conns[topic] = writer.add_connection(topic, msgtype, typestore=store)
+            writer.write(conns[topic], ns, serialize(_build(store, msgtype, values), msgtype))
+    return path
+
+
+def header(t_ns: int, frame_id: str = "") -> dict[str, Any]:
+    """A header stamped at ``t_ns`` nanoseconds."""
+    return {"stamp": {"sec": t_ns // 10**9, "nanosec": t_ns % 10**9}, "frame_id": frame_id}
+
+
+@pytest.fixture(scope="session")
+def bag_writer() -> Callable[..., Path]:
+    pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+    return write_bag
+
+
+@pytest.fixture(scope="session")
+def stamp() -> Callable[..., dict[str, Any]]:
+    return header

@@ -1,0 +1,324 @@
+"""ROS bags in and out (issue 12 items 4, 5): every format written with rosbags' own writers
+and read back to the same numbers; the channels checked against values worked out by hand
+from the messages (independent of the reader's resampling code)."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from odomkit.errors import InputError
+from odomkit.io.ros import UNOBSERVED_VARIANCE, ros_pose_covariance, ros_twist_covariance
+
+pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+
+from odomkit.io.bag import bag_topics, is_bag, read_bag, read_bag_odometry  # noqa: E402
+from odomkit.io.bag_writer import check_bag_out, write_odometry_bag  # noqa: E402
+
+FORMATS = ("ros1", "db3", "mcap")
+T0 = 1_700_000_000 * 10**9  # an epoch time [ns]: stamps beyond float64's integer range in ns
+JS, ODOM, TWIST, TWIST_S, IMU = ("sensor_msgs/msg/JointState", "nav_msgs/msg/Odometry",
+                                 "geometry_msgs/msg/Twist", "geometry_msgs/msg/TwistStamped",
+                                 "sensor_msgs/msg/Imu")
+
+
+def seconds(ns: int) -> float:
+    """The float nearest to ns·1e-9 (exact rational arithmetic)."""
+    return float(Fraction(ns, 10**9))
+
+
+def joint_messages(stamps_ns, left, right, extra=True, stamp=None):
+    """JointState messages; each also carries an arm joint, in a shuffled order."""
+    out = []
+    for k, ns in enumerate(stamps_ns):
+        names, pos = ["wheel_right_joint", "arm", "wheel_left_joint"], [right[k], 0.5, left[k]]
+        if not extra:
+            names, pos = ["wheel_right_joint", "wheel_left_joint"], [right[k], left[k]]
+        fields = {"header": stamp(ns), "name": names, "position": pos}
+        out.append(("/joint_states", JS, ns + 3_000_000, fields))
+    return out
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_joint_positions_read_back_as_wheel_angle_increments(tmp_path, bag_writer, stamp, fmt):
+    stamps = [T0 + k * 20_000_001 + (k % 3) * 7 for k in range(6)]
+    left = [0.0, 0.1, 0.25, 0.25, 0.2, 0.9]
+    right = [1.0, 1.3, 1.3, 1.6, 2.0, 2.0]
+    path = bag_writer(tmp_path / "js", fmt, joint_messages(stamps, left, right, stamp=stamp))
+    log = read_bag(path, ["/joint_states"], ["wheel_left_joint", "wheel_right_joint"])
+    assert log.t.tolist() == [seconds(ns) for ns in stamps]  # header stamps, to the float
+    assert log.channels["ticks_left"].tolist() == pytest.approx([0] + list(np.diff(left)), abs=1e-15)
+    assert log.channels["ticks_right"].tolist() == pytest.approx([0] + list(np.diff(right)), abs=1e-15)
+    # The bag's own times instead (3 ms later):
+    late = read_bag(path, ["joint_states"], ["wheel_left_joint", "wheel_right_joint"], receive_time=True)
+    assert late.t.tolist() == [seconds(ns + 3_000_000) for ns in stamps]
+    # Joints found by their names: one "left", one "right".
+    auto = read_bag(path, ["/joint_states"])
+    assert auto.channels["ticks_left"].tolist() == log.channels["ticks_left"].tolist()
+    assert is_bag(path) and bag_topics(path) == {"/joint_states": JS}
+
+
+def test_one_joint_is_the_ticks_channel_and_velocities_are_integrated(tmp_path, bag_writer, stamp):
+    # Velocity ω(t) = 3 t (rad/s) sampled at uneven times: the wheel turns exactly
+    # 1.5 (t_k² − t_{k−1}²) over each step, and the trapezoid rule is exact for a line.
+    t = np.array([0.0, 0.1, 0.25, 0.3, 0.7, 1.0])
+    msgs = [("/js", JS, T0 + round(x * 1e9), {"header": stamp(T0 + round(x * 1e9)), "name": ["wheel"],
+                                              "velocity": [3 * x]}) for x in t]
+    log = read_bag(bag_writer(tmp_path / "v", "mcap", msgs))
+    expected = np.r_[0.0, 1.5 * np.diff(t**2)]
+    assert np.allclose(log.channels["ticks"], expected, rtol=1e-6, atol=1e-15)  # t rounded to ns
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_twist_messages_give_speed_and_yaw_rate(tmp_path, bag_writer, stamp, fmt):
+    v, w = [0.5, 0.6, 0.7, 0.8], [0.1, -0.2, 0.3, -0.4]
+    stamps = [T0 + k * 50_000_000 for k in range(4)]
+    msgs = []
+    for k, ns in enumerate(stamps):
+        twist = {"linear": {"x": v[k]}, "angular": {"z": w[k]}}
+        msgs.append(("/odom", ODOM, ns + 1000, {"header": stamp(ns, "odom"), "twist": {"twist": twist}}))
+        msgs.append(("/cmd_vel", TWIST, ns + 2000, twist))
+        msgs.append(("/cmd_stamped", TWIST_S, ns + 3000, {"header": stamp(ns), "twist": twist}))
+    path = bag_writer(tmp_path / "tw", fmt, msgs)
+    # An Odometry twist is the motion over the interval ending at its stamp: step k uses k+1.
+    odom = read_bag(path, ["/odom"])
+    assert odom.channels["speed"].tolist() == v[1:] + v[-1:]
+    assert odom.channels["yaw_rate"].tolist() == w[1:] + w[-1:]
+    # A command holds from its stamp on; Twist has no header, so the bag's time is used.
+    cmd = read_bag(path, ["/cmd_vel"])
+    assert cmd.channels["speed"].tolist() == v and cmd.channels["yaw_rate"].tolist() == w
+    assert cmd.t.tolist() == [seconds(ns + 2000) for ns in stamps]
+    stamped = read_bag(path, ["/cmd_stamped"])
+    assert stamped.channels["speed"].tolist() == v and stamped.t.tolist() == [seconds(ns) for ns in stamps]
+
+
+def test_imu_gives_the_gyro_rate_and_its_heading_when_it_has_one(tmp_path, bag_writer, stamp):
+    t = np.linspace(0.0, 1.0, 11)
+    yaw = 3.0 * t  # passes ±π: the heading channel is unwrapped
+    msgs = []
+    for x, th in zip(t, yaw, strict=True):
+        ns = T0 + round(x * 1e9)
+        q = {"z": math.sin(th / 2), "w": math.cos(th / 2)}
+        rate = {"z": 2 * x}
+        msgs.append(("/imu", IMU, ns, {"header": stamp(ns), "orientation": q, "angular_velocity": rate}))
+        msgs.append(("/imu_raw", IMU, ns + 1, {"header": stamp(ns), "angular_velocity": rate,
+                                               "orientation_covariance": [-1.0] + [0.0] * 8}))
+    path = bag_writer(tmp_path / "imu", "db3", msgs)
+    log = read_bag(path, ["/imu"])
+    # A sampled rate: step k uses the mean of both ends (exact for this line).
+    assert np.allclose(log.channels["yaw_rate"][:-1], t[:-1] + t[1:], atol=1e-8)
+    assert np.allclose(log.channels["heading"], yaw, atol=1e-12)
+    assert "heading" not in read_bag(path, ["/imu_raw"]).channels  # orientation_covariance[0] = -1
+
+
+def test_a_second_topic_is_resampled_at_the_first_ones_rows(tmp_path, bag_writer, stamp):
+    # /odom at 0, 0.5, 1.0 s; a gyro yaw rate ω(t) = 1 + 4t at 0.05 s steps from 0.1 s: the
+    # mean over [0.5, 1.0] is 1 + 4·0.75 = 4; the row at 0 s lies before the gyro's span.
+    msgs = []
+    for x in (0.0, 0.5, 1.0, 1.5):
+        ns = T0 + round(x * 1e9)
+        msgs.append(("/odom", ODOM, ns, {"header": stamp(ns), "twist": {"twist": {"linear": {"x": 2.0 + x},
+                                                                                "angular": {"z": 9.0}}}}))
+    for k in range(2, 29):
+        ns = T0 + k * 50_000_000
+        msgs.append(("/imu", IMU, ns, {"header": stamp(ns), "angular_velocity": {"z": 1 + 4 * k * 0.05},
+                                       "orientation_covariance": [-1.0] + [0.0] * 8}))
+    path = bag_writer(tmp_path / "two", "mcap", msgs)
+    with pytest.warns(UserWarning, match=r"2 of 4 /odom messages fall outside /imu's time span"):
+        log = read_bag(path, ["/odom", "/imu"])
+    assert log.t.tolist() == [seconds(T0 + 500_000_000), seconds(T0 + 10**9)]
+    assert log.channels["yaw_rate"][0] == pytest.approx(4.0, abs=1e-9)  # the gyro's, not /odom's 9
+    assert log.channels["speed"][0] == 3.0  # /odom's own: the twist at 1.0 s
+
+
+def test_a_held_command_resampled_is_its_time_weighted_mean(tmp_path, bag_writer, stamp):
+    msgs = [("/rows", TWIST_S, T0 + round(x * 1e9), {"header": stamp(T0 + round(x * 1e9))})
+            for x in (0, 0.5, 1)]
+    for x, v in ((0.0, 1.0), (0.3, 2.0), (0.7, 5.0), (1.0, 7.0)):
+        msgs.append(("/cmd", TWIST_S, T0 + round(x * 1e9), {"header": stamp(T0 + round(x * 1e9)),
+                                                            "twist": {"linear": {"x": v}}}))
+    log = read_bag(bag_writer(tmp_path / "held", "db3", msgs), ["/rows", "/cmd"])
+    by_hand = [(1.0 * 0.3 + 2.0 * 0.2) / 0.5, (2.0 * 0.2 + 5.0 * 0.3) / 0.5, 7.0]
+    assert log.channels["speed"] == pytest.approx(by_hand, rel=1e-14)
+
+
+def errors(call) -> str:
+    with pytest.raises(InputError) as info:
+        call()
+    text = str(info.value)
+    assert "\n" not in text
+    return text
+
+
+def test_what_is_not_there_is_named_with_what_is(tmp_path, bag_writer, stamp):
+    stamps = [T0 + k * 10**7 for k in range(3)]
+    msgs = joint_messages(stamps, [0, 1, 2], [0, 1, 2], stamp=stamp)
+    msgs.append(("/scan", "sensor_msgs/msg/LaserScan", T0, {"header": stamp(T0)}))
+    msgs += [("/cmd_vel", TWIST, T0 + k, {}) for k in range(2)]
+    path = bag_writer(tmp_path / "b", "ros1", msgs)
+    text = errors(lambda: read_bag(path, ["/odom"]))
+    assert "no topic /odom in the bag; topics odomkit reads: /cmd_vel (Twist), /joint_states (JointState); " \
+           "1 other topic" in text
+    assert "needs --topic" in errors(lambda: read_bag(path))  # two readable topics: which?
+    assert "its joints are wheel_right_joint, arm, wheel_left_joint" in errors(
+        lambda: read_bag(path, ["/joint_states"], ["wheel_left", "wheel_right_joint"]))
+    assert "sensor_msgs/msg/LaserScan" in errors(lambda: read_bag(path, ["/scan"]))
+    assert "--joints applies to a JointState topic" in errors(lambda: read_bag(path, ["/cmd_vel"], ["a"]))
+    unnamed = [("/js", JS, T0 + k, {"header": stamp(T0 + k), "name": ["a", "b"], "position": [k, k]})
+               for k in range(3)]
+    plain = bag_writer(tmp_path / "c", "mcap", unnamed)
+    # Neither joint says left or right: no guess (and the only topic needs no --topic).
+    assert "name the wheel joints with --joints LEFT,RIGHT (or one joint); its joints are a, b" in errors(
+        lambda: read_bag(plain))
+    junk = tmp_path / "junk.bag"
+    junk.write_text("not a bag")
+    assert "not a readable ROS bag" in errors(lambda: read_bag(junk))
+
+
+def test_stamps_going_backwards_or_never_set_are_refused(tmp_path, bag_writer, stamp):
+    stamps = [T0, T0 + 2 * 10**7, T0 + 10**7]
+    msgs = [("/js", JS, T0 + k * 10**8, {"header": stamp(ns), "name": ["l", "r"], "position": [k, k]})
+            for k, ns in enumerate(stamps)]
+    path = bag_writer(tmp_path / "back", "mcap", msgs)
+    text = errors(lambda: read_bag(path, ["/js"], ["l", "r"]))
+    assert "header stamps go backwards at message 3" in text and "--bag-time" in text
+    assert len(read_bag(path, ["/js"], ["l", "r"], receive_time=True)) == 3  # the bag's time is ordered
+    unset = [("/js", JS, T0 + k * 10**8, {"name": ["l", "r"], "position": [k, k]}) for k in range(3)]
+    assert "never filled in" in errors(lambda: read_bag(bag_writer(tmp_path / "zero", "db3", unset), ["/js"]))
+
+
+def test_a_joint_that_jumps_by_more_than_pi_warns(tmp_path, bag_writer, stamp):
+    msgs = [("/js", JS, T0 + k * 10**8, {"header": stamp(T0 + k * 10**8), "name": ["w"],
+                                          "position": [p]}) for k, p in enumerate([3.0, -3.0, -2.9])]
+    with pytest.warns(UserWarning, match="jumps by more than π"):
+        read_bag(bag_writer(tmp_path / "wrap", "mcap", msgs))
+
+
+def _track_arrays(n=7):
+    rng = np.random.default_rng(5)
+    t = np.array([seconds(T0) + 0.1 * k for k in range(n)])
+    poses = np.column_stack((rng.normal(size=n), rng.normal(size=n), np.linspace(0, 9.0, n)))  # θ past 2π
+    a = rng.normal(size=(n, 3, 3))
+    cov = a @ a.transpose(0, 2, 1)
+    twist = rng.normal(size=(n, 2))
+    twist[0] = np.nan  # no step ends at the first row
+    b = rng.normal(size=(n, 2, 2))
+    return t, poses, cov, twist, b @ b.transpose(0, 2, 1)
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_odometry_written_reads_back_the_same_numbers(tmp_path, fmt):
+    t, poses, cov, twist, twist_cov = _track_arrays()
+    target = check_bag_out(tmp_path / ("odo.bag" if fmt == "ros1" else "odo"), fmt)
+    path = write_odometry_bag(target, t, poses, cov, twist, twist_cov, frame_id="map", child_frame_id="base")
+    back = read_bag_odometry(path)
+    assert back.t.tolist() == t.tolist()  # each float time to the nanosecond and back, exactly
+    assert back.poses[:, :2].tolist() == poses[:, :2].tolist()
+    assert np.abs(back.poses[:, 2] - poses[:, 2]).max() < 4e-15
+    assert back.pose_covariance.tolist() == [ros_pose_covariance(c) for c in cov]
+    assert np.array_equal(back.cov, cov)
+    assert back.twist[1:].tolist() == twist[1:].tolist() and back.twist[0].tolist() == [0.0, 0.0]
+    assert back.twist_covariance[1:].tolist() == [ros_twist_covariance(c) for c in twist_cov[1:]]
+    assert back.twist_covariance[0].tolist() == np.diag([UNOBSERVED_VARIANCE] * 6).reshape(-1).tolist()
+    assert (back.frame_id, back.child_frame_id) == ("map", "base")
+
+
+def test_the_6x6_layout_seen_by_rosbags_itself(tmp_path):
+    """Independent of odomkit's reader: the raw messages through rosbags' AnyReader."""
+    from rosbags.highlevel import AnyReader
+
+    t, poses, cov, twist, twist_cov = _track_arrays(3)
+    path = write_odometry_bag(check_bag_out(tmp_path / "raw"), t, poses, cov, twist, twist_cov)
+    with AnyReader([path]) as reader:
+        msgs = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages()]
+    m = msgs[2]
+    c6 = np.asarray(m.pose.covariance).reshape(6, 6)
+    assert c6[0, 0] == cov[2, 0, 0] and c6[0, 5] == cov[2, 0, 2] and c6[5, 1] == cov[2, 2, 1]
+    assert c6[5, 5] == cov[2, 2, 2] and [c6[i, i] for i in (2, 3, 4)] == [UNOBSERVED_VARIANCE] * 3
+    assert np.count_nonzero(c6) == 9 + 3
+    w6 = np.asarray(m.twist.covariance).reshape(6, 6)
+    assert w6[0, 0] == twist_cov[2, 0, 0] and w6[0, 5] == twist_cov[2, 0, 1]
+    assert w6[5, 5] == twist_cov[2, 1, 1]
+    assert [w6[i, i] for i in (1, 2, 3, 4)] == [UNOBSERVED_VARIANCE] * 4
+    assert m.twist.twist.linear.x == twist[2, 0] and m.twist.twist.angular.z == twist[2, 1]
+    q = m.pose.pose.orientation
+    assert (q.x, q.y) == (0.0, 0.0) and q.w >= 0
+    assert math.atan2(q.z, q.w) * 2 == pytest.approx(poses[2, 2] - 2 * math.pi, abs=1e-15)
+
+
+def test_bag_out_paths_are_checked(tmp_path):
+    with pytest.raises(InputError, match="give a .bag path"):
+        check_bag_out(tmp_path / "x", "ros1")
+    with pytest.raises(InputError, match="a .bag path is a ROS 1 bag"):
+        check_bag_out(tmp_path / "x.bag", "db3")
+    with pytest.raises(InputError, match="--bag-format must be one of"):
+        check_bag_out(tmp_path / "x", "ros3")
+    other = tmp_path / "notes"
+    other.mkdir()
+    (other / "a.txt").write_text("keep me")
+    with pytest.raises(InputError, match="not a ROS 2 bag"):
+        check_bag_out(other, overwrite=True)
+    t, poses, *_ = _track_arrays(2)
+    bag = write_odometry_bag(check_bag_out(tmp_path / "b"), t, poses)
+    with pytest.raises(InputError, match="exists already"):
+        check_bag_out(bag)
+    with pytest.raises(InputError, match="replace an input"):
+        check_bag_out(bag, overwrite=True, inputs=[bag / "b.mcap"])
+    again = write_odometry_bag(check_bag_out(bag, "db3", overwrite=True), t, poses + 1)
+    assert sorted(p.name for p in again.iterdir()) == ["b.db3", "metadata.yaml"]
+    assert read_bag_odometry(again).poses[:, 0].tolist() == (poses[:, 0] + 1).tolist()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        unknown = read_bag_odometry(again).pose_covariance  # no covariance: "unknown", large
+    assert unknown[0].tolist() == np.diag([UNOBSERVED_VARIANCE] * 6).reshape(-1).tolist()
+
+
+def test_twist_covariance_is_the_step_covariance_over_dt_squared():
+    """Hand formula for a differential drive (Borenstein–Feng eq. 2.2–2.4, variance k²|d| per
+    wheel): Δd = (d_L + d_R)/2, Δθ = (d_R − d_L)/b."""
+    from odomkit.io.bag_writer import track_twist
+    from odomkit.log import OdometryLog
+    from odomkit.noise import WheelNoise
+    from odomkit.robot import DiffDrive
+    from odomkit.track import dead_reckon_log
+
+    b, kl, kr = 0.4, 0.002, 0.003
+    t = np.array([0.0, 0.1, 0.1, 0.35, 0.5])  # a repeated time: a zero-length step
+    dl = np.array([0.0, 0.01, 0.0, -0.02, 0.03])
+    dr = np.array([0.0, 0.02, 0.0, 0.01, 0.03])
+    log = OdometryLog(t, {"dist_left": dl, "dist_right": dr})
+    track = dead_reckon_log(log, DiffDrive(b), noise=WheelNoise(kl, kr))
+    twist, cov = track_twist(track, WheelNoise(kl, kr))
+    assert np.isnan(twist[[0, 2]]).all() and np.isnan(cov[[0, 2]]).all()
+    for k in (1, 3, 4):
+        dt = t[k] - t[k - 1]
+        vl, vr = kl**2 * abs(dl[k]), kr**2 * abs(dr[k])
+        assert twist[k] == pytest.approx([(dl[k] + dr[k]) / 2 / dt, (dr[k] - dl[k]) / b / dt], rel=1e-14)
+        c = (vr - vl) / (2 * b)
+        expected = np.array([[(vl + vr) / 4, c], [c, (vl + vr) / b**2]]) / dt**2
+        assert cov[k] == pytest.approx(expected, rel=1e-12)
+    assert track_twist(track)[1] is None
+
+
+def test_twist_covariance_adds_the_spread_of_a_bias():
+    """A left-wheel scale error s (σ_s) moves each step by s·d_L: J = (d_L/2, −d_L/b)."""
+    from odomkit.io.bag_writer import track_twist
+    from odomkit.log import OdometryLog
+    from odomkit.noise import ParameterUncertainty, WheelNoise
+    from odomkit.robot import DiffDrive
+    from odomkit.track import dead_reckon_log
+
+    b, k, s = 0.3, 0.001, 0.01
+    t, dl, dr = np.array([0.0, 0.2, 0.5]), np.array([0.0, 0.04, -0.01]), np.array([0.0, 0.05, 0.02])
+    noise = (WheelNoise(k, k), ParameterUncertainty(sigma_scale_left=s))
+    track = dead_reckon_log(OdometryLog(t, {"dist_left": dl, "dist_right": dr}), DiffDrive(b), noise=noise)
+    _, with_bias = track_twist(track, noise)
+    _, white = track_twist(track, noise[0])
+    for i in (1, 2):
+        jac = np.array([dl[i] / 2, -dl[i] / b])
+        assert with_bias[i] - white[i] == pytest.approx(s**2 * np.outer(jac, jac) / (t[i] - t[i - 1]) ** 2,
+                                                        rel=1e-12)

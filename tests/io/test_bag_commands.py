@@ -1,0 +1,181 @@
+"""Commands on ROS bags (issue 12 items 4, 5): the real OptiOdom runs (encoder ticks with
+OptiTrack truth) recorded as ``sensor_msgs/JointState`` wheel angles plus a
+``geometry_msgs/PoseStamped`` truth topic must give what the same runs give as text logs
+(the independent reference: the text reader and the robot file in ticks), and a track
+written as a bag must read back as the CSV track. Bad input is one line, exit 2."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from odomkit.data import builtin_data_path
+from odomkit.io.optiodom import read_run
+from odomkit.io.trackio import read_track_csv
+
+pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+
+from odomkit.io.bag import read_bag_odometry  # noqa: E402
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
+TICKS_PER_TURN = 64 * 43.7  # encoder resolution × gear ratio (optiodom_diff.toml)
+T0 = 1_687_000_000 * 10**9  # the runs' times, moved to an epoch time [ns]
+# The same robot with wheel angles in radians as its "ticks": metres per tick = radius.
+RAD_ROBOT = """[robot]
+type = "diff"
+wheel_base = 0.2
+wheel_radius = 0.042
+encoder_resolution = 6.283185307179586
+[noise]
+k_left = 0.001
+k_right = 0.001
+"""
+
+
+def run_bag(bag_writer, stamp, run, path, fmt="mcap"):
+    log = read_run(run)
+    turn = 2 * math.pi / TICKS_PER_TURN
+    left = np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]) * turn
+    right = np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]) * turn
+    msgs = []
+    for k, t in enumerate(log.t):
+        ns = T0 + round(t * 1e9)
+        x, y, th = log.ground_truth[k]
+        msgs.append(("/joint_states", "sensor_msgs/msg/JointState", ns + 2_000_000,
+                     {"header": stamp(ns), "name": ["wheel_left_joint", "wheel_right_joint"],
+                      "position": [left[k], right[k]]}))
+        msgs.append(("/mocap", "geometry_msgs/msg/PoseStamped", ns + 1_000_000,
+                     {"header": stamp(ns, "world"), "pose": {"position": {"x": x, "y": y},
+                                                             "orientation": {"z": math.sin(th / 2),
+                                                                             "w": math.cos(th / 2)}}}))
+    return bag_writer(path, fmt, msgs)
+
+
+@pytest.fixture(scope="module")
+def bags(tmp_path_factory, bag_writer, stamp):
+    d = tmp_path_factory.mktemp("bags")
+    (d / "rad.toml").write_text(RAD_ROBOT)
+    (d / "gyro.toml").write_text('[robot]\ntype = "gyro"\n')
+    made = {fmt: run_bag(bag_writer, stamp, RUNS[0], d / f"run1_{fmt}", fmt)
+            for fmt in ("ros1", "db3", "mcap")}
+    made["runs"] = [made["mcap"]] + [run_bag(bag_writer, stamp, r, d / f"run{i + 2}")
+                                     for i, r in enumerate(RUNS[1:])]
+    made["dir"] = d
+    return made
+
+
+def run_json(run_cli, *args):
+    code, out, err = run_cli(*args, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+def close(a, b, rel=1e-9, abs_=1e-12, skip=("outputs", "warnings", "duration", "source", "sources", "files")):
+    if isinstance(a, dict):
+        assert a.keys() == b.keys()
+        for key in a.keys() - set(skip):
+            close(a[key], b[key], rel, abs_, skip)
+    elif isinstance(a, list):
+        assert len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            close(x, y, rel, abs_, skip)
+    elif isinstance(a, float):
+        assert a == pytest.approx(b, rel=rel, abs=abs_)
+    elif not isinstance(a, str):
+        assert a == b
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "db3", "mcap"])
+def test_track_on_a_joint_state_bag_equals_the_text_log(run_cli, bags, fmt):
+    bag = run_json(run_cli, "track", bags[fmt], "--robot", bags["dir"] / "rad.toml",
+                   "--topic", "/joint_states", "--joints", "wheel_left_joint,wheel_right_joint")
+    text = run_json(run_cli, "track", RUNS[0], "--robot", ROBOT, "--no-covariance")
+    text_cov = run_json(run_cli, "track", RUNS[0], "--robot", ROBOT)
+    keys = ("pose", "path_length", "samples")
+    close({k: bag[k] for k in keys}, {k: text[k] for k in keys})
+    close(bag["cov"], text_cov["cov"])
+    assert bag["duration"] == pytest.approx(text["duration"], abs=1e-6)  # epoch seconds: 0.24 µs steps
+
+
+def test_a_track_written_as_a_bag_reads_back_as_the_csv_track(run_cli, bags, tmp_path):
+    for fmt, name in (("ros1", "t.bag"), ("db3", "t_db3"), ("mcap", "t_mcap")):
+        out, bag = tmp_path / f"{fmt}.csv", tmp_path / name
+        run_json(run_cli, "track", RUNS[0], "--robot", ROBOT, "--out", out, "--bag-out", bag,
+                 "--bag-format", fmt, "--frame-id", "map", "--child-frame-id", "base_footprint")
+        csv, odo = read_track_csv(out), read_bag_odometry(bag)
+        assert np.abs(odo.t - csv.t).max() <= 0.5e-9  # stamps hold nanoseconds
+        assert odo.poses[:, :2].tolist() == csv.poses[:, :2].tolist()
+        assert np.abs(odo.poses[:, 2] - csv.poses[:, 2]).max() < 1e-14
+        upper = np.triu_indices(3)
+        assert odo.cov[:, upper[0], upper[1]].tolist() == csv.cov[:, upper[0], upper[1]].tolist()
+        assert (odo.frame_id, odo.child_frame_id) == ("map", "base_footprint")
+    # The twists are the steps: read back as speed and yaw rate (a gyro robot), they give
+    # the same track again.
+    again = run_json(run_cli, "track", tmp_path / "t_mcap", "--robot", bags["dir"] / "gyro.toml")
+    final = read_track_csv(tmp_path / "mcap.csv").poses[-1]
+    assert again["pose"][:2] == pytest.approx(final[:2].tolist(), abs=1e-12)
+    assert again["theta_unwrapped"] == pytest.approx(final[2], abs=1e-12)
+
+
+# Windows of 29.98 s: the runs' rows fall every 50 ms, and a 30 s boundary would land on a
+# row, where the text log's times (29.999999999999996) and the bag's (30 s to the nanosecond)
+# would end the window one row apart.
+
+
+def test_evaluate_on_a_bag_with_a_truth_topic_equals_the_text_log(run_cli, bags):
+    bag = run_json(run_cli, "evaluate", bags["mcap"], "--robot", bags["dir"] / "rad.toml",
+                   "--truth-topic", "/mocap", "--window", "29.98s")
+    text = run_json(run_cli, "evaluate", RUNS[0], "--robot", ROBOT, "--window", "29.98s")
+    close(bag, text, rel=1e-8, abs_=1e-10)
+
+
+def test_calibrate_on_bags_equals_the_text_logs(run_cli, bags):
+    bag = run_json(run_cli, "calibrate", *bags["runs"], "--robot", bags["dir"] / "rad.toml",
+                   "--truth-topic", "mocap")
+    text = run_json(run_cli, "calibrate", *RUNS, "--robot", ROBOT)
+    for key in ("c_left", "c_right", "c_wheel_base"):
+        assert bag["robot"][key] == pytest.approx(text["robot"][key], rel=1e-9), key
+
+
+def test_fit_noise_on_bags_equals_the_text_logs(run_cli, bags, tmp_path):
+    logs = [a for p in bags["runs"][:3] for a in ("--log", p)]
+    bag = run_json(run_cli, "fit-noise", "--robot", bags["dir"] / "rad.toml", *logs,
+                   "--truth-topic", "/mocap", "--out", tmp_path / "a.toml", "--window", "29.98s")
+    text = run_json(run_cli, "fit-noise", "--robot", ROBOT, *[a for p in RUNS[:3] for a in ("--log", p)],
+                    "--out", tmp_path / "b.toml", "--window", "29.98s")
+    close(bag["parameters"], text["parameters"], rel=1e-8, abs_=1e-15)
+    assert bag["windows"] == text["windows"] == 9
+
+
+def one_line_error(run_cli, *args):
+    code, out, err = run_cli(*args)
+    assert code == 2 and out == ""
+    assert err.startswith("odomkit: error: ") and err.count("\n") == 1 and "Traceback" not in err
+    return err
+
+
+def test_bad_bags_are_one_line_exit_2(run_cli, bags, bag_writer, stamp, tmp_path):
+    robot = bags["dir"] / "rad.toml"
+    err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--topic", "/odom")
+    assert "no topic /odom in the bag; topics odomkit reads: /joint_states (JointState); 1 other" in err
+    err = one_line_error(run_cli, "track", bags["ros1"], "--robot", robot, "--joints", "left,right")
+    assert "no joint named 'left'; its joints are wheel_left_joint, wheel_right_joint" in err
+    back = [("/js", "sensor_msgs/msg/JointState", T0 + k * 10**8,
+             {"header": stamp(T0 + (1 - k) * 10**8), "name": ["l", "r"], "position": [k, k]})
+            for k in range(2)]
+    err = one_line_error(run_cli, "track", bag_writer(tmp_path / "back", "db3", back), "--robot", robot)
+    assert "header stamps go backwards at message 2" in err
+    err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--truth-topic", "/joint_states")
+    assert "odomkit reads Odometry, PoseStamped, PoseWithCovarianceStamped (pose topics: /mocap" in err
+    err = one_line_error(run_cli, "track", RUNS[0], "--robot", ROBOT, "--topic", "/odom")
+    assert "--topic does not apply to a optiodom log" in err
+    err = one_line_error(run_cli, "track", RUNS[0], "--robot", ROBOT, "--bag-out", tmp_path / "a.bag",
+                         "--bag-format", "mcap")
+    assert "a .bag path is a ROS 1 bag" in err
+    err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--bag-out", bags["mcap"],
+                         "--force")
+    assert "would replace an input" in err

@@ -1,0 +1,176 @@
+"""``odomkit fit-noise`` end to end: files in, fitted robot file and JSON out.
+
+Inputs are the built-in OptiOdom runs (encoder ticks with OptiTrack truth), also written
+out again as a plain CSV log plus a position-only truth file; the fitted robot file is
+read back and must hold the reported values; bad input is one line and exit status 2.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from odomkit.data import builtin_data_path
+from odomkit.io.optiodom import read_run
+from odomkit.io.robotfile import read_robot
+from odomkit.noise import ParameterUncertainty, WheelNoise
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
+
+
+def _logs(runs=RUNS):
+    return [a for run in runs for a in ("--log", str(run))]
+
+
+def _fit(run_cli, tmp_path, *args, name="fitted.toml"):
+    out = tmp_path / name
+    code, stdout, stderr = run_cli("fit-noise", "--robot", ROBOT, *args, "--out", out, "--json")
+    assert code == 0, stderr
+    return json.loads(stdout), out
+
+
+def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path):
+    result, out = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--kinds", "white,bias")
+    for key in ("parameters", "interval95", "windows", "log_likelihood", "warnings",
+                "coverage_in_sample", "per_log", "outputs"):
+        assert key in result, key
+    assert set(result["parameters"]) == {"k_left", "k_right", "sigma_wheel_base", "sigma_scale_left",
+                                         "sigma_scale_right"}
+    for key, value in result["parameters"].items():
+        lo, hi = result["interval95"][key]
+        assert lo <= value <= hi
+    assert set(result["coverage_in_sample"]) == {"0.5", "0.9", "0.95", "0.99"}
+    assert len(result["per_log"]) == 6 and result["logs"] == 6
+    # 10 s windows over six runs of this experiment, each restarted from truth.
+    assert result["windows"] == sum(p["windows"] for p in result["per_log"]) > 30
+    robot, noise = read_robot(out)
+    wheel = next(m for m in noise if isinstance(m, WheelNoise))
+    params = next(m for m in noise if isinstance(m, ParameterUncertainty))
+    assert wheel.k_left == result["parameters"]["k_left"]
+    assert params.sigma_scale_right == result["parameters"]["sigma_scale_right"]
+    assert params.mode == "bias"
+    assert robot.wheel_base == pytest.approx(0.2)
+
+
+def test_the_result_does_not_depend_on_the_number_of_workers(run_cli, tmp_path):
+    one, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "20s", "--workers", "1", name="a.toml")
+    two, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "20s", "--workers", "2", name="b.toml")
+    for result in (one, two):
+        result.pop("seconds")
+        result.pop("outputs")
+    assert one == two
+
+
+def test_text_logs_with_position_only_truth_files(run_cli, tmp_path):
+    """The same runs as plain CSV logs without truth plus truth files t,x,y on their own clock:
+    the heading at each window start is fitted to the truth positions."""
+    args = []
+    for i, run in enumerate(RUNS[:4]):
+        log = read_run(run)
+        log_path = tmp_path / f"log{i}.csv"
+        rows = np.column_stack((log.t, log.channels["ticks_left"], log.channels["ticks_right"]))
+        np.savetxt(log_path, rows, delimiter=",", header="t,L,R", comments="", fmt="%.17g")
+        truth_path = tmp_path / f"truth{i}.csv"
+        gt = log.ground_truth
+        # OptiTrack at its own clock: every other row, shifted by 10 ms.
+        np.savetxt(truth_path, np.column_stack((log.t[::2] + 0.01, gt[::2, :2])), delimiter=",",
+                   header="t,x,y", comments="", fmt="%.17g")
+        args += ["--log", str(log_path), "--truth", str(truth_path)]
+    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s",
+                     "--columns", "t=t,ticks_left=L,ticks_right=R", "--truth-sigma", "0.001")
+    assert result["windows"] > 20
+    assert set(result["parameters"]) == {"k_left", "k_right"}
+    assert all(0 < v < 0.1 for v in result["parameters"].values())
+
+
+def test_cross_validation_is_reported_when_asked(run_cli, tmp_path):
+    result, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:4]), "--window", "20s", "--cross-validate")
+    cv = result["cross_validation"]
+    assert cv["folds"] == 4 and set(cv["coverage"]) == {"0.5", "0.9", "0.95", "0.99"}
+
+
+def _error(run_cli, *args):
+    code, stdout, stderr = run_cli("fit-noise", *args)
+    assert code == 2
+    assert stdout == ""
+    lines = stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("odomkit: error: "), stderr
+    return lines[0]
+
+
+def test_a_window_longer_than_the_log_is_one_line_exit_2(run_cli, tmp_path):
+    line = _error(run_cli, "--robot", ROBOT, "--log", RUNS[0], "--window", "1h", "--out", tmp_path / "x.toml")
+    assert "longer than the log" in line and str(RUNS[0]) in line
+    assert not (tmp_path / "x.toml").exists()
+
+
+def test_a_log_without_motion_is_one_line_exit_2(run_cli, tmp_path):
+    log = tmp_path / "still.csv"
+    t = np.arange(200) * 0.05
+    np.savetxt(log, np.column_stack((t, np.zeros(200), np.zeros(200), 1 + 0 * t, 2 + 0 * t, 0 * t)),
+               delimiter=",", header="t,L,R,gx,gy,gth", comments="", fmt="%.17g")
+    line = _error(run_cli, "--robot", ROBOT, "--log", log, "--window", "2s", "--out", tmp_path / "x.toml",
+                  "--columns", "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth")
+    assert "no motion" in line and "still.csv" in line
+
+
+def test_a_truth_file_with_nan_is_one_line_exit_2(run_cli, tmp_path):
+    truth = tmp_path / "gt.csv"
+    log = read_run(RUNS[0])
+    gt = log.ground_truth.copy()
+    gt[50, 1] = np.nan
+    np.savetxt(truth, np.column_stack((log.t, gt)), delimiter=",", header="t,x,y,theta", comments="")
+    line = _error(run_cli, "--robot", ROBOT, "--log", RUNS[0], "--truth", truth, "--out", tmp_path / "x.toml")
+    assert "gt.csv, line 52" in line and "nan" in line.lower()
+
+
+def test_it_never_overwrites_without_force(run_cli, tmp_path):
+    out = tmp_path / "fitted.toml"
+    out.write_text("precious")
+    line = _error(run_cli, "--robot", ROBOT, "--log", RUNS[0], "--out", out)
+    assert "--force" in line
+    assert out.read_text() == "precious"
+    code, _, stderr = run_cli("fit-noise", "--robot", ROBOT, "--log", RUNS[0], "--out", out, "--force",
+                              "--json")
+    assert code == 0, stderr
+    assert "[noise]" in out.read_text()
+
+
+@pytest.mark.parametrize(("args", "message"), [
+    (["--kinds", "colour"], "--kinds"),
+    (["--window", "ten"], "--window"),
+    (["--truth", "a.csv", "--truth", "b.csv"], "one --truth per"),
+])
+def test_bad_flags_are_one_line_exit_2(run_cli, tmp_path, args, message):
+    line = _error(run_cli, "--robot", ROBOT, "--log", RUNS[0], "--out", tmp_path / "x.toml", *args)
+    assert message in line
+
+
+def test_some_logs_too_short_are_left_out_with_a_warning(run_cli, tmp_path):
+    short = tmp_path / "short_run-01.csv"
+    lines = Path(RUNS[0]).read_text().splitlines()[:40]  # 2 s of the run
+    short.write_text("\n".join(lines) + "\n")
+    result, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--log", str(short), "--window", "10s")
+    assert result["logs_left_out"] == [str(short)]
+    assert any("1 of 3 logs left out" in w for w in result["warnings"])
+
+
+def test_a_dask_cluster_gives_the_same_fit(tmp_path):
+    distributed = pytest.importorskip("dask.distributed")
+    from odomkit.workflows.fit_noise import fit_noise_files
+    from odomkit.workflows.truth import TruthOptions
+
+    truths = [TruthOptions()] * 3
+    local = fit_noise_files(ROBOT, RUNS[:3], truths, tmp_path / "a.toml", window="20s", workers=1)
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=False, protocol="tcp",
+                                  host="127.0.0.1", dashboard_address=None) as cluster:
+        remote = fit_noise_files(ROBOT, RUNS[:3], truths, tmp_path / "b.toml", window="20s",
+                                 scheduler=cluster.scheduler_address)
+    for result in (local, remote):
+        result.pop("seconds")
+        result.pop("outputs")
+    assert local == remote
