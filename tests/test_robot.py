@@ -24,7 +24,9 @@ from odomkit.robot import (
 
 # Fields that may be any finite number (offsets and biases); every other field of every
 # robot is a length, a scale or a correction factor and must be positive.
-MAY_BE_ANY_FINITE = {"steering_offset", "gyro_bias", "heading_offset"}
+MAY_BE_ANY_FINITE = {"steering_offset", "gyro_bias", "heading_offset", "yaw_rate_bias", "encoder_offset"}
+# Fields that are a word from a fixed set.
+WORDS = {"encoder_at": ("rear", "front")}
 
 
 def _example(cls: type) -> object:
@@ -51,6 +53,11 @@ def test_every_field_of_every_robot_rejects_bad_numbers_naming_class_and_field(n
     cls = ROBOT_TYPES[name]
     base = _example(cls)
     for f in dataclasses.fields(cls):
+        if f.name in WORDS:
+            for bad in ("left", 1.0, None):
+                with pytest.raises(ModelError, match=rf"^{cls.__name__}\.{f.name} must be "):
+                    dataclasses.replace(base, **{f.name: bad})
+            continue
         bad_values = [math.nan, math.inf, -math.inf, True, "1.0", None]
         if f.name not in MAY_BE_ANY_FINITE:
             bad_values += [0.0, -0.1]

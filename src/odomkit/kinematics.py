@@ -1,7 +1,7 @@
 """Sensor increments -> body motion (Δd, Δθ) per step, and the step's Jacobians.
 
 A *step* k goes from log row k to row k+1. Body motion is the travelled arc length Δd
-[m] of the reference point (differential drive: axle centre; tricycle: rear axle
+[m] of the reference point (differential drive: axle centre; tricycle and car: rear axle
 centre) and the heading change Δθ [rad].
 
 The exact-arc step map (constant curvature over the step; Wang's compensation as used in
@@ -28,12 +28,12 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit.angles import sinc_half, sinc_half_derivative, unwrap_angle
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
 __all__ = [
-    "METHODS", "body_steps", "BodySteps", "diff_body_jacobian", "diff_body_steps", "Method",
-    "step_displacement", "step_jacobians", "tricycle_body_jacobian",
-    "tricycle_body_steps"
+    "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_speed_factor",
+    "diff_body_jacobian", "diff_body_steps", "Method", "steering_body_jacobian", "steering_body_steps",
+    "step_displacement", "step_jacobians", "tricycle_body_jacobian", "tricycle_body_steps"
 ]
 
 Method = Literal["euler", "midpoint", "exact"]
@@ -101,6 +101,131 @@ def tricycle_body_jacobian(
     jac[..., 1, 1] = s * np.cos(a) / wheel_to_axle
     jac[..., 1, 2] = -s * np.sin(a) / wheel_to_axle**2
     return jac
+
+
+def _car_denominator(steer: NDArray[np.float64], wheel_base: float, encoder_offset: float,
+                     encoder_at: str) -> tuple[NDArray[np.float64], NDArray[np.float64],
+                                               NDArray[np.float64], NDArray[np.float64]]:
+    """cos α, sin α, D and r = cos α − sin α·H/L of :func:`car_body_steps` (D = r for a rear
+    wheel, √(r² + sin² α) for a front wheel); a ModelError where a rear measuring wheel is at
+    or beyond the centre of the turn (r ≤ 0: its speed says nothing about the car's)."""
+    c, sn = np.cos(steer), np.sin(steer)
+    r = c - sn * (encoder_offset / wheel_base)
+    if encoder_at == "front":
+        return c, sn, np.sqrt(r * r + sn * sn), r
+    if encoder_at != "rear":
+        raise ModelError(f"encoder_at must be 'rear' or 'front', got {encoder_at!r}")
+    if np.any(r <= 0):
+        raise ModelError(f"a steering angle of {float(np.max(np.abs(steer))):.3g} rad puts the rear "
+                         f"measuring wheel (offset {encoder_offset:g} m) at or beyond the centre of "
+                         "the turn (tan α·H/L >= 1): its speed cannot give the car's")
+    return c, sn, r, r
+
+
+def car_speed_factor(steer: ArrayLike, wheel_base: float, encoder_offset: float = 0.0,
+                     encoder_at: str = "rear") -> NDArray[np.float64]:
+    """Rear-axle speed per unit speed of the measuring wheel, v / v_e (:class:`~odomkit.robot.Car`).
+
+    Rear wheel at lateral offset H: v_e = v − ωH with ω = v·tan α/L, so
+    v/v_e = 1/(1 − tan α·H/L) (DESIGN.md). Front wheel at (L, H): its contact point moves
+    at (v − ωH, ωL) and an Ackermann wheel rolls along that direction, so
+    v/v_e = 1/√((1 − tan α·H/L)² + tan² α) = cos α/√((cos α − sin α·H/L)² + sin² α)
+    (H = 0: cos α, the tricycle). Derived here; checked against a closed circle.
+
+    >>> float(car_speed_factor(0.0, 2.7, 0.8))
+    1.0
+    >>> round(float(car_speed_factor(0.3, 2.0, 0.0, "front")), 12) == round(np.cos(0.3), 12)
+    True
+    """
+    c, sn, d, _ = _car_denominator(np.asarray(steer, dtype=float), wheel_base, encoder_offset,
+                                   encoder_at)
+    return np.asarray(c / d)
+
+
+def car_body_steps(
+    travel: ArrayLike, steer: ArrayLike, wheel_base: float, encoder_offset: float = 0.0,
+    encoder_at: str = "rear",
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Measuring-wheel travel and front steering angle -> (Δd, Δθ) of the rear-axle centre.
+
+    ``Δd = s·cos α / D``, ``Δθ = Δd·tan α / L = s·sin α / (L·D)`` with r = cos α − sin α·H/L
+    and D = r (rear wheel) or √(r² + sin² α) (front wheel): :func:`car_speed_factor`
+    written without tan, so it stays finite at α = ±π/2.
+
+    Parameters
+    ----------
+    travel : array_like, shape (M,)
+        Distance s the measuring wheel rolled over each step [m].
+    steer : array_like, shape (M,)
+        Bicycle steering angle α [rad], positive to the left, offset already applied.
+    wheel_base : float
+        L [m].
+    encoder_offset : float
+        H, lateral offset of the measuring wheel [m], + left.
+    encoder_at : {"rear", "front"}
+    """
+    s = np.asarray(travel, dtype=float)
+    c, sn, d, _ = _car_denominator(np.asarray(steer, dtype=float), wheel_base, encoder_offset,
+                                   encoder_at)
+    return s * c / d, s * sn / (wheel_base * d)
+
+
+def car_body_jacobian(
+    travel: ArrayLike, steer: ArrayLike, wheel_base: float, encoder_offset: float = 0.0,
+    encoder_at: str = "rear",
+) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(s, α, L) of :func:`car_body_steps`, shape (M, 2, 3).
+
+    With h = H/L, r = cos α − sin α·h: rear D = r, ∂D/∂α = −sin α − cos α·h,
+    ∂D/∂L = sin α·h/L; front D = √(r² + sin² α), ∂D/∂α = (r·(−sin α − cos α·h) +
+    sin α cos α)/D, ∂D/∂L = r·sin α·h/(L·D). Then Δd = s cos α/D and Δθ = s sin α/(L D)
+    differentiate by the quotient rule. Checked against finite differences.
+    """
+    s = np.asarray(travel, dtype=float)
+    a = np.asarray(steer, dtype=float)
+    s, a = np.broadcast_arrays(s, a)
+    length = wheel_base
+    c, sn, d, r = _car_denominator(a, length, encoder_offset, encoder_at)
+    h = encoder_offset / length
+    dr_da = -sn - c * h
+    dr_dl = sn * h / length
+    if encoder_at == "front":
+        dd_da = (r * dr_da + sn * c) / d
+        dd_dl = r * dr_dl / d
+    else:
+        dd_da, dd_dl = dr_da, dr_dl
+    jac = np.zeros(s.shape + (2, 3))
+    jac[..., 0, 0] = c / d
+    jac[..., 0, 1] = s * (-sn / d - c * dd_da / d**2)
+    jac[..., 0, 2] = -s * c * dd_dl / d**2
+    jac[..., 1, 0] = sn / (length * d)
+    jac[..., 1, 1] = s * (c / (length * d) - sn * dd_da / (length * d**2))
+    jac[..., 1, 2] = -s * sn / (length**2 * d) - s * sn * dd_dl / (length * d**2)
+    return jac
+
+
+def steering_body_steps(robot: Tricycle | Car, travel: ArrayLike, steer: ArrayLike
+                        ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(Δd, Δθ) of a steered vehicle (tricycle or car) from the travel of its measuring
+    wheel and its steering angle (offset applied): :func:`tricycle_body_steps` or
+    :func:`car_body_steps` with the robot's geometry."""
+    if isinstance(robot, Tricycle):
+        return tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+    if isinstance(robot, Car):
+        return car_body_steps(travel, steer, robot.wheel_base, robot.encoder_offset, robot.encoder_at)
+    raise ModelError(f"not a steered vehicle (tricycle or car): {type(robot).__name__}")
+
+
+def steering_body_jacobian(robot: Tricycle | Car, travel: ArrayLike, steer: ArrayLike
+                           ) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(s, α, L) of :func:`steering_body_steps`, shape (M, 2, 3) (L is the
+    tricycle's ``wheel_to_axle`` or the car's ``wheel_base``)."""
+    if isinstance(robot, Tricycle):
+        return tricycle_body_jacobian(travel, steer, robot.wheel_to_axle)
+    if isinstance(robot, Car):
+        return car_body_jacobian(travel, steer, robot.wheel_base, robot.encoder_offset,
+                                 robot.encoder_at)
+    raise ModelError(f"not a steered vehicle (tricycle or car): {type(robot).__name__}")
 
 
 def step_displacement(
@@ -181,8 +306,9 @@ class BodySteps:
         Step duration [s] (zero for repeated timestamps).
     inputs : mapping of str to ndarray, shape (M,)
         The raw per-step inputs the covariance engines need, in SI units:
-        diff ``d_left``, ``d_right`` [m]; tricycle ``travel`` [m], ``steer`` [rad];
-        gyro ``yaw_rate`` [rad/s]; compass ``heading`` (shape (M+1,)) [rad].
+        diff ``d_left``, ``d_right`` [m]; tricycle and car ``travel`` (of the measuring
+        wheel) [m], ``steer`` [rad]; gyro and unicycle ``yaw_rate`` [rad/s]; compass
+        ``heading`` (shape (M+1,)) [rad].
     robot : Robot
         The robot that produced these steps.
 
@@ -261,12 +387,35 @@ def _compass_steps(robot: CompassOdometry, log: OdometryLog, dt: NDArray[np.floa
     return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
 
 
+def _unicycle_steps(robot: Unicycle, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    if "ticks" in log.channels:
+        # A unicycle's channels are body velocities; ticks need a wheel size (gyro robot).
+        raise InputError("a unicycle reads speed [m/s] (or dist [m]) and yaw_rate, not ticks; "
+                         "describe an encoder robot as type = \"gyro\"", source=log.source)
+    dd = _travel(log, 1.0, robot.c_scale)
+    rate = robot.yaw_rate_scale * (log.channel("yaw_rate")[:-1] - robot.yaw_rate_bias)
+    return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+
+
+def _car_steps(robot: Car, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    travel = _travel(log, robot.m_per_tick, robot.c_scale)
+    steer = _steer_per_step(log) + robot.steering_offset
+    try:
+        dd, dtheta = car_body_steps(travel, steer, robot.wheel_base, robot.encoder_offset,
+                                    robot.encoder_at)
+    except ModelError as exc:
+        raise InputError(str(exc), source=log.source) from None
+    return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
+
+
 # One entry per vehicle, keyed by its robot-file type: a new vehicle adds one function here.
 _BODY_STEPS: dict[str, Callable[[Any, OdometryLog, NDArray[np.float64]], BodySteps]] = {
     "diff": _diff_steps,
     "tricycle": _tricycle_steps,
     "gyro": _gyro_steps,
     "compass": _compass_steps,
+    "unicycle": _unicycle_steps,
+    "car": _car_steps,
 }
 
 
@@ -275,7 +424,7 @@ def body_steps(robot: Robot, log: OdometryLog) -> BodySteps:
 
     Parameters
     ----------
-    robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry
+    robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry | Unicycle | Car
     log : OdometryLog, N rows
 
     Returns

@@ -14,6 +14,10 @@ robot                      channels
                            plus ``steer`` (rad, positive = left/CCW)
 :class:`GyroOdometry`      ``ticks``/``dist``/``speed`` plus ``yaw_rate`` (rad/s)
 :class:`CompassOdometry`   ``ticks``/``dist``/``speed`` plus ``heading`` (rad)
+:class:`Unicycle`          ``speed`` (m/s; or ``dist`` increments) plus ``yaw_rate``
+                           (rad/s): body velocities, e.g. a base's ``cmd_vel``
+:class:`Car`               ``ticks``/``dist``/``speed`` of one wheel plus ``steer`` (rad,
+                           the front (bicycle) angle, positive = left/CCW)
 =========================  ======================================================
 
 Only ``ticks*`` channels are converted by ``m_per_tick*``; ``dist*`` [m] and ``speed``
@@ -30,8 +34,9 @@ from odomkit import validate
 from odomkit.errors import ModelError
 
 __all__ = [
-    "ROBOT_TYPES", "CompassOdometry", "DiffDrive", "GyroOdometry", "metres_per_tick", "Robot",
-    "robot_type_name", "SystematicErrors", "Tricycle", "true_robot"
+    "ROBOT_TYPES", "Car", "CompassOdometry", "DiffDrive", "ENCODER_POSITIONS", "GyroOdometry",
+    "metres_per_tick", "Robot", "robot_type_name", "SystematicErrors", "Tricycle", "true_robot",
+    "Unicycle"
 ]
 
 
@@ -221,6 +226,104 @@ class CompassOdometry:
 
 
 @dataclass(frozen=True)
+class Unicycle:
+    """Body-velocity odometry: forward speed and yaw rate of the reference point, e.g. a
+    mobile base's commanded (``cmd_vel``) or measured (``odom`` twist) velocities.
+
+    The calibration factors mirror :class:`GyroOdometry`'s: the yaw rate used is
+    ``yaw_rate_scale · (measured − yaw_rate_bias)``; the speed used is
+    ``c_scale · measured`` (as :class:`Tricycle`'s ``c_scale``).
+
+    Parameters
+    ----------
+    c_scale : float
+        Dimensionless speed-scale correction.
+    yaw_rate_bias : float
+        Subtracted from the measured yaw rate [rad/s].
+    yaw_rate_scale : float
+        Dimensionless yaw-rate scale correction.
+    """
+
+    type_name: ClassVar[str] = "unicycle"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = False
+    """Heading is integrated from the steps, not measured."""
+
+    c_scale: float = 1.0
+    yaw_rate_bias: float = 0.0
+    yaw_rate_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        _positive_fields(self, "c_scale", "yaw_rate_scale")
+        validate.finite(self.yaw_rate_bias, "Unicycle.yaw_rate_bias")
+
+
+ENCODER_POSITIONS = ("rear", "front")
+"""Where a :class:`Car`'s speed-measuring wheel sits: on the rear or the front axle."""
+
+
+@dataclass(frozen=True)
+class Car:
+    """Car-like (Ackermann) vehicle as a bicycle: the reference point is the centre of the
+    rear axle, the steering angle is that of a virtual front wheel on the centre line, and
+    the speed is measured at one real wheel (DESIGN.md, robot files).
+
+    With ω = v·tan α / L the yaw rate of the rear-axle speed v, the measuring wheel at
+    lateral offset H (+ left) moves at
+
+    * ``encoder_at="rear"``: v_e = v − ωH = v·(1 − tan α·H/L), so v = v_e / (1 − tan α·H/L);
+    * ``encoder_at="front"``: its contact point (L, H) moves at (v − ωH, ωL) in the body
+      frame and the wheel rolls along it (Ackermann), so
+      v_e = v·√((1 − tan α·H/L)² + tan² α), i.e. v = v_e·cos α / √((cos α − sin α·H/L)² + sin² α)
+      (H = 0: v = v_e cos α, the tricycle).
+
+    (:func:`odomkit.kinematics.car_speed_factor`; derived here, checked against a closed
+    circle in the tests.)
+
+    Parameters
+    ----------
+    wheel_base : float
+        L, rear axle to front axle [m].
+    encoder_offset : float
+        H, lateral offset of the measuring wheel from the centre line [m], + left.
+    encoder_at : {"rear", "front"}
+        Axle of the measuring wheel.
+    m_per_tick : float
+        Distance per tick of the measuring wheel [m]; converts a ``ticks`` channel only
+        (``dist`` [m] and ``speed`` [m/s] are metres already).
+    steering_offset : float
+        Added to the measured steering angle [rad]: α = α_measured + steering_offset.
+    c_scale : float
+        Dimensionless scale correction of the measuring wheel (ticks, ``dist`` and
+        ``speed`` alike).
+    """
+
+    type_name: ClassVar[str] = "car"
+    """The robot-file ``type``."""
+    measures_heading: ClassVar[bool] = False
+    """Heading is integrated from the steps, not measured."""
+
+    wheel_base: float
+    encoder_offset: float = 0.0
+    encoder_at: str = "rear"
+    m_per_tick: float = 1.0
+    steering_offset: float = 0.0
+    c_scale: float = 1.0
+
+    def __post_init__(self) -> None:
+        _positive_fields(self, "wheel_base", "m_per_tick", "c_scale")
+        validate.finite(self.encoder_offset, "Car.encoder_offset")
+        validate.finite(self.steering_offset, "Car.steering_offset")
+        if self.encoder_at not in ENCODER_POSITIONS:
+            raise ModelError(f"Car.encoder_at must be 'rear' or 'front', got {self.encoder_at!r}")
+
+    @property
+    def scale(self) -> float:
+        """Metres per tick of the measuring wheel after correction."""
+        return self.c_scale * self.m_per_tick
+
+
+@dataclass(frozen=True)
 class SystematicErrors:
     """The true systematic errors of a virtual differential robot (Borenstein–Feng II-B).
 
@@ -271,13 +374,15 @@ def true_robot(true_errors: SystematicErrors, robot: DiffDrive) -> DiffDrive:
     )
 
 
-Robot = DiffDrive | Tricycle | GyroOdometry | CompassOdometry
+Robot = DiffDrive | Tricycle | GyroOdometry | CompassOdometry | Unicycle | Car
 
 ROBOT_TYPES: dict[str, type[Any]] = {
     "diff": DiffDrive,
     "tricycle": Tricycle,
     "gyro": GyroOdometry,
     "compass": CompassOdometry,
+    "unicycle": Unicycle,
+    "car": Car,
 }
 
 

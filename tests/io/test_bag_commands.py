@@ -171,6 +171,8 @@ def test_bad_bags_are_one_line_exit_2(run_cli, bags, bag_writer, stamp, tmp_path
     assert "header stamps go backwards at message 2" in err
     err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--truth-topic", "/joint_states")
     assert "odomkit reads Odometry, PoseStamped, PoseWithCovarianceStamped (pose topics: /mocap" in err
+    err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--joints", "a,b,c")
+    assert "--joints takes LEFT,RIGHT or one joint name, got 'a,b,c'" in err
     err = one_line_error(run_cli, "track", RUNS[0], "--robot", ROBOT, "--topic", "/odom")
     assert "--topic does not apply to a optiodom log" in err
     err = one_line_error(run_cli, "track", RUNS[0], "--robot", ROBOT, "--bag-out", tmp_path / "a.bag",

@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from odomkit.errors import ModelError
-from odomkit.kinematics import BodySteps, diff_body_steps, tricycle_body_steps
+from odomkit.kinematics import BodySteps, car_body_steps, diff_body_steps, tricycle_body_steps
 from odomkit.noise import (
     NOISE_MODELS,
     ClassicalNoise,
@@ -33,7 +33,7 @@ from odomkit.noise import (
     WheelNoise,
     noise_fields,
 )
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 
 M = 40
 
@@ -58,6 +58,19 @@ def gyro_log(rng) -> BodySteps:
     return BodySteps(rng.uniform(0, 0.05, M), rate * dt, dt, {"yaw_rate": rate}, GyroOdometry())
 
 
+def car_log(rng, at="rear") -> BodySteps:
+    s, a = rng.uniform(-0.02, 0.05, M), rng.uniform(-0.5, 0.5, M)
+    robot = Car(2.7, 0.8, at)
+    dd, dth = car_body_steps(s, a, robot.wheel_base, robot.encoder_offset, robot.encoder_at)
+    return BodySteps(dd, dth, rng.uniform(0.05, 0.15, M), {"travel": s, "steer": a}, robot)
+
+
+def unicycle_log(rng) -> BodySteps:
+    dt = rng.uniform(0.05, 0.15, M)
+    rate = rng.uniform(-0.5, 0.5, M)
+    return BodySteps(rng.uniform(-0.02, 0.05, M), rate * dt, dt, {"yaw_rate": rate}, Unicycle())
+
+
 def compass_log(rng) -> BodySteps:
     dt = rng.uniform(0.05, 0.15, M)
     heading = np.cumsum(np.concatenate([[0.0], rng.uniform(-0.05, 0.05, M)]))
@@ -80,6 +93,13 @@ def _tricycle_motion(steps, k, u):
                                         steps.robot.wheel_to_axle), dtype=float)
 
 
+def _car_motion(steps, k, u):
+    t, robot = steps.dt[k], steps.robot
+    v = steps.inputs["travel"][k] / t
+    return np.array(car_body_steps((v + u[0]) * (t + u[2]), steps.inputs["steer"][k] + u[1],
+                                   robot.wheel_base, robot.encoder_offset, robot.encoder_at), dtype=float)
+
+
 def _additive(steps, k, u, rows):
     out = np.array([steps.dd[k], steps.dtheta[k]])
     for r, du in zip(rows, u, strict=True):
@@ -96,8 +116,26 @@ def _diff_params(steps, k, u):
 
 def _tricycle_params(steps, k, u):
     s = steps.inputs["travel"][k] * (1 + u[1])
-    return np.array(tricycle_body_steps(s, steps.inputs["steer"][k],
+    return np.array(tricycle_body_steps(s, steps.inputs["steer"][k] + u[2],
                                         steps.robot.wheel_to_axle + u[0]), dtype=float)
+
+
+def _car_params(steps, k, u):
+    s, robot = steps.inputs["travel"][k] * (1 + u[1]), steps.robot
+    return np.array(car_body_steps(s, steps.inputs["steer"][k] + u[2], robot.wheel_base + u[0],
+                                   robot.encoder_offset, robot.encoder_at), dtype=float)
+
+
+def _rate_params(steps, k, u):
+    """(speed scale ε, yaw-rate offset δω [rad/s], yaw-rate scale ε_ω)."""
+    rate = steps.dtheta[k] / steps.dt[k]
+    return np.array([steps.dd[k] * (1 + u[0]), (rate * (1 + u[2]) + u[1]) * steps.dt[k]])
+
+
+def _compass_params(steps, k, u):
+    """(speed scale, heading offset): the offset moves both headings of the step alike."""
+    heading = steps.inputs["heading"]
+    return np.array([steps.dd[k] * (1 + u[0]), (heading[k + 1] + u[1]) - (heading[k] + u[1])])
 
 
 CASES = [
@@ -106,10 +144,20 @@ CASES = [
     ("speed", SpeedNoise(1e-3), gyro_log, lambda s, k, u: _additive(s, k, u, (0,))),
     ("gyro", GyroNoise(1e-3), gyro_log, lambda s, k, u: _additive(s, k, u, (1,))),
     ("tricycle", TricycleNoise(0.01, 0.02, 0.003), tricycle_log, _tricycle_motion),
+    ("car-rear", TricycleNoise(0.01, 0.02, 0.003), car_log, _car_motion),
+    ("car-front", TricycleNoise(0.01, 0.02, 0.003), lambda rng: car_log(rng, "front"), _car_motion),
+    ("speed-unicycle", SpeedNoise(1e-3), unicycle_log, lambda s, k, u: _additive(s, k, u, (0,))),
+    ("gyro-unicycle", GyroNoise(1e-3), unicycle_log, lambda s, k, u: _additive(s, k, u, (1,))),
     ("params-diff-white", ParameterUncertainty(0.01, 0.02, 0.03, mode="white"), diff_log,
      _diff_params),
-    ("params-tricycle-white", ParameterUncertainty(0.01, 0.02, mode="white"), tricycle_log,
-     _tricycle_params),
+    ("params-tricycle-white", ParameterUncertainty(0.01, 0.02, mode="white", sigma_steering_offset=0.01),
+     tricycle_log, _tricycle_params),
+    ("params-car-white", ParameterUncertainty(0.01, 0.02, mode="white", sigma_steering_offset=0.01),
+     lambda rng: car_log(rng, "front"), _car_params),
+    ("params-gyro-white", ParameterUncertainty(0, 0.02, mode="white", sigma_yaw_rate_offset=0.01,
+                                               sigma_yaw_rate_scale=0.03), gyro_log, _rate_params),
+    ("params-unicycle-white", ParameterUncertainty(0, 0.02, mode="white", sigma_yaw_rate_offset=0.01,
+                                                   sigma_yaw_rate_scale=0.03), unicycle_log, _rate_params),
 ]
 
 
@@ -166,9 +214,24 @@ def test_zero_noise_gives_zero_covariance(name, model, make, motion):
     assert np.array_equal(zero.input_cov(steps, 0, M), np.zeros((M, 2, 2)))
 
 
+BIAS_CASES = [
+    (diff_log, ParameterUncertainty(0.01, 0.02, 0.03), _diff_params),
+    (tricycle_log, ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01), _tricycle_params),
+    (car_log, ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01), _car_params),
+    (lambda rng: car_log(rng, "front"), ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01),
+     _car_params),
+    (gyro_log, ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.01, sigma_yaw_rate_scale=0.03),
+     _rate_params),
+    (unicycle_log, ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.01, sigma_yaw_rate_scale=0.03),
+     _rate_params),
+    (compass_log, ParameterUncertainty(0, 0.02, sigma_heading_offset=0.01), _compass_params),
+]
+
+
 def test_bias_sensitivity_matches_finite_differences(numeric_jacobian):
-    for make, model, motion in ((diff_log, ParameterUncertainty(0.01, 0.02, 0.03), _diff_params),
-                                (tricycle_log, ParameterUncertainty(0.01, 0.02), _tricycle_params)):
+    """K = ∂(Δd, Δθ)/∂β of every vehicle against finite differences of its body motion
+    with the parameters perturbed."""
+    for make, model, motion in BIAS_CASES:
         steps = make(np.random.default_rng(5))
         assert model.kind == "bias"
         jac = model.bias_jacobian(steps, 0, M)
@@ -200,6 +263,12 @@ def test_models_check_their_robot():
         GyroNoise(0.1).check_robot(CompassOdometry())
     with pytest.raises(ModelError, match="sigma_scale_right"):
         ParameterUncertainty(sigma_scale_right=0.1).check_robot(tri.robot)
+    with pytest.raises(ModelError, match="sigma_heading_offset does not apply to a GyroOdometry"):
+        ParameterUncertainty(sigma_heading_offset=0.1).check_robot(GyroOdometry())
+    with pytest.raises(ModelError, match="bias only"):
+        ParameterUncertainty(sigma_heading_offset=0.1, mode="white").check_robot(CompassOdometry())
+    with pytest.raises(ModelError, match="TricycleNoise applies to a Tricycle or Car robot"):
+        TricycleNoise(0.1, 0.1).check_robot(Unicycle())
     ClassicalNoise(0.1, 0.1).check_robot(tri.robot)  # the classical model fits any robot
 
 

@@ -28,7 +28,7 @@ def test_the_counter_widths_agree_with_the_reader():
     ({"period": 0.0}, "--period"), ({"period": -1.0}, "--period"), ({"period": math.nan}, "--period"),
     ({"time_scale": 0.0}, "--time-scale"), ({"time_scale": -1.0}, "--time-scale"),
     ({"time_scale": math.inf}, "--time-scale"), ({"wrap_bits": 12}, "--wrap-bits"),
-    ({"decimate": 0}, "--decimate"), ({"decimate": 2.0}, "--decimate"), ({"format": "bag"}, "--format"),
+    ({"decimate": 0}, "--decimate"), ({"decimate": 2.0}, "--decimate"), ({"format": "rosbag"}, "--format"),
 ])
 def test_bad_values_are_refused_by_flag(kwargs, flag):
     with pytest.raises(InputError, match=f"^{flag} must be"):

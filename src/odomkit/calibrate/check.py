@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
-from odomkit.robot import DiffDrive, GyroOdometry, Robot, Tricycle
+from odomkit.robot import DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, truth_at
 
 __all__ = [
@@ -239,7 +239,7 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
 
 # --- channels: swapped or sign-flipped -------------------------------------------------
 
-def _hypotheses(robot: Robot) -> list[tuple[str, dict[str, Any]]]:
+def _hypotheses(robot: Robot, log: OdometryLog) -> list[tuple[str, dict[str, Any]]]:
     """(description, channel changes) for each wrong mapping a robot's log can have."""
     if isinstance(robot, DiffDrive):
         # After a swap the left wheel is read from the right channel (times "left") and the
@@ -260,17 +260,13 @@ def _hypotheses(robot: Robot) -> list[tuple[str, dict[str, Any]]]:
                             2: ", with both channels also negated"}[len(negated)]
                     out.append((words, {"swap": swap, "left": sl, "right": sr}))
         return out
-    if isinstance(robot, Tricycle):
-        return [(d, {"distance": sd, "steer": ss}) for d, sd, ss in (
-            ("as given", 1, 1), ("the steering sign flipped", 1, -1),
-            ("the traction sign flipped", -1, 1), ("both signs flipped", -1, -1))]
-    if isinstance(robot, GyroOdometry):
-        return [(d, {"distance": sd, "yaw_rate": ss}) for d, sd, ss in (
-            ("as given", 1, 1), ("the yaw-rate sign flipped", 1, -1),
-            ("the distance sign flipped", -1, 1), ("both signs flipped", -1, -1))]
-    return [(d, {"distance": sd, "heading": ss}) for d, sd, ss in (
-        ("as given", 1, 1), ("the heading sign flipped", 1, -1),
-        ("the distance sign flipped", -1, 1), ("both signs flipped", -1, -1))]
+    # Any other vehicle: the sign of its distance channel and of its turn channel.
+    turn = next((c for c in ("steer", "yaw_rate", "heading") if c in log.channels), None)
+    what = {"steer": "steering", "yaw_rate": "yaw-rate", "heading": "heading", None: "turn"}[turn]
+    dist = "traction" if isinstance(robot, Tricycle) else "distance"
+    return [(d, {"distance": sd, **({turn: st} if turn else {})}) for d, sd, st in (
+        ("as given", 1, 1), (f"the {what} sign flipped", 1, -1),
+        (f"the {dist} sign flipped", -1, 1), ("both signs flipped", -1, -1)) if turn or st > 0]
 
 
 def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
@@ -396,7 +392,7 @@ def _channels_against_truth(log: OdometryLog, robot: Robot, truth: Truth,
         return [Finding("channels", "ok", "the truth barely moves while it overlaps the log: channels not "
                         "checked", "record motion inside the truth's coverage")]
     scores = []
-    for words, change in _hypotheses(robot):
+    for words, change in _hypotheses(robot, log):
         dd, dth = _motion(_remapped(log, change), robot, every)
         dd, dth = dd[ok], dth[ok]
         if not truth.has_heading:

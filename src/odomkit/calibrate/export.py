@@ -165,7 +165,8 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
     elif isinstance(robot, CompassOdometry):
         channels = {"speed": ones * speed, "heading": yaw_rate * t - robot.heading_offset}
     else:
-        raise ModelError(f"not an odomkit robot: {type(robot).__name__}")
+        raise ModelError(f"a twist covariance is computed for diff, tricycle, gyro and compass robots, "
+                         f"not a {type(robot).__name__}")
     return OdometryLog(t, channels, source="<steady motion>")
 
 

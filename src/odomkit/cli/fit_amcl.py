@@ -47,7 +47,8 @@ __all__ = ["fit_amcl_command", "print_fit"]
 @app.command("fit-amcl")
 def fit_amcl_command(
     odometry: Annotated[list[Path], typer.Argument(
-        help="Odometry pose tracks (odomkit track --out, TUM, t,x,y,theta), or logs with --robot.")],
+        help="Odometry pose tracks (odomkit track --out, TUM, t,x,y,theta), ROS bags with a "
+             "nav_msgs/Odometry topic, or logs with --robot.")],
     robot: Annotated[Path | None, typer.Option(
         "--robot", help="Robot file (TOML): ODOM files are raw logs, dead-reckoned with it.")] = None,
     model: Annotated[str, typer.Option("--model", help="AMCL motion model: diff | omni.")] = "diff",

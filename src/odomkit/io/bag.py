@@ -15,16 +15,17 @@ message                        channels
                                differenced; without positions, velocities [rad/s] are
                                integrated over each step.
 ``nav_msgs/Odometry``          ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
-``geometry_msgs/Twist``,       ``speed``, ``yaw_rate`` (a command; Twist has no header, so
-``geometry_msgs/TwistStamped`` its time is always the bag's)
+``Twist``, ``TwistStamped``    ``speed``, ``yaw_rate`` (``geometry_msgs``; a command. Twist
+                               has no header, so its time is always the bag's)
 ``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro), and ``heading`` (yaw
                                of the orientation) when the IMU gives one (its
                                ``orientation_covariance[0]`` is not −1)
 =============================  =============================================================
 
-A diff robot reads the two joints; a gyro robot reads ``speed`` + ``yaw_rate`` (Odometry,
-Twist, TwistStamped, or one of them with an Imu for the rate); a compass robot ``speed`` +
-an Imu's ``heading``; a gyro or tricycle robot one joint as its ``ticks``.
+A diff robot reads the two joints; a gyro robot (or a unicycle, the body-velocity vehicle)
+reads ``speed`` + ``yaw_rate`` (Odometry, Twist, TwistStamped, or one of them with an Imu
+for the rate); a compass robot ``speed`` + an Imu's ``heading``; a gyro or tricycle robot
+one joint as its ``ticks``.
 
 **Time.** Each message's header stamp (``--bag-time``: the time the bag received it).
 Stamps that go backwards are an error naming the message, and so are stamps that never
@@ -45,10 +46,13 @@ not given.
 
 **What a rate means over a step** (row k's rate holds from row k to row k+1, as in
 :mod:`odomkit.log`): a command (Twist, TwistStamped) holds from its stamp to the next one
-(step k uses message k); an Odometry twist is the controller's estimate over the interval
-*ending* at its stamp (``diff_drive_controller`` divides the last wheel motion by the last
-period), so step k uses message k+1; an IMU or joint velocity is a sample of a smooth
-signal: step k uses the mean of both ends (trapezoid rule, second order).
+(step k uses message k); an Odometry twist is the controller's estimate over an interval
+*ending* at its stamp (ROS 2 ``diff_drive_controller``: the wheel motion of each update
+divided by its period, averaged over the last ``velocity_rolling_window_size`` updates), so
+step k uses message k+1. That is exact for a window of one update (and for odomkit's own
+``--bag-out``); a longer window lags by about half its length, so where the bag has the
+wheels' JointState, dead-reckon that instead. An IMU or joint velocity is a sample of a
+smooth signal: step k uses the mean of both ends (trapezoid rule, second order).
 """
 
 from __future__ import annotations
@@ -174,13 +178,14 @@ def _find_topic(topics: dict[str, str], wanted: str, source: str,
     raise InputError(f"no topic {wanted} in the bag; {_topic_list(topics, types)}", source=source)
 
 
-def _choose_topics(topics: dict[str, str], wanted: Sequence[str], source: str) -> list[str]:
+def _choose_topics(topics: dict[str, str], wanted: Sequence[str], source: str,
+                   truth_topic: str | None = None) -> list[str]:
     if wanted:
         chosen = [_find_topic(topics, w, source) for w in wanted]
         if len(set(chosen)) != len(chosen):
             raise InputError(f"--topic names a topic twice: {', '.join(wanted)}", source=source)
         return chosen
-    readable = sorted(n for n, t in topics.items() if t in MESSAGE_TYPES)
+    readable = sorted(n for n, t in topics.items() if t in MESSAGE_TYPES and n != truth_topic)
     if len(readable) == 1:
         return readable
     raise InputError(f"a bag log needs --topic; {_topic_list(topics)}", source=source)
@@ -228,7 +233,9 @@ def _stamps(reader: Any, conns: list[Any], receive_time: bool, topic: str,
         raise InputError(f"{topic}: header stamps go backwards at message {i + 1} ({t[i]:.9f} s after "
                          f"{t[i - 1]:.9f} s); {hint}", source=source)
     if ns[-1] == ns[0]:
-        raise InputError(f"{topic}: every stamp is {t[0]:.9f} s (never filled in?); {hint}", source=source)
+        raise InputError(f"{topic}: every message was received at {t[0]:.9f} s" if receive_time else
+                         f"{topic}: every header stamp is {t[0]:.9f} s (never filled in?); {hint}",
+                         source=source)
     return messages, ns
 
 
@@ -465,19 +472,19 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     with _open(path) as reader:
         with _bag_errors(source):
             available = {name: str(info.msgtype) for name, info in reader.topics.items()}
-        chosen = _choose_topics(available, topics, source)
+        truth = None if not truth_topic else _find_topic(available, truth_topic, source, TRUTH_TYPES)
+        chosen = _choose_topics(available, topics, source, truth)
         if joints and not any(MESSAGE_TYPES[available[c]] == "JointState" for c in chosen):
             raise InputError("--joints applies to a JointState topic; none is read", source=source)
         streams = [_read_stream(reader, c, available[c], joints, receive_time, source) for c in chosen]
-        if truth_topic:
-            name = _find_topic(available, truth_topic, source, TRUTH_TYPES)
-            streams.append(_truth_stream(reader, name, available[name], receive_time, source))
+        if truth is not None:
+            streams.append(_truth_stream(reader, truth, available[truth], receive_time, source))
     t, channels = _merge(streams, source)
-    truth = None
-    if truth_topic:
-        truth = np.column_stack([channels.pop(c) for c in ("gt_x", "gt_y", "gt_theta")])
+    poses = None
+    if truth is not None:
+        poses = np.column_stack([channels.pop(c) for c in ("gt_x", "gt_y", "gt_theta")])
     meta = {"format": "bag", "topics": chosen, "time": "bag" if receive_time else "header"}
-    return OdometryLog(t, channels, truth, source, meta)
+    return OdometryLog(t, channels, poses, source, meta)
 
 
 @dataclass(frozen=True)

@@ -1,73 +1,156 @@
-"""Generic CSV logs (plain or gzip) with a header and a column mapping."""
+"""Text logs as users have them: comma, semicolon, tab or whitespace separated, with or
+without a header, ``#`` comments, plain or gzip (DESIGN.md, "Text logs and truth files").
+
+The layout (delimiter, header) is sniffed from the first data lines
+(:func:`odomkit.io.text.sniff_layout`); the columns are named by ``--columns``, either in
+order for a headerless file (``t,ticks_left,_,ticks_right``; ``_`` skips a column) or as a
+map of header names (``t=time,ticks_left=L``). Timestamps may repeat (zero-length steps) but
+never decrease; the time column may be in s, ms, µs or ns (``--time-unit``).
+"""
 
 from __future__ import annotations
 
-import csv
-import io
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
-from odomkit import validate
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
-from odomkit.io.table import counter_increments, order_by_time, read_table, warn_if_cumulative
-from odomkit.io.text import read_text
+from odomkit.io.table import (
+    check_time_order,
+    counter_increments,
+    read_table,
+    to_seconds,
+    warn_if_cumulative,
+)
+from odomkit.io.text import (
+    TextLayout,
+    content_lines,
+    is_number,
+    read_text,
+    seconds_per_unit,
+    sniff_layout,
+    split_fields,
+)
 from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
 
-__all__ = ["GROUND_TRUTH_FIELDS", "parse_column_map", "read_csv_log"]
+__all__ = ["GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN"]
 
 GROUND_TRUTH_FIELDS = ("gt_x", "gt_y", "gt_theta")
+SKIP_COLUMN = "_"
+"""The name that skips a column in ``--columns`` given in order."""
 
 
-def parse_column_map(text: str) -> dict[str, str]:
-    """Parse ``"t=time,ticks_left=enc_l,ticks_right=enc_r"`` into a dict.
+def parse_columns(text: str) -> dict[str, str] | list[str]:
+    """``--columns``: channel names in column order, or a map from channel to header name.
 
-    >>> parse_column_map("t=time, ticks_left=L")
+    >>> parse_columns("t=time, ticks_left=L")
     {'t': 'time', 'ticks_left': 'L'}
+    >>> parse_columns("t, speed, _, yaw_rate")
+    ['t', 'speed', '_', 'yaw_rate']
     """
+    items = [s.strip() for s in text.split(",") if s.strip()]
+    if not items:
+        raise InputError("--columns is empty; name the columns, e.g. t,ticks_left,ticks_right")
+    mapped = ["=" in item for item in items]
+    if any(mapped) and not all(mapped):
+        raise InputError(f"--columns {text!r} mixes the two forms: name every column in order "
+                         "(t,ticks_left,_,ticks_right) or map every channel to a header name "
+                         "(t=time,ticks_left=L)")
+    if not all(mapped):
+        return items
     mapping: dict[str, str] = {}
-    for item in filter(None, (s.strip() for s in text.split(","))):
-        key, sep, column = item.partition("=")
-        if not sep or not key.strip() or not column.strip():
+    for item in items:
+        key, _, column = (p.strip() for p in item.partition("="))
+        if not key or not column:
             raise InputError(f"--columns item {item!r} must look like channel=column")
-        mapping[key.strip()] = column.strip()
+        mapping[key] = column
     return mapping
 
 
-def _header(text: str, delimiter: str, source: str) -> tuple[int, list[str]]:
-    """Line number and names of the header: the first line that is neither blank nor a
-    ``#`` comment."""
-    for lineno, line in enumerate(io.StringIO(text, newline="\n"), start=1):  # lazily: logs are long
-        if line.strip() and not line.lstrip().startswith("#"):
-            names = next(csv.reader([line.rstrip("\r\n")], delimiter=delimiter))
-            return lineno, [name.strip() for name in names]
-    raise InputError("the file is empty: expected a header line", source=source)
+def _check_targets(targets: Sequence[str], source: str) -> None:
+    named = [k for k in targets if k != SKIP_COLUMN]
+    for key in named:
+        if key != "t" and key not in KNOWN_CHANNELS and key not in GROUND_TRUTH_FIELDS:
+            raise InputError(
+                f"unknown target {key!r} in --columns; expected t, "
+                f"{', '.join(sorted(KNOWN_CHANNELS))}, {', '.join(GROUND_TRUTH_FIELDS)} or _ (skip)",
+                source=source)
+    twice = sorted({k for k in named if named.count(k) > 1})
+    if twice:
+        raise InputError(f"--columns names {', '.join(twice)} more than once", source=source)
+    if "t" not in named:
+        raise InputError("--columns needs the time column t (t=<header name>, or t in its place)",
+                         source=source)
+
+
+def _in_order(columns: Sequence[str], layout: TextLayout, source: str) -> dict[str, int]:
+    """Column index of each channel named in order."""
+    if layout.header is not None and any(map(is_number, layout.header)):
+        raise InputError("this line mixes names and numbers: a header holds names only, a data row "
+                         "numbers only; fix the row, or delete it if it is a header",
+                         source=source, line=layout.header_line)
+    if len(columns) > layout.ncols:
+        raise InputError(f"--columns names {len(columns)} columns, the file has {layout.ncols} "
+                         f"({layout.delimiter_name}-separated)", source=source,
+                         line=layout.header_line or None)
+    return {key: i for i, key in enumerate(columns) if key != SKIP_COLUMN}
+
+
+def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
+               source: str) -> tuple[TextLayout, dict[str, int]]:
+    """Column index of each channel mapped to a header name (and the layout, whose first
+    line is taken as the header when it holds exactly the names asked for: pandas writes
+    ``0,1,2``)."""
+    if layout.header is None:
+        lineno, first = next(content_lines(text))
+        if not set(columns.values()) <= set(split_fields(first, layout.delimiter)):
+            raise InputError("--columns maps header names, but the file has no header (this line is "
+                             "numbers); name the columns in order instead, e.g. --columns "
+                             "t,ticks_left,ticks_right (_ skips a column)", source=source, line=lineno)
+        layout = sniff_layout(text, source, header=True)
+    header = list(layout.header or ())
+    index = {}
+    for key, name in columns.items():
+        if name not in header:
+            raise InputError(f"no column named {name!r} in the header (it has {header})",
+                             source=source, line=layout.header_line)
+        index[key] = header.index(name)
+    return layout, index
 
 
 def read_csv_log(
     path: str | Path,
-    columns: Mapping[str, str],
+    columns: Mapping[str, str] | Sequence[str],
     *,
-    delimiter: str = ",",
-    time_scale: float = 1.0,
+    time_unit: str | float = "s",
     cumulative: bool = False,
     wrap_bits: int | None = None,
 ) -> OdometryLog:
-    """Read a CSV log (plain or gzip) whose first line, after any ``#`` comments, names the columns.
+    """Read a text log (plain or gzip): delimiter and header found by
+    :func:`odomkit.io.text.sniff_layout`, columns named by ``columns``.
 
     Parameters
     ----------
-    path : the CSV file
-    columns : mapping from odomkit name to CSV column name. Keys: ``t`` (required), any
-        channel of :mod:`odomkit.log` (``ticks_left``, ``speed``, ``steer``, ...), and
-        optionally ``gt_x``, ``gt_y``, ``gt_theta`` for ground truth [m, m, rad].
-    delimiter : field separator
-    time_scale : multiply the time column by this to get seconds (1e-9 for ns stamps)
+    path : the file
+    columns : which column holds what. A sequence names the columns in order
+        (``["t", "ticks_left", "_", "ticks_right"]``; ``_`` skips one; columns after the
+        last name are ignored; a header line, if any, is skipped); a mapping goes from
+        odomkit name to header name (``{"t": "time", "ticks_left": "L"}``). Names: ``t``
+        (required), any channel of :mod:`odomkit.log` (``ticks_left``, ``speed``,
+        ``steer``, ...), and ``gt_x``, ``gt_y``, ``gt_theta`` for ground truth [m, m, rad].
+    time_unit : unit of the time column: ``"s"``, ``"ms"``, ``"us"``, ``"ns"``, or seconds
+        per unit as a number (:func:`odomkit.io.text.seconds_per_unit`)
     cumulative : increment channels hold cumulative counts, differenced here (integer
         counts exactly, in 64-bit integer arithmetic)
     wrap_bits : unwrap cumulative counters of this width (16 or 32 typically; 64 exact)
+
+    Raises
+    ------
+    InputError
+        Naming the file and line: no such column, a field that is not a number, decreasing
+        time (repeated times are kept: zero-length steps), decimal commas, and so on.
 
     Warns
     -----
@@ -77,43 +160,37 @@ def read_csv_log(
     """
     path = Path(path)
     source = str(path)
-    time_scale = validate.positive(time_scale, "time_scale", unit="s per time unit", error=InputError)
+    seconds = seconds_per_unit(time_unit)
     if wrap_bits is not None and not cumulative:
         raise InputError("wrap-around can only be undone on cumulative counters (--cumulative)")
+    if isinstance(columns, str):
+        raise InputError("columns must be a mapping or a sequence of names, not a string "
+                         "(parse --columns text with parse_columns)")
+    _check_targets(list(columns), source)
     text = read_text(path)
-    header_line, header = _header(text, delimiter, source)
-    if "t" not in columns:
-        raise InputError("the column mapping needs t=<time column>", source=source)
-    index: dict[str, int] = {}
-    for key, name in columns.items():
-        if key != "t" and key not in KNOWN_CHANNELS and key not in GROUND_TRUTH_FIELDS:
-            raise InputError(
-                f"unknown target {key!r} in the column mapping; expected t, "
-                f"{', '.join(sorted(KNOWN_CHANNELS))} or {', '.join(GROUND_TRUTH_FIELDS)}",
-                source=source)
-        if name not in header:
-            raise InputError(f"no column named {name!r} in the header (it has {header})",
-                             source=source, line=header_line)
-        index[key] = header.index(name)
+    layout = sniff_layout(text, source)
+    if isinstance(columns, Mapping):
+        layout, index = _by_header(columns, layout, text, source)
+        labels = {key: f"column {name!r}" for key, name in columns.items()}
+    else:
+        index = _in_order(columns, layout, source)
+        labels = {key: f"column {i + 1}" for key, i in index.items()}
     counters = sorted({col for key, col in index.items() if key in INCREMENT_CHANNELS}) if cumulative else []
-    table = read_table(path, len(header), delimiter=delimiter, skip_header=header_line,
+    table = read_table(path, layout.ncols, delimiter=layout.delimiter, skip_header=layout.header_line,
                        integer_columns=counters, text=text)
     data = table.values
-    order = order_by_time(data[:, index["t"]], source)
-    if order is not None:
-        data = data[order]
-    t = data[:, index["t"]] * time_scale
+    check_time_order(data[:, index["t"]], table)
+    t = to_seconds(data[:, index["t"]], seconds)
     channels = {}
     for key, col in index.items():
         if key not in KNOWN_CHANNELS:
             continue
         if key in INCREMENT_CHANNELS and cumulative:
-            counts = table.counter(col, wrap_bits)
-            channels[key] = counter_increments(counts if order is None else counts[order], wrap_bits)
+            channels[key] = counter_increments(table.counter(col, wrap_bits), wrap_bits)
             continue
         channels[key] = data[:, col].copy()
         if key in INCREMENT_CHANNELS:
-            warn_if_cumulative(channels[key], source, f"column {columns[key]!r} ({key})")
+            warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
     truth = None
     gt_keys = [k for k in GROUND_TRUTH_FIELDS if k in index]
     if gt_keys:
@@ -121,4 +198,4 @@ def read_csv_log(
             raise InputError("ground truth needs all of gt_x, gt_y, gt_theta", source=source)
         truth = np.column_stack([data[:, index[k]] for k in GROUND_TRUTH_FIELDS])
         truth[:, 2] = unwrap_angle(truth[:, 2])
-    return OdometryLog(t, channels, truth, source, {"format": "csv"})
+    return OdometryLog(t, channels, truth, source, {"format": "csv", "delimiter": layout.delimiter_name})

@@ -3,7 +3,7 @@
 Example (all lengths in metres, angles in radians)::
 
     [robot]
-    type = "diff"               # diff | tricycle | gyro | compass
+    type = "diff"               # diff | tricycle | gyro | compass | unicycle | car
     wheel_base = 0.2
     wheel_diameter = 0.084      # or wheel_diameter_left/_right, wheel_radius[_left/_right],
     encoder_resolution = 64     #    or m_per_tick[_left/_right] directly (one per wheel;
@@ -19,6 +19,21 @@ Example (all lengths in metres, angles in radians)::
     [noise.parameters]          # optional ParameterUncertainty
     sigma_wheel_base = 0.002
     mode = "bias"
+
+A car (rear-axle reference, speed measured at one wheel, front steering angle)::
+
+    [robot]
+    type = "car"
+    wheel_base = 2.7            # L [m]
+    encoder_offset = 0.8        # H [m], + left: lateral offset of the measuring wheel
+    encoder_at = "rear"         # "rear" | "front": axle of the measuring wheel
+    steering_offset = 0.0       # [rad], added to the measured steering angle
+    c_scale = 1.0               # measuring-wheel scale correction
+    wheel_diameter = 0.65       # optional size of the measuring wheel (ticks only):
+                                # m_per_tick, wheel_diameter or wheel_radius
+
+A unicycle (body velocities ``speed``, ``yaw_rate``): ``c_scale``, ``yaw_rate_bias``
+[rad/s], ``yaw_rate_scale``, all optional.
 """
 
 from __future__ import annotations
@@ -35,11 +50,15 @@ from odomkit.io.files import refuse_overwrite
 from odomkit.io.text import read_text
 from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
 from odomkit.robot import (
+    ENCODER_POSITIONS,
+    ROBOT_TYPES,
+    Car,
     CompassOdometry,
     DiffDrive,
     GyroOdometry,
     Robot,
     Tricycle,
+    Unicycle,
     metres_per_tick,
     robot_type_name,
 )
@@ -65,6 +84,14 @@ class _Fields:
             raise InputError(f"[{self.section}] {key} must be a number, got {value!r}",
                              source=self.source)
         return float(value)
+
+    def word(self, key: str, choices: tuple[str, ...], default: str) -> str:
+        self.used.add(key)
+        value = self.table.get(key, default)
+        if value not in choices:
+            raise InputError(f"[{self.section}] {key} must be one of {', '.join(map(repr, choices))}, "
+                             f"got {value!r}", source=self.source)
+        return str(value)
 
     def has(self, key: str) -> bool:
         return key in self.table
@@ -158,8 +185,19 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
     elif kind == "compass":
         robot = CompassOdometry(m_per_tick=sizes.optional_scale(None, "odometry"),
                                 heading_offset=f.number("heading_offset", 0.0))
+    elif kind == "unicycle":
+        robot = Unicycle(c_scale=f.number("c_scale", 1.0),
+                         yaw_rate_bias=f.number("yaw_rate_bias", 0.0),
+                         yaw_rate_scale=f.number("yaw_rate_scale", 1.0))
+    elif kind == "car":
+        robot = Car(wheel_base=f.number("wheel_base"),
+                    encoder_offset=f.number("encoder_offset", 0.0),
+                    encoder_at=f.word("encoder_at", ENCODER_POSITIONS, "rear"),
+                    m_per_tick=sizes.optional_scale(None, "measuring"),
+                    steering_offset=f.number("steering_offset", 0.0),
+                    c_scale=f.number("c_scale", 1.0))
     else:
-        raise InputError(f"[robot] type must be one of diff, tricycle, gyro, compass; got {kind!r}",
+        raise InputError(f"[robot] type must be one of {', '.join(ROBOT_TYPES)}; got {kind!r}",
                          source=source)
     sizes.check_encoder()
     f.check_unused()
@@ -213,7 +251,7 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
 
     Returns
     -------
-    robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry
+    robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry | Unicycle | Car
     noise : tuple of noise models (empty when the file has no [noise] table)
     """
     path = Path(path)

@@ -10,7 +10,6 @@ that a 64-bit encoder count keeps its low bits (a float64 holds 2**63 only to ±
 from __future__ import annotations
 
 import io
-import re
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -21,21 +20,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.errors import InputError
-from odomkit.io.text import read_text
+from odomkit.io.text import is_number, read_text
 
 __all__ = [
-    "COUNTER_BITS", "counter_increments", "cumulative_to_increments", "NumericTable",
-    "order_by_time", "polars_module", "read_numeric", "read_table", "unwrap_counter",
-    "warn_if_cumulative",
+    "check_time_order", "COUNTER_BITS", "counter_increments", "cumulative_to_increments", "NumericTable",
+    "polars_module", "read_numeric", "read_table", "to_seconds", "unwrap_counter", "warn_if_cumulative",
 ]
 
 COUNTER_BITS = (8, 16, 24, 32, 64)
 """Counter widths whose wrap-around can be undone."""
 
-# What numpy's parser takes as a float: Python's float() also takes '1_000' and Unicode
-# digits, which numpy refuses, so the line that made numpy fail must be found by this.
-_NUMBER = re.compile(r"\s*[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf(?:inity)?|nan)\s*",
-                     re.IGNORECASE | re.ASCII)
 # A column that only ever grows is flagged when it takes at least this many distinct values
 # (and 1 % of the rows): fewer could be increments that merely rose during a short log.
 _MIN_DISTINCT = 16
@@ -236,7 +230,7 @@ def _first_bad_line(text: str, ncols: int, delimiter: str | None, skip: int, sou
             return InputError(f"expected {ncols} columns, found {len(fields)}",
                               source=source, line=lineno)
         for col, text_field in enumerate(fields, start=1):
-            if not _NUMBER.fullmatch(text_field):
+            if not is_number(text_field):
                 return InputError(f"column {col}: {text_field.strip()!r} is not a number",
                                   source=source, line=lineno)
     return InputError(f"could not be read as a numeric table ({exc})", source=source)
@@ -341,14 +335,36 @@ def warn_if_cumulative(values: NDArray[np.float64], source: str, column: str) ->
             "pass --cumulative if it is one", UserWarning, stacklevel=3)
 
 
-def order_by_time(t: NDArray[np.float64], source: str) -> NDArray[np.intp] | None:
-    """Row order that makes time non-decreasing, or None if it already is.
+def check_time_order(t: NDArray[np.float64], table: NumericTable) -> None:
+    """Refuse a time column that decreases, naming the line; repeated times are kept (they
+    give zero-length steps).
 
-    Out-of-order rows (e.g. a logger that flushed buffers late) are put back in time
-    order with a warning; repeated timestamps are kept (they give zero-length steps).
+    A row earlier than the one before it is a logger's clock jumping back or rows written
+    out of order; sorting would hide either, so the user decides (DESIGN.md, "Text logs").
+    ``t`` is the column as read (row ``k`` of ``table``), in the file's own unit.
     """
-    if t.size < 2 or np.all(np.diff(t) >= 0):
-        return None
-    warnings.warn(f"{source}: timestamps are not monotonic; rows were sorted by time",
-                  stacklevel=3)
-    return np.argsort(t, kind="stable")
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        row = int(back[0]) + 1
+        raise InputError(
+            f"time {float(t[row])!r} is earlier than {float(t[row - 1])!r} on line "
+            f"{table.line(row - 1)}: timestamps must not decrease ({back.size} row(s) do; repeated "
+            "ones are kept as zero-length steps); sort the rows by time or fix the logger's clock",
+            source=table.source, line=table.line(row))
+
+
+def to_seconds(t: NDArray[np.float64], seconds_per_unit: float) -> NDArray[np.float64]:
+    """A time column in seconds.
+
+    Where the unit is 1/n s for a whole n (ms, µs, ns), the column is divided by n rather
+    than multiplied by the inexact 1/n: IEEE 754 division is correctly rounded, so a time
+    whose value in the file's unit is an exact double (any whole number below 2**53, e.g.
+    ns stamps of a day) gives the same double as the same time written in seconds.
+
+    >>> bool(to_seconds(np.array([1234567891.0]), 1e-9)[0] == float("1.234567891"))
+    True
+    """
+    n = round(1.0 / seconds_per_unit)
+    if n >= 2 and 1.0 / n == seconds_per_unit:
+        return t / float(n)
+    return t * seconds_per_unit

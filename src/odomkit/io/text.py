@@ -1,8 +1,11 @@
-"""Reading a text file as users have it: plain or gzip-compressed, UTF-8 or an older encoding.
+"""Reading a text file as users have it: plain or gzip-compressed, UTF-8 or an older encoding,
+comma, semicolon, tab or whitespace separated, with or without a header.
 
 Every text reader of :mod:`odomkit.io` starts here, so that a compressed log, a byte-order
 mark, a comment written in Latin-1 or a binary file handed over by mistake behave the same
 in every format, and a problem is one line naming the file and line (DESIGN.md, "Text logs").
+The layout of a table (:func:`sniff_layout`: delimiter, header) and the unit of its time
+column (:func:`seconds_per_unit`) are decided here once, for logs and truth files alike.
 
 Decoding rule (decided for issue 10): text is UTF-8 (a leading byte-order mark is dropped).
 A log line that is not valid UTF-8 is read as Latin-1, which maps every byte to one
@@ -15,13 +18,20 @@ Robot files are TOML, which is UTF-8 by definition: there any other byte is an e
 from __future__ import annotations
 
 import codecs
+import csv
 import gzip
+import itertools
+import math
+import re
 import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 
 from odomkit.errors import InputError
 
-__all__ = ["GZIP_MAGIC", "read_text"]
+__all__ = ["content_lines", "DELIMITERS", "GZIP_MAGIC", "is_number", "read_text", "seconds_per_unit",
+           "sniff_layout", "split_fields", "TextLayout", "TIME_UNITS"]
 
 GZIP_MAGIC = b"\x1f\x8b"
 """The first two bytes of a gzip file (RFC 1952, section 2.3.1)."""
@@ -92,3 +102,200 @@ def read_text(path: str | Path, *, compressed: bool = True, strict_utf8: bool = 
             raise InputError(f"byte 0x{byte} is not UTF-8 text; a {kind} must be saved as UTF-8",
                              source=source, line=_line_of(raw, exc.start)) from None
     return _decode_lines(raw)
+
+
+# --- what a text table looks like --------------------------------------------------------
+
+DELIMITERS: tuple[str | None, ...] = (",", ";", "\t", None)
+"""The field separators a text table may use, tried in this order: comma, semicolon, tab,
+and any run of whitespace (None)."""
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+"""Seconds per unit of a time column (``--time-unit``, ``--truth-time-unit``)."""
+
+_NAMES = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}
+# What numpy's parser takes as a float: Python's float() also takes '1_000' and Unicode
+# digits, which numpy refuses, so both parsers agree on this grammar.
+_NUMBER = re.compile(r"\s*[+-]?(?:(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?|inf(?:inity)?|nan)\s*",
+                     re.IGNORECASE | re.ASCII)
+_DECIMAL_COMMA = re.compile(r"[+-]?\d+,\d+(?:[eE][+-]?\d+)?", re.ASCII)
+_SAMPLE = 64  # data lines the delimiter is sniffed from
+
+
+def is_number(field: str) -> bool:
+    """Whether ``field`` is a number as numpy and polars read one (``1.5``, ``-2e-3``,
+    ``nan``, ``inf``; not ``1_000``, ``0x1f`` or non-ASCII digits).
+
+    >>> is_number(" 1.5e3 "), is_number("1_000"), is_number("1,5")
+    (True, False, False)
+    """
+    return _NUMBER.fullmatch(field) is not None
+
+
+def content_lines(text: str) -> Iterator[tuple[int, str]]:
+    """(1-based line number, content) of every line that holds something: ``#`` starts a
+    comment anywhere on a line (as numpy reads it), blank and comment-only lines are left
+    out, and the content is stripped of surrounding whitespace (``\\r`` included)."""
+    for lineno, line in enumerate(text.split("\n"), start=1):
+        content = line.split("#", 1)[0].strip()
+        if content:
+            yield lineno, content
+
+
+def split_fields(content: str, delimiter: str | None) -> list[str]:
+    """The fields of one line's content: split at ``delimiter`` (None: any whitespace),
+    each stripped."""
+    if delimiter is None:
+        return content.split()
+    return [f.strip() for f in content.split(delimiter)]
+
+
+def _header_fields(content: str, delimiter: str | None) -> list[str]:
+    """Column names: like :func:`split_fields`, but a quoted name (``"left ticks"``) is
+    read as the CSV module reads it."""
+    if delimiter is None:
+        return content.split()
+    return [name.strip() for name in next(csv.reader([content], delimiter=delimiter))]
+
+
+@dataclass(frozen=True)
+class TextLayout:
+    """How a text table is laid out (:func:`sniff_layout`).
+
+    Parameters
+    ----------
+    delimiter : {",", ";", "\\t", None}
+        The field separator; None is any run of whitespace.
+    header : tuple of str, optional
+        The column names, or None for a headerless table.
+    header_line : int
+        1-based line number of the header; 0 without one. Every line up to it (comments
+        included) is skipped before the data.
+    ncols : int
+        Columns of the table (the header's names, or the first data line's fields).
+    """
+
+    delimiter: str | None
+    header: tuple[str, ...] | None
+    header_line: int
+    ncols: int
+
+    @property
+    def delimiter_name(self) -> str:
+        """``"comma"``, ``"semicolon"``, ``"tab"`` or ``"whitespace"``, for messages."""
+        return _NAMES[self.delimiter]
+
+
+def _candidate(sample: list[tuple[int, str]], delimiter: str | None,
+               header: bool | None) -> tuple[TextLayout, int, int]:
+    """The layout ``delimiter`` gives the sample, how many data lines it reads as ``ncols``
+    numbers (at least two), and how many fields the first data line has."""
+    first_line, first = sample[0]
+    fields = split_fields(first, delimiter)
+    has_header = not all(map(is_number, fields)) if header is None else header
+    data = sample[1:] if has_header else sample
+    names = tuple(_header_fields(first, delimiter)) if has_header else None
+    width = len(split_fields(data[0][1], delimiter)) if data else 0
+    ncols = len(names) if names is not None else width
+    fits = 0
+    for _, content in data:
+        row = split_fields(content, delimiter)
+        fits += ncols >= 2 and len(row) == ncols and all(map(is_number, row))
+    layout = TextLayout(delimiter, names, first_line if has_header else 0, ncols)
+    return layout, fits, width
+
+
+def _decimal_comma(sample: list[tuple[int, str]], source: str) -> InputError | None:
+    """The error for a table of decimal-comma numbers (``1,5;2,25``), or None: some
+    non-comma separator splits every sampled line into the same two or more fields, each a
+    number or a number with a decimal comma, and at least one has the comma."""
+    for delimiter in (";", "\t", None):
+        rows = [(n, split_fields(c, delimiter)) for n, c in sample]
+        data = rows[1:] if not all(map(is_number, rows[0][1])) else rows
+        if not data or len(data[0][1]) < 2 or any(len(r) != len(data[0][1]) for _, r in data):
+            continue
+        if not all(is_number(f) or _DECIMAL_COMMA.fullmatch(f) for _, r in data for f in r):
+            continue
+        for lineno, row in data:
+            comma = next((f for f in row if _DECIMAL_COMMA.fullmatch(f)), None)
+            if comma is not None:
+                return InputError(
+                    f"{comma!r} has a decimal comma: odomkit reads numbers with a decimal point "
+                    f"only (decimal-comma files are not supported); convert the file first, e.g. "
+                    f"tr ',' '.' for this {_NAMES[delimiter]}-separated one", source=source,
+                    line=lineno)
+    return None
+
+
+def sniff_layout(text: str, source: str, *, header: bool | None = None) -> TextLayout:
+    """Find the delimiter and the header of a text table from its first data lines.
+
+    Comment (``#``) and blank lines are skipped. Each separator of :data:`DELIMITERS` is
+    tried on the first 64 lines that hold something; the first line is a header when some
+    of its fields are not numbers (or as ``header`` says). The first separator that reads
+    every sampled data line as the same number (two or more) of numbers wins. When none
+    does, the one that reads the most lines so (then: splits the first data line into the
+    most fields, then the most names) is returned, so that the table reader names the line and field that is
+    wrong.
+
+    Parameters
+    ----------
+    text : the file's text (:func:`read_text`)
+    source : the file, for messages
+    header : True: the first line is the header whatever it holds (a header of numbers,
+        ``0,1,2``, as pandas writes one); False: there is none; None: decide as above
+
+    Raises
+    ------
+    InputError
+        No data at all; one column only; decimal commas (out of scope, said so); a header
+        whose names do not match the data's fields in number.
+
+    Examples
+    --------
+    >>> sniff_layout("# robot 3\\nt;L;R\\n0;0;0\\n0.1;2;3\\n", "log.csv")
+    TextLayout(delimiter=';', header=('t', 'L', 'R'), header_line=2, ncols=3)
+    >>> sniff_layout("0.0 1 2\\n0.1\\t3   4\\n", "log.txt").delimiter is None
+    True
+    """
+    sample = list(itertools.islice(content_lines(text), _SAMPLE + 1))
+    if not sample:
+        raise InputError("the file is empty: no data rows", source=source)
+    candidates = [_candidate(sample, d, header) for d in DELIMITERS]
+    for layout, fits, _ in candidates:
+        data_lines = len(sample) - (layout.header_line > 0)
+        if data_lines and fits == data_lines:
+            return layout
+    problem = _decimal_comma(sample, source)
+    if problem is not None:
+        raise problem
+    # max() keeps the first of equals: the order of DELIMITERS breaks ties.
+    layout, fits, width = max(candidates, key=lambda c: (c[1], c[2], c[0].ncols))
+    if layout.ncols < 2 and width < 2:
+        raise InputError("one column only: expected columns separated by commas, semicolons, tabs "
+                         "or whitespace (t and at least one channel)", source=source,
+                         line=sample[0][0])
+    if layout.header is not None and not fits and width and width != layout.ncols:
+        raise InputError(f"the header has {layout.ncols} name(s) but the next line has {width} "
+                         f"{layout.delimiter_name}-separated fields", source=source,
+                         line=layout.header_line)
+    return layout
+
+
+def seconds_per_unit(unit: str | float, flag: str = "--time-unit") -> float:
+    """Seconds per unit of a time column: a unit of :data:`TIME_UNITS` or a positive number
+    of seconds (``"1e-4"`` for 100 µs ticks).
+
+    >>> seconds_per_unit("ms"), seconds_per_unit("1e-4"), seconds_per_unit(2.5)
+    (0.001, 0.0001, 2.5)
+    """
+    if isinstance(unit, str) and unit.strip() in TIME_UNITS:
+        return TIME_UNITS[unit.strip()]
+    try:
+        value = float(unit)
+    except (TypeError, ValueError):
+        value = math.nan
+    if isinstance(unit, bool) or not math.isfinite(value) or value <= 0:
+        raise InputError(f"{flag} must be one of {', '.join(TIME_UNITS)} or a positive number of "
+                         f"seconds per unit (1e-4 for 100 µs ticks), got {unit!r}")
+    return value

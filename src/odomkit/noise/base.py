@@ -14,7 +14,9 @@ which class they hold:
    (:meth:`NoiseModel.bias_variances`, (p,)) and the sensitivity of each step's body motion
    to them (:meth:`NoiseModel.bias_jacobian`, (n, 2, p));
 4. for direct-heading odometry (a compass measures θ instead of integrating it): the
-   variance of each heading sample (:meth:`NoiseModel.heading_variances`).
+   variance of each heading sample (:meth:`NoiseModel.heading_variances`), and how a
+   bias parameter moves every measured heading (:meth:`NoiseModel.bias_heading`, (p,):
+   a heading offset, θ_k = θ_meas,k + δ for every k).
 
 A new noise model is one frozen dataclass subclassing :class:`NoiseModel` in one module,
 decorated with :func:`register`; the robot-file reader (:mod:`odomkit.io.robotfile`) finds
@@ -190,6 +192,11 @@ class NoiseModel(ABC):
     def bias_jacobian(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """∂(Δd, Δθ)/∂(bias parameters) of steps a … b−1, shape (b − a, 2, p)."""
         return np.zeros((b - a, 2, 0))
+
+    def bias_heading(self, robot: Robot) -> NDArray[np.float64]:
+        """Direct heading: ∂θ_k/∂(bias parameters) of every measured heading, (p,) (the
+        same for every k: an offset of the heading sensor). Zero unless a model says so."""
+        return np.zeros(self.bias_variances(robot).size)
 
     # --- variance parameters (fitting) -----------------------------------------------
     def variance_parameters(self, robot: Robot | None = None) -> dict[str, float]:
@@ -404,3 +411,8 @@ class NoiseSet:
         """Stacked ∂(Δd, Δθ)/∂(bias parameters), (b − a, 2, p)."""
         parts = [m.bias_jacobian(steps, a, b) for m in self.bias]
         return np.concatenate(parts, axis=-1) if parts else np.zeros((b - a, 2, 0))
+
+    def bias_heading(self, robot: Robot) -> NDArray[np.float64]:
+        """Stacked ∂θ_k/∂(bias parameters) of a measured heading, (p,)."""
+        parts = [m.bias_heading(robot) for m in self.bias]
+        return np.concatenate(parts) if parts else np.zeros(0)

@@ -47,7 +47,8 @@ needs none: its rows are the samples."""
 class SpeedNoise(NoiseModel):
     """Kelly Table 1: speed-encoder noise, σ_vv = α_ss·|V| (a spectral density).
 
-    Over a step of length Δs the travelled distance has variance ``alpha_ss · |Δs|``.
+    Over a step of length Δs the travelled distance has variance ``alpha_ss · |Δs|``
+    (the white speed noise of any vehicle: a unicycle's, gyro's or compass robot's speed).
 
     Parameters
     ----------
@@ -77,7 +78,8 @@ class SpeedNoise(NoiseModel):
 @dataclass(frozen=True)
 class GyroNoise(NoiseModel):
     """Kelly Table 1, integrated heading: gyro rate noise with constant spectral density
-    σ_ωω = σ_gg, so the integrated heading has variance ``psd_gyro · Δt`` over a step.
+    σ_ωω = σ_gg, so the integrated heading has variance ``psd_gyro · Δt`` over a step
+    (the white yaw-rate noise of a gyro robot or a unicycle).
 
     Parameters
     ----------
@@ -88,7 +90,7 @@ class GyroNoise(NoiseModel):
     psd_gyro: float
 
     # Any robot that integrates its heading (not a compass robot, which measures it).
-    robot_types: ClassVar[tuple[str, ...]] = ("gyro", "diff", "tricycle")
+    robot_types: ClassVar[tuple[str, ...]] = ("gyro", "diff", "tricycle", "unicycle", "car")
     family: ClassVar[str | None] = "gyro"
 
     def __post_init__(self) -> None:

@@ -1,11 +1,29 @@
-"""Uncertain robot parameters (wheel base, wheel scales) as a noise model.
+"""Uncertain robot parameters (the bias noise of every vehicle) as a noise model.
 
-A wrong wheel base or wheel diameter is the *same* error at every step of a run: in
-``mode="bias"`` it is a constant unknown parameter (an augmented state) whose pose
-covariance grows with the square of the distance; ``mode="white"`` draws fresh noise
-every step, as the Sun–Gao exercise does (it understates long runs; kept for comparison).
+A wrong wheel base, wheel diameter, steering offset or gyro offset is the *same* error at
+every step of a run: in ``mode="bias"`` it is a constant unknown parameter (an augmented
+state) whose pose covariance grows with the square of the distance; ``mode="white"``
+draws fresh noise every step, as the Sun–Gao exercise does (it understates long runs;
+kept for comparison).
 
-Each robot type has its own sensitivity ∂(Δd, Δθ)/∂β, looked up by the robot's type name.
+Which parameters a vehicle has, and their order in the parameter vector β, is
+:data:`PARAMETERS` (keyed by the robot's type name); each vehicle's sensitivity
+∂(Δd, Δθ)/∂β is looked up the same way (:data:`_SENSITIVITY`):
+
+==========  ==============================================================  ============
+vehicle     β                                                               field
+==========  ==============================================================  ============
+diff        wheel base b [m]; left, right wheel scale ε_L, ε_R [1]          sigma_wheel_base, sigma_scale_left, sigma_scale_right
+tricycle,   wheel base L [m]; measuring-wheel scale ε [1]; steering         sigma_wheel_base, sigma_scale_left,
+car         offset δα [rad]                                                 sigma_steering_offset
+gyro,       speed scale ε [1]; yaw-rate offset δω [rad/s]; yaw-rate         sigma_scale_left, sigma_yaw_rate_offset,
+unicycle    scale ε_ω [1]                                                   sigma_yaw_rate_scale
+compass     speed scale ε [1]; heading offset δh [rad]                      sigma_scale_left, sigma_heading_offset
+==========  ==============================================================  ============
+
+A heading offset does not change any step (Δθ is a difference of two measured headings);
+it moves every measured heading, θ_k = θ_meas,k + δh, which the direct-heading engine
+carries as :meth:`ParameterUncertainty.bias_heading`.
 """
 
 from __future__ import annotations
@@ -18,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
+from odomkit.kinematics import car_body_jacobian
 from odomkit.noise.base import NoiseKind, NoiseModel, register, require_non_negative, steps_input
 
 if TYPE_CHECKING:
@@ -25,40 +44,73 @@ if TYPE_CHECKING:
     from odomkit.robot import Robot
 
 __all__ = [
+    "PARAMETERS",
     "ParameterUncertainty",
+    "car_parameter_jacobian",
     "diff_parameter_jacobian",
+    "rate_parameter_jacobian",
     "tricycle_parameter_jacobian",
     "scale_parameter_jacobian",
     "white_parameter_cov",
 ]
 
+_STEERED = ("sigma_wheel_base", "sigma_scale_left", "sigma_steering_offset")
+_RATE = ("sigma_scale_left", "sigma_yaw_rate_offset", "sigma_yaw_rate_scale")
+PARAMETERS: dict[str, tuple[str, ...]] = {
+    "diff": ("sigma_wheel_base", "sigma_scale_left", "sigma_scale_right"),
+    "tricycle": _STEERED,
+    "car": _STEERED,
+    "gyro": _RATE,
+    "unicycle": _RATE,
+    "compass": ("sigma_scale_left", "sigma_heading_offset"),
+}
+"""The bias parameters of each vehicle (robot type name), in the order of β."""
+
 
 @register
 @dataclass(frozen=True)
 class ParameterUncertainty(NoiseModel):
-    """Uncertain robot parameters (wheel base, wheel scales).
+    """Uncertain robot parameters: the bias (constant over a run) of every vehicle.
 
     A wrong wheel base or wheel diameter is the *same* error at every step of a run. With
     ``mode="bias"`` it is modelled as a constant unknown parameter (an augmented state),
     so its pose covariance grows with the square of the distance. ``mode="white"`` draws
     fresh noise every step, as the Sun–Gao exercise does; that understates long runs and
-    is kept only for comparison.
+    is kept only for comparison. Each vehicle has the parameters of :data:`PARAMETERS`; a
+    non-zero σ of a parameter the vehicle does not have is refused, not ignored.
 
     Parameters
     ----------
     sigma_wheel_base : float
-        Standard deviation of the wheel base (diff) or of L (tricycle) [m].
+        Standard deviation of the wheel base: b (diff), L (tricycle ``wheel_to_axle``,
+        car ``wheel_base``) [m].
     sigma_scale_left, sigma_scale_right : float
         Relative standard deviation of each wheel's metres-per-tick (dimensionless; a
-        wheel-diameter σ divided by the diameter). For single-wheel robots use
-        ``sigma_scale_left`` for the traction wheel.
+        wheel-diameter σ divided by the diameter). For single-wheel robots
+        ``sigma_scale_left`` is the scale of the measured distance or speed (the traction
+        or measuring wheel, the speed of a unicycle, gyro or compass robot).
     mode : {"bias", "white"}
+    sigma_steering_offset : float
+        Standard deviation of a constant steering-angle error (tricycle, car) [rad].
+    sigma_yaw_rate_offset : float
+        Standard deviation of a constant error added to the yaw rate (gyro, unicycle)
+        [rad/s].
+    sigma_yaw_rate_scale : float
+        Relative standard deviation of the yaw-rate scale (gyro, unicycle) [1].
+    sigma_heading_offset : float
+        Standard deviation of a constant error of every measured heading (compass) [rad];
+        bias mode only (a fresh heading error at every sample is
+        :class:`~odomkit.noise.CompassNoise`).
     """
 
     sigma_wheel_base: float = 0.0
     sigma_scale_left: float = 0.0
     sigma_scale_right: float = 0.0
     mode: Literal["bias", "white"] = "bias"
+    sigma_steering_offset: float = 0.0
+    sigma_yaw_rate_offset: float = 0.0
+    sigma_yaw_rate_scale: float = 0.0
+    sigma_heading_offset: float = 0.0
 
     toml_table: ClassVar[str] = "noise.parameters"
 
@@ -76,24 +128,46 @@ class ParameterUncertainty(NoiseModel):
         """Which parameters apply depends on the robot (see :meth:`bias_variances`)."""
         self.bias_variances(robot)
 
+    def parameters(self, robot: Robot) -> tuple[str, ...]:
+        """The field names of ``robot``'s bias parameters, in the order of β."""
+        try:
+            return PARAMETERS[robot.type_name]
+        except (KeyError, AttributeError):
+            raise ModelError(f"ParameterUncertainty knows no parameters of a {type(robot).__name__}") from None
+
     def bias_variances(self, robot: Robot) -> NDArray[np.float64]:
-        """diff: (σ_b², σ_εL², σ_εR²); tricycle: (σ_L², σ_ε²); gyro, compass: (σ_ε²)."""
-        if robot.type_name == "diff":
-            return np.array([self.sigma_wheel_base, self.sigma_scale_left,
-                             self.sigma_scale_right]) ** 2
-        if robot.type_name == "tricycle":
-            if self.sigma_scale_right:
-                raise ModelError("ParameterUncertainty.sigma_scale_right: a tricycle has one "
-                                 "traction wheel; use sigma_scale_left")
-            return np.array([self.sigma_wheel_base, self.sigma_scale_left]) ** 2
-        if self.sigma_wheel_base or self.sigma_scale_right:
-            raise ModelError(f"ParameterUncertainty for a {type(robot).__name__}: only "
-                             "sigma_scale_left (the distance scale) applies")
-        return np.array([self.sigma_scale_left**2])
+        """σ² of each of ``robot``'s parameters (:data:`PARAMETERS`), (p,); a ModelError
+        names a non-zero σ the robot has no parameter for."""
+        names = self.parameters(robot)
+        for name in PARAMETERS["diff"] + _STEERED + _RATE + ("sigma_heading_offset",):
+            if name not in names and getattr(self, name):
+                hint = ("; a tricycle has one traction wheel: use sigma_scale_left"
+                        if name == "sigma_scale_right" and robot.type_name == "tricycle" else
+                        "; its one measured wheel or speed is sigma_scale_left"
+                        if name == "sigma_scale_right" else "")
+                raise ModelError(f"ParameterUncertainty.{name} does not apply to a {type(robot).__name__}, "
+                                 f"whose parameters are {', '.join(names)}{hint}")
+        if self.mode == "white" and self.sigma_heading_offset:
+            raise ModelError("ParameterUncertainty.sigma_heading_offset is a bias only: a fresh "
+                             "heading error at every sample is CompassNoise")
+        return np.array([getattr(self, name) for name in names], dtype=float) ** 2
 
     def bias_jacobian(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """K = ∂(Δd, Δθ)/∂β of steps a … b−1, (n, 2, p), for the robot's parameters."""
-        return _SENSITIVITY.get(steps.robot.type_name, _scale_sensitivity)(self, steps, a, b)
+        try:
+            sensitivity = _SENSITIVITY[steps.robot.type_name]
+        except KeyError:
+            raise ModelError(f"ParameterUncertainty has no sensitivity for a {type(steps.robot).__name__}") from None
+        return sensitivity(self, steps, a, b)
+
+    def bias_heading(self, robot: Robot) -> NDArray[np.float64]:
+        """∂θ_k/∂β of every measured heading, (p,): 1 for the compass heading offset, 0
+        otherwise (and for every integrated-heading vehicle)."""
+        names = self.parameters(robot)
+        out = np.zeros(len(names))
+        if robot.measures_heading:
+            out[[i for i, n in enumerate(names) if n == "sigma_heading_offset"]] = 1.0
+        return out
 
     # In white mode the parameters are fresh every step: the same K and variances.
     def input_variances(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
@@ -119,18 +193,41 @@ def _diff_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int
 
 
 def _tricycle_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
-    return tricycle_parameter_jacobian(steps_input(steps, "travel", pu)[a:b],
-                                       steps_input(steps, "steer", pu)[a:b],
-                                       steps.robot.wheel_to_axle)  # type: ignore[union-attr]
+    travel, steer = steps_input(steps, "travel", pu)[a:b], steps_input(steps, "steer", pu)[a:b]
+    jac = np.empty((b - a, 2, 3))
+    jac[..., :2] = tricycle_parameter_jacobian(travel, steer, steps.robot.wheel_to_axle)  # type: ignore[union-attr]
+    # δα: ∂(s cos α, s sin α / L)/∂α (kinematics.tricycle_body_jacobian)
+    jac[..., 0, 2] = -travel * np.sin(steer)
+    jac[..., 1, 2] = travel * np.cos(steer) / steps.robot.wheel_to_axle  # type: ignore[union-attr]
+    return jac
 
 
-def _scale_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
-    return scale_parameter_jacobian(np.asarray(steps.dd, dtype=float)[a:b])
+def _car_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
+    robot = steps.robot
+    return car_parameter_jacobian(steps_input(steps, "travel", pu)[a:b],
+                                  steps_input(steps, "steer", pu)[a:b], robot.wheel_base,  # type: ignore[union-attr]
+                                  robot.encoder_offset, robot.encoder_at)  # type: ignore[union-attr]
+
+
+def _rate_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
+    return rate_parameter_jacobian(steps.dd[a:b], steps.dtheta[a:b], steps.dt[a:b])
+
+
+def _compass_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
+    # The heading offset moves no step (Δθ = h_{k+1} − h_k): its column is zero, and it
+    # enters through bias_heading.
+    jac = np.zeros((b - a, 2, 2))
+    jac[..., :1] = scale_parameter_jacobian(np.asarray(steps.dd, dtype=float)[a:b])
+    return jac
 
 
 _SENSITIVITY: dict[str, Callable[[ParameterUncertainty, BodySteps, int, int], NDArray[np.float64]]] = {
     "diff": _diff_sensitivity,
     "tricycle": _tricycle_sensitivity,
+    "car": _car_sensitivity,
+    "gyro": _rate_sensitivity,
+    "unicycle": _rate_sensitivity,
+    "compass": _compass_sensitivity,
 }
 
 
@@ -170,8 +267,41 @@ def tricycle_parameter_jacobian(
     return jac
 
 
+def car_parameter_jacobian(
+    travel: ArrayLike, steer: ArrayLike, wheel_base: float, encoder_offset: float = 0.0,
+    encoder_at: str = "rear",
+) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(L, ε, δα), shape (M, 2, 3), of a car
+    (:func:`odomkit.kinematics.car_body_steps`): the wheel base L [m], the measuring
+    wheel's scale ε (it travels s(1 + ε), so the column is (Δd, Δθ)) and a steering
+    offset δα [rad] (α + δα): the L and α columns of
+    :func:`odomkit.kinematics.car_body_jacobian`, and s times its s column.
+    """
+    s = np.asarray(travel, dtype=float)
+    body = car_body_jacobian(s, steer, wheel_base, encoder_offset, encoder_at)
+    jac = np.empty(body.shape)
+    jac[..., 0] = body[..., 2]
+    jac[..., 1] = body[..., 0] * s[..., None]
+    jac[..., 2] = body[..., 1]
+    return jac
+
+
+def rate_parameter_jacobian(dd: ArrayLike, dtheta: ArrayLike, dt: ArrayLike) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(ε, δω, ε_ω), shape (M, 2, 3), of speed and yaw-rate odometry (gyro,
+    unicycle): Δd = v·Δt·(1 + ε), Δθ = (ω·(1 + ε_ω) + δω)·Δt, so
+    ``[[Δd, 0, 0], [0, Δt, Δθ]]``.
+    """
+    dd, dtheta, dt = np.broadcast_arrays(np.asarray(dd, dtype=float), np.asarray(dtheta, dtype=float),
+                                         np.asarray(dt, dtype=float))
+    jac = np.zeros(dd.shape + (2, 3))
+    jac[..., 0, 0] = dd
+    jac[..., 1, 1] = dt
+    jac[..., 1, 2] = dtheta
+    return jac
+
+
 def scale_parameter_jacobian(dd: ArrayLike) -> NDArray[np.float64]:
-    """∂(Δd, Δθ)/∂ε, shape (M, 2, 1), for a single distance scale ε (gyro/compass)."""
+    """∂(Δd, Δθ)/∂ε, shape (M, 2, 1), for a single distance scale ε."""
     dd = np.asarray(dd, dtype=float)
     jac = np.zeros(dd.shape + (2, 1))
     jac[..., 0, 0] = dd

@@ -1,5 +1,6 @@
-"""Tricycle noise: white noise on each sample's speed, steering angle and period
-(Sun–Gao, Snowhite part)."""
+"""Steered-vehicle noise (tricycle and car): white noise on each sample's speed, steering
+angle and period (Sun–Gao, Snowhite part; the car's kinematics instead of the tricycle's
+for a car)."""
 
 from __future__ import annotations
 
@@ -9,25 +10,29 @@ from typing import TYPE_CHECKING, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit.kinematics import car_body_jacobian
 from odomkit.noise.base import NoiseModel, register, require_non_negative, steps_input
 
 if TYPE_CHECKING:
     from odomkit.kinematics import BodySteps
 
-__all__ = ["TricycleNoise", "tricycle_input_jacobian", "tricycle_input_cov"]
+__all__ = ["TricycleNoise", "car_input_jacobian", "tricycle_input_jacobian", "tricycle_input_cov"]
 
 
 @register
 @dataclass(frozen=True)
 class TricycleNoise(NoiseModel):
     """The exercise's tricycle noise: independent white noise on each sample's speed,
-    steering angle and sample period (Sun–Gao, Snowhite part).
+    steering angle and sample period (Sun–Gao, Snowhite part). It is also a car's white
+    speed and steering noise: the same raw inputs through the car's kinematics
+    (:func:`car_input_jacobian`).
 
     Parameters
     ----------
     sigma_speed : float
-        Standard deviation of the measured front-wheel speed [m/s] (or, for a ticks
-        channel, of the per-step travelled distance divided by the step duration).
+        Standard deviation of the measured wheel speed [m/s] (the tricycle's front wheel,
+        the car's measuring wheel; for a ticks channel, of the per-step travelled
+        distance divided by the step duration).
     sigma_steer : float
         Standard deviation of the steering angle [rad].
     sigma_dt : float
@@ -38,7 +43,7 @@ class TricycleNoise(NoiseModel):
     sigma_steer: float
     sigma_dt: float = 0.0
 
-    robot_types: ClassVar[tuple[str, ...]] = ("tricycle",)
+    robot_types: ClassVar[tuple[str, ...]] = ("tricycle", "car")
 
     def __post_init__(self) -> None:
         require_non_negative(self)
@@ -49,13 +54,21 @@ class TricycleNoise(NoiseModel):
         return np.broadcast_to(var, (b - a, 3))
 
     def input_jacobian(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
-        """:func:`tricycle_input_jacobian` of steps a … b−1, (n, 2, 3)."""
-        return tricycle_input_jacobian(steps_input(steps, "travel", self)[a:b],
-                                       steps_input(steps, "steer", self)[a:b], steps.dt[a:b],
-                                       steps.robot.wheel_to_axle)  # type: ignore[union-attr]
+        """:func:`tricycle_input_jacobian` (a car: :func:`car_input_jacobian`) of steps
+        a … b−1, (n, 2, 3)."""
+        travel, steer = steps_input(steps, "travel", self)[a:b], steps_input(steps, "steer", self)[a:b]
+        robot = steps.robot
+        if robot.type_name == "car":
+            return car_input_jacobian(travel, steer, steps.dt[a:b], robot.wheel_base,  # type: ignore[union-attr]
+                                      robot.encoder_offset, robot.encoder_at)  # type: ignore[union-attr]
+        return tricycle_input_jacobian(travel, steer, steps.dt[a:b],
+                                       robot.wheel_to_axle)  # type: ignore[union-attr]
 
     def input_cov(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
-        """:func:`tricycle_input_cov` of steps a … b−1."""
+        """:func:`tricycle_input_cov` of steps a … b−1 (a car: J diag(σ²) Jᵀ of
+        :meth:`input_jacobian`)."""
+        if steps.robot.type_name == "car":
+            return super().input_cov(steps, a, b)
         return tricycle_input_cov(steps_input(steps, "travel", self)[a:b],
                                   steps_input(steps, "steer", self)[a:b], steps.dt[a:b],
                                   steps.robot.wheel_to_axle, self)  # type: ignore[union-attr]
@@ -88,6 +101,25 @@ def tricycle_input_jacobian(
     jac[..., 1, 0] = t * sa / wheel_to_axle
     jac[..., 1, 1] = s * ca / wheel_to_axle
     jac[..., 1, 2] = v * sa / wheel_to_axle
+    return jac
+
+
+def car_input_jacobian(
+    travel: ArrayLike, steer: ArrayLike, dt: ArrayLike, wheel_base: float,
+    encoder_offset: float = 0.0, encoder_at: str = "rear",
+) -> NDArray[np.float64]:
+    """∂(Δd, Δθ)/∂(v, α, T) of a car step (:func:`odomkit.kinematics.car_body_steps`),
+    shape (M, 2, 3), with v = s/T the measuring wheel's speed: the body motion depends on
+    v and T through s = vT only, so ∂/∂v = T·∂/∂s, ∂/∂T = v·∂/∂s, and ∂/∂α is the car's
+    (:func:`odomkit.kinematics.car_body_jacobian`). For T = 0 the speed is taken as 0.
+    """
+    s, t = np.broadcast_arrays(np.asarray(travel, dtype=float), np.asarray(dt, dtype=float))
+    v = np.divide(s, t, out=np.zeros_like(s), where=t != 0)
+    body = car_body_jacobian(s, steer, wheel_base, encoder_offset, encoder_at)
+    jac = np.empty(body.shape)
+    jac[..., 0] = body[..., 0] * t[..., None]
+    jac[..., 1] = body[..., 1]
+    jac[..., 2] = body[..., 0] * v[..., None]
     return jac
 
 

@@ -107,7 +107,7 @@ def check_size(runs: int, partitions: int, segments: int, *, segment_ends: bool 
     Traceback (most recent call last):
     ...
     odomkit.errors.ModelError: 1e+09 runs × 1000 partitions × 1 segment = 1e+12 partition \
-steps, above the limit 1e+10 (this would take about 4 h); lower --runs or --partitions, or \
+steps, above the limit 1e+10 (this would take about 4.2 h); lower --runs or --partitions, or \
 raise the limit with --max-work 1e+12
     """
     runs = validate.positive_int(runs, "runs")

@@ -1,7 +1,9 @@
 """``odomkit fit-amcl``: nav2 AMCL's motion-model α's from odometry and ground truth.
 
 The odometry is a pose track (``odomkit track --out`` CSV, TUM, or headerless
-``t,x,y,theta`` text) or, with a robot file, a raw log dead-reckoned here. AMCL's updates
+``t,x,y,theta`` text), a ROS bag's ``nav_msgs/Odometry`` topic (``--topic``, or the bag's
+only one; its own truth from ``--truth-topic``), or, with a robot file, a raw log
+dead-reckoned here. AMCL's updates
 are taken where AMCL would take them (its ``update_min_d``/``update_min_a`` thresholds on
 the odometry, :func:`odomkit.calibrate.amcl.amcl_update_rows`); the truth, on its own
 clock, is interpolated at the update times; the fit is
@@ -72,6 +74,27 @@ def _track_poses(path: Path) -> OdometryPoses:
     return OdometryPoses(poses.t, np.column_stack((poses.xy, poses.theta)), None, str(path))
 
 
+# The log options a bag's Odometry topic uses without a robot file.
+_BAG_FLAGS = {"--topic", "--bag-time", "--truth-topic"}
+
+
+def _bag_poses(path: Path, options: LogOptions) -> OdometryPoses:
+    """A bag's ``nav_msgs/Odometry`` poses, and its truth topic (``--truth-topic``) if named."""
+    from odomkit.io.bag import bag_topics, read_bag, read_bag_odometry
+    from odomkit.truth import truth_from_log
+
+    topic = options.topic[0] if options.topic else None
+    if len(options.topic) > 1:
+        raise InputError("fit-amcl reads one Odometry topic: give one --topic", source=str(path))
+    odom = read_bag_odometry(path, topic, options.bag_time)
+    own = None
+    if options.truth_topic is not None:
+        if topic is None:
+            topic = next(n for n, t in bag_topics(path).items() if t == "nav_msgs/msg/Odometry")
+        own = truth_from_log(read_bag(path, (topic,), (), options.bag_time, options.truth_topic))
+    return OdometryPoses(odom.t, odom.poses, own, str(path))
+
+
 def _log_poses(path: Path, robot: Robot, options: LogOptions, truth_options: TruthOptions,
                method: str) -> OdometryPoses:
     """A raw log dead-reckoned from the origin (AMCL's increments do not depend on where the
@@ -84,6 +107,12 @@ def _log_poses(path: Path, robot: Robot, options: LogOptions, truth_options: Tru
     track = dead_reckon_log(log, robot, method, np.zeros(3))  # type: ignore[arg-type]
     own = load_truth(truth_options, log) if truth_options.path is None else None
     return OdometryPoses(log.t, track.poses, own, str(path))
+
+
+def _is_bag(path: Path) -> bool:
+    from odomkit.io.bag import is_bag
+
+    return is_bag(path)
 
 
 def _updates(odom: OdometryPoses, truth: Truth, opts: TruthOptions, model: str, update_min_d: float,
@@ -160,14 +189,20 @@ def fit_amcl_files(
         from odomkit.io.robotfile import read_robot
 
         robot = read_robot(robot_path)[0]
-    elif log_options is not None and log_options.given():
-        raise InputError(f"{', '.join(log_options.given())} reads logs, so it needs --robot")
+    elif log_options is not None and set(log_options.given()) - _BAG_FLAGS:
+        stray = sorted(set(log_options.given()) - _BAG_FLAGS)
+        raise InputError(f"{', '.join(stray)} reads logs, so it needs --robot")
     parts, per_log, skipped = [], [], 0
     for path, opts in zip(odometry, truth, strict=True):
         path = Path(path)
         if robot is not None:
             odom = _log_poses(path, robot, log_options or LogOptions(), opts, method)
+        elif _is_bag(path):
+            odom = _bag_poses(path, log_options or LogOptions())
         else:
+            if log_options is not None and log_options.given():
+                raise InputError(f"{', '.join(log_options.given())} applies to a ROS bag; this is a "
+                                 "pose track", source=str(path))
             odom = _track_poses(path)
         found = load_truth(opts) if opts.path is not None else odom.own_truth
         if found is None:

@@ -1,6 +1,7 @@
 """Reading a log in any supported format: the log options every log-reading command shares
-(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise``, ``evaluate``).
-A ROS bag (:mod:`odomkit.io.bag`) is one more format.
+(``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise``, ``evaluate``,
+``check``, ``fit-amcl``). A text log (``csv``: any delimiter, header optional, ``#`` comments,
+gzip, :mod:`odomkit.io.csvlog`) and a ROS bag (:mod:`odomkit.io.bag`) are two of the formats.
 
 The readers are imported inside :func:`load_log`, so that a command module may import
 :class:`LogOptions` and :data:`LOG_FORMATS` at start-up for nothing (``--help`` stays fast).
@@ -30,14 +31,14 @@ _COUNTER_BITS = (8, 16, 24, 32, 64)
 
 # The options each format reads; any other option given for it is an error, not ignored.
 _APPLIES = {
-    "csv": {"columns", "cumulative", "wrap_bits", "time_scale"},
+    "csv": {"columns", "cumulative", "wrap_bits", "time_unit"},
     "khepera": {"cumulative", "wrap_bits", "period"},  # cumulative counts by definition
     "snowhite": {"period"},
     "optiodom": set(),
     "bag": {"topic", "joints", "bag_time", "truth_topic"},
 }
 _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
-          "period": "--period", "time_scale": "--time-scale", "topic": "--topic", "joints": "--joints",
+          "period": "--period", "time_unit": "--time-unit", "topic": "--topic", "joints": "--joints",
           "bag_time": "--bag-time", "truth_topic": "--truth-topic"}
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")  # odomkit.io.bag.is_bag, without importing it
 
@@ -70,11 +71,14 @@ class LogOptions:
     Parameters
     ----------
     format : one of :data:`LOG_FORMATS` ("auto": from the file name, :func:`detect_format`)
-    columns : CSV column mapping ``t=time,ticks_left=L,...`` (csv only)
+    columns : which text column holds what (csv only; :func:`odomkit.io.csvlog.parse_columns`):
+        in order ``t,ticks_left,_,ticks_right`` (``_`` skips one) or a map of header
+        names ``t=time,ticks_left=L,...``
     cumulative : increment channels hold cumulative counters (csv; khepera always does)
     wrap_bits : width of a counter that wraps around: 8, 16, 24, 32 or 64
     period : sample period [s] of a log without a time column (khepera, snowhite)
-    time_scale : seconds per unit of the CSV time column (1e-3 for ms, 1e-9 for ns)
+    time_unit : unit of the text log's time column: s, ms, us, ns, or seconds per unit as
+        a number (``--time-unit 1e-4`` for 100 µs ticks; ``--time-scale`` is its old name)
     decimate : use every n-th row (increments summed, rates sampled)
     topic : ROS bag topics, the first giving the rows (bag only; :func:`odomkit.io.bag.read_bag`)
     joints : JointState wheel joints, ``(left, right)`` or one (bag only)
@@ -87,7 +91,7 @@ class LogOptions:
     cumulative: bool = False
     wrap_bits: int | None = None
     period: float | None = None
-    time_scale: float = 1.0
+    time_unit: str | float = "s"
     decimate: int = 1
     topic: tuple[str, ...] = ()
     joints: tuple[str, ...] = ()
@@ -102,9 +106,10 @@ class LogOptions:
                              f"got {self.wrap_bits!r}")
         if self.period is not None and not _positive(self.period):
             raise InputError(f"--period must be a positive number of seconds, got {self.period!r}")
-        if not _positive(self.time_scale):
-            raise InputError(f"--time-scale must be a positive number (seconds per time unit), "
-                             f"got {self.time_scale!r}")
+        if self.time_unit != "s":
+            from odomkit.io.text import seconds_per_unit  # no numpy: --help stays fast
+
+            seconds_per_unit(self.time_unit, "--time-unit")
         if isinstance(self.decimate, bool) or not isinstance(self.decimate, int) or self.decimate < 1:
             raise InputError(f"--decimate must be a positive integer, got {self.decimate!r}")
         if any(not isinstance(name, str) or not name.strip("/ ") for name in self.topic):
@@ -135,8 +140,9 @@ def _positive(value: float) -> bool:
             and math.isfinite(value) and value > 0)
 
 
-def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions()) -> OdometryLog:
-    """Read a log in any supported format (plain or gzip) and decimate it as ``options`` say.
+def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None) -> OdometryLog:
+    """Read a log in any supported format (plain or gzip) and decimate it as ``options`` say
+    (default: :class:`LogOptions`, the format from the file name).
 
     Raises
     ------
@@ -146,13 +152,14 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions())
     Warns
     -----
     UserWarning
-        A counter column read as increments that looks cumulative, or rows out of time order.
+        A counter column read as increments that looks cumulative.
     """
-    from odomkit.io.csvlog import parse_column_map, read_csv_log
+    from odomkit.io.csvlog import parse_columns, read_csv_log
     from odomkit.io.halmstad import read_khepera, read_snowhite
     from odomkit.io.optiodom import read_run
     from odomkit.robot import DiffDrive
 
+    options = options or LogOptions()
     path = Path(path)
     fmt = detect_format(path) if options.format == "auto" else options.format
     if fmt == "bag":
@@ -172,8 +179,9 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions = LogOptions())
         log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
     else:
         if not options.columns:
-            raise InputError("a CSV log needs --columns, e.g. t=time,ticks_left=L,ticks_right=R",
+            raise InputError("a text log needs --columns: header names (t=time,ticks_left=L,"
+                             "ticks_right=R) or the columns in order (t,ticks_left,ticks_right)",
                              source=str(path))
-        log = read_csv_log(path, parse_column_map(options.columns), cumulative=options.cumulative,
-                           wrap_bits=options.wrap_bits, time_scale=options.time_scale)
+        log = read_csv_log(path, parse_columns(options.columns), cumulative=options.cumulative,
+                           wrap_bits=options.wrap_bits, time_unit=options.time_unit)
     return log.decimate(options.decimate)

@@ -1,5 +1,6 @@
-"""``odomkit check`` on real OptiOdom logs (issue 12 item 7): a good run passes, the same
-run with its wheel columns swapped is caught, a straight-only run cannot give a wheel base."""
+"""``odomkit check`` (workflows/check.py, through the command line) on real OptiOdom logs
+(issue 12 item 7): a good run passes, the same run with its wheel columns swapped is caught,
+a straight-only run cannot give a wheel base."""
 
 from __future__ import annotations
 
@@ -72,3 +73,18 @@ def test_an_unreadable_log_is_a_finding_and_text_output(run_cli, tmp_path):
     assert code == 2 and err.startswith("odomkit: error:")
     code, _, err = run_cli("check", bad, "--robot", ROBOT, "--spin", "left")
     assert code == 2 and "--spin" in err
+
+
+def test_check_file_reports_reader_warnings_as_findings(tmp_path):
+    """A counter column read as increments: the reader's warning becomes a finding."""
+    from odomkit.workflows.check import check_file
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
+    log = tmp_path / "log.csv"
+    log.write_text("t,L,R\n" + "".join(f"{0.05 * i!r},{100 * i},{100 * i}\n" for i in range(200)))
+    options = LogOptions(columns="t=t,ticks_left=L,ticks_right=R")
+    out = check_file(log, ROBOT, TruthOptions(), log_options=options)
+    reading = [f for f in out["findings"] if f["check"] == "reading"]
+    assert reading and reading[0]["status"] == "warn" and "cumulative" in reading[0]["message"]
+    assert out["truth"] is None

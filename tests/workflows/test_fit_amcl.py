@@ -134,3 +134,23 @@ def test_a_track_written_by_odomkit_track_gives_the_same_fit_as_its_log(run_cli,
     a, b = json.loads(from_track), json.loads(from_log)
     assert a["updates"] == b["updates"] > 0
     assert list(a["alpha"].values()) == pytest.approx(list(b["alpha"].values()), rel=1e-9)
+
+
+def test_a_bags_odometry_topic_gives_the_same_fit_as_the_track(run_cli, tmp_path):
+    """``track --bag-out`` writes nav_msgs/Odometry; fitted against the same truth it gives the
+    track CSV's α's (the bag's stamps are the log's times to within a nanosecond)."""
+    pytest.importorskip("rosbags")
+    from odomkit.io.trackio import read_track_csv
+
+    track, bag = tmp_path / "track.csv", tmp_path / "run.bag"
+    code, _, err = run_cli("track", RUNS[0], "--robot", ROBOT, "--out", track, "--bag-out", bag)
+    assert code == 0, err
+    written = read_track_csv(track)
+    truth = _write(tmp_path / "gt.txt", written.t, written.truth, None)
+    _, from_bag, err = run_cli("fit-amcl", bag, "--truth", truth, "--truth-columns", "t,x,y,theta", "--json")
+    _, from_track, _ = run_cli("fit-amcl", track, "--json")
+    a, b = json.loads(from_bag), json.loads(from_track)
+    assert a["updates"] == b["updates"] > 0
+    assert list(a["alpha"].values()) == pytest.approx(list(b["alpha"].values()), rel=1e-8)
+    code, _, err = run_cli("fit-amcl", track, "--topic", "/odom")
+    assert code == 2 and "applies to a ROS bag" in err
