@@ -7,15 +7,22 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from odomkit.errors import InputError, ModelError
+from odomkit.integrate import dead_reckon
 from odomkit.kinematics import (
     body_steps,
+    car_body_jacobian,
+    car_body_steps,
+    car_speed_factor,
+    steering_body_jacobian,
+    steering_body_steps,
     step_displacement,
     step_jacobians,
     tricycle_body_jacobian,
     tricycle_body_steps,
 )
 from odomkit.log import OdometryLog
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 
 
 def step(pose, u, method):
@@ -77,3 +84,94 @@ def test_kelly_robots_scale_only_ticks(kind, channel, per_step):
     value = {"speed": 0.5, "dist": 0.05, "ticks": 250}[channel]
     other = {"yaw_rate": 0.0} if kind == "gyro" else {"heading": 0.0}
     assert np.allclose(body_steps(robot, _log({channel: value, **other})).dd, per_step, rtol=1e-14, atol=0)
+
+
+# --- the car: rear-axle reference, speed at one wheel, front (bicycle) steering -------
+
+@pytest.mark.parametrize("at", ["rear", "front"])
+@settings(max_examples=40, deadline=None)
+@given(s=st.floats(-0.5, 0.5), a=st.floats(-0.6, 0.6), h=st.floats(-0.9, 0.9))
+def test_car_jacobian_matches_central_differences(numeric_jacobian, at, s, a, h):
+    def f(v):
+        return np.array(car_body_steps(v[0], v[1], v[2], h, at), dtype=float)
+
+    assert np.allclose(car_body_jacobian(s, a, 2.7, h, at), numeric_jacobian(f, [s, a, 2.7]), atol=1e-8)
+
+
+@pytest.mark.parametrize("at", ["rear", "front"])
+@pytest.mark.parametrize("h", [0.0, 0.75, -0.75])
+@pytest.mark.parametrize("alpha", [0.3, -0.45])
+def test_car_drives_the_closed_circle_of_its_geometry(at, h, alpha):
+    """Independent truth: with a constant steering angle α the rear-axle centre turns on a
+    circle of radius R = L/tan α about the instantaneous centre (0, R) in the body frame.
+    A wheel at (x_w, H) runs on a circle of radius √(x_w² + (R − H)²) about the same
+    centre, so one full turn rolls it 2π times that. Fed this travel in 500 steps, the
+    body steps must turn the car by exactly 2π and move the rear axle 2πR, back to the
+    start."""
+    length = 2.7
+    radius = length / np.tan(alpha)
+    x_w = length if at == "front" else 0.0
+    wheel_radius = np.hypot(x_w, radius - h)  # distance of the wheel from the centre
+    travel = np.full(500, 2 * np.pi * wheel_radius / 500)  # driving forwards
+    steer = np.full(500, alpha)
+    dd, dth = car_body_steps(travel, steer, length, h, at)
+    turn = 2 * np.pi * np.sign(alpha)  # left (CCW) for α > 0
+    assert np.sum(dth) == pytest.approx(turn, rel=1e-12)
+    assert np.sum(dd) == pytest.approx(2 * np.pi * abs(radius), rel=1e-12)
+    end = dead_reckon(dd, dth)[-1]
+    assert np.allclose(end, [0.0, 0.0, turn], atol=1e-9)
+    # and the design's rear-encoder formula v = v_e/(1 − tan α·H/L)
+    if at == "rear":
+        assert float(car_speed_factor(alpha, length, h)) == pytest.approx(
+            1 / (1 - np.tan(alpha) * h / length), rel=1e-13)
+
+
+def test_car_reduces_to_the_tricycle_and_to_a_plain_rear_wheel():
+    s, a = np.array([0.1, -0.2, 0.05]), np.array([0.3, -0.2, 0.0])
+    # front wheel on the centre line: the tricycle
+    assert np.allclose(car_body_steps(s, a, 0.7, 0.0, "front"), tricycle_body_steps(s, a, 0.7),
+                       rtol=1e-14, atol=0)
+    assert np.allclose(car_body_jacobian(s, a, 0.7, 0.0, "front"), tricycle_body_jacobian(s, a, 0.7),
+                       rtol=1e-13, atol=1e-16)
+    # rear wheel on the centre line measures the reference point itself
+    dd, dth = car_body_steps(s, a, 2.0)
+    assert np.array_equal(dd, s) and np.allclose(dth, s * np.tan(a) / 2.0, rtol=1e-14)
+    car, tri = Car(0.7, encoder_at="front"), Tricycle(0.7)
+    assert np.allclose(steering_body_steps(car, s, a), steering_body_steps(tri, s, a), rtol=1e-14)
+    assert np.allclose(steering_body_jacobian(car, s, a), steering_body_jacobian(tri, s, a), rtol=1e-13)
+    with pytest.raises(ModelError, match="not a steered vehicle"):
+        steering_body_steps(Unicycle(), s, a)  # type: ignore[arg-type]
+
+
+def test_car_rear_wheel_beyond_the_turn_centre_is_refused():
+    """tan α·H/L >= 1: the wheel is at or beyond the centre of the turn, its speed is zero
+    or runs backwards while the car goes forwards."""
+    with pytest.raises(ModelError, match="at or beyond the centre of the turn"):
+        car_body_steps([0.1], [1.2], 2.0, 0.9)
+    log = _log({"speed": 1.0, "steer": 1.2})
+    with pytest.raises(InputError, match="at or beyond the centre"):
+        body_steps(Car(2.0, 0.9), log)
+    front = body_steps(Car(2.0, 0.9, "front"), log)  # a front wheel is never at the centre
+    assert np.all(np.isfinite(front.dd))
+
+
+@pytest.mark.parametrize("channel, value, per_step", [("speed", 2.0, 0.2), ("dist", 0.2, 0.2),
+                                                      ("ticks", 100, 0.01 * 100)])
+def test_car_log_channels_scale_and_offset(channel, value, per_step):
+    robot = Car(2.7, 0.8, "rear", m_per_tick=0.01, steering_offset=0.02, c_scale=1.01)
+    steps = body_steps(robot, _log({channel: value, "steer": 0.1}))
+    assert np.allclose(steps.inputs["travel"], 1.01 * per_step, rtol=1e-14, atol=0)
+    assert np.allclose(steps.inputs["steer"], 0.12, rtol=1e-14)
+    expected = car_body_steps(1.01 * per_step, 0.12, 2.7, 0.8)
+    assert np.allclose(steps.dd, expected[0], rtol=1e-14) and np.allclose(steps.dtheta, expected[1], rtol=1e-14)
+
+
+def test_unicycle_reads_body_velocities_with_gyro_like_corrections():
+    robot = Unicycle(c_scale=1.02, yaw_rate_bias=0.01, yaw_rate_scale=0.98)
+    steps = body_steps(robot, _log({"speed": 0.5, "yaw_rate": 0.21}))
+    assert np.allclose(steps.dd, 1.02 * 0.5 * 0.1, rtol=1e-14)
+    assert np.allclose(steps.dtheta, 0.98 * (0.21 - 0.01) * 0.1, rtol=1e-14)
+    assert np.allclose(steps.inputs["yaw_rate"], 0.98 * 0.2, rtol=1e-14)
+    assert np.allclose(body_steps(robot, _log({"dist": 0.05, "yaw_rate": 0.0})).dd, 1.02 * 0.05, rtol=1e-14)
+    with pytest.raises(InputError, match="not ticks"):
+        body_steps(robot, _log({"ticks": 5, "yaw_rate": 0.0}))

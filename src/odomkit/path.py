@@ -1,8 +1,9 @@
 """Planned paths as sequences of constant-curvature segments.
 
 Used by ``predict`` (closed-form covariance) and ``simulate`` (Monte Carlo). A
-differential-drive segment is given by wheel travels; Kelly's gyro and compass models
-use speed, yaw rate and duration.
+differential-drive segment is given by wheel travels; Kelly's gyro and compass models and
+a unicycle use speed, yaw rate and duration; a steered vehicle (tricycle, car) the speed
+of its measuring wheel, its steering angle and a duration (:class:`SteerArc`).
 """
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ from dataclasses import dataclass
 from odomkit import validate
 from odomkit.errors import ModelError
 
-__all__ = ["Arc", "DiffSegment", "KellyArc", "parse_segment", "Segment", "Spin", "Straight"]
+__all__ = ["Arc", "DiffSegment", "KellyArc", "parse_segment", "Segment", "Spin", "SteerArc", "Straight"]
 
 
 @dataclass(frozen=True)
@@ -76,8 +77,27 @@ class KellyArc:
         validate.non_negative(self.duration, "segment duration", unit="s")
 
 
+@dataclass(frozen=True)
+class SteerArc:
+    """Steered vehicles (tricycle, car): the measuring wheel's speed ``speed`` [m/s] and
+    the steering angle ``steer`` [rad] (as the kinematics use them: calibrations and
+    offset applied), constant for ``duration`` [s]. The body motion is the vehicle's
+    (:func:`odomkit.kinematics.steering_body_steps`): a constant-curvature arc."""
+
+    speed: float
+    steer: float
+    duration: float
+
+    def __post_init__(self) -> None:
+        validate.finite(self.speed, "SteerArc.speed", unit="m/s")
+        validate.finite(self.steer, "SteerArc.steer", unit="rad")
+        if not abs(self.steer) < math.pi / 2:
+            raise ModelError(f"SteerArc.steer must lie within ±π/2 rad, got {self.steer!r}")
+        validate.non_negative(self.duration, "segment duration", unit="s")
+
+
 DiffSegment = Arc | Straight | Spin
-Segment = Arc | Straight | Spin | KellyArc
+Segment = Arc | Straight | Spin | KellyArc | SteerArc
 
 _SYNTAX = {
     "diff": "arc:L,R | straight:D | spin:DTHETA",

@@ -478,7 +478,7 @@ def window_covariance_basis(
     WindowBasis
     """
     from odomkit.propagate.inputs import step_terms
-    from odomkit.propagate.transition import sensitivity_chunk, sensitivity_terms
+    from odomkit.propagate.transition import bias_sensitivity_chunk
 
     noise = NoiseSet.of(models)
     noise.check_robot(robot)
@@ -518,10 +518,11 @@ def window_covariance_basis(
             white[w, j] = _end_covariance(part, poses, unit, np.zeros((3, 3)), method)
         if n_cols and len(part):
             K = np.concatenate([m.bias_jacobian(part, 0, len(part)) for m in bias_models], axis=-1)
-            u, C = sensitivity_terms(step_terms(poses[:-1, 2], part.dd, part.dtheta, step_map), K)
-            if robot.measures_heading:
-                u = np.zeros_like(u)  # a measured heading carries no error forward (Kelly 3.1)
-            sens[w] = sensitivity_chunk(u, C, np.zeros((3, n_cols)))[-1]
+            start = np.zeros((3, n_cols))
+            if robot.measures_heading:  # a heading offset moves the measured start heading too
+                start[2] = np.concatenate([m.bias_heading(robot) for m in bias_models])
+            sens[w] = bias_sensitivity_chunk(step_terms(poses[:-1, 2], part.dd, part.dtheta, step_map),
+                                             K, start, robot.measures_heading)[-1]
     turning = np.array([float(np.sum(np.abs(part.dtheta))) for part in prep.steps])
     return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights,
                        tuple(name for name, _ in white_units), tuple(bias_names), turning,

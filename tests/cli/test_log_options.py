@@ -20,10 +20,12 @@ from odomkit.io.optiodom import read_run
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
-LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-scale",
-             "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic"}
+LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-unit",
+             "--time-scale", "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic"}
 CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
 LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
+#: Every command that reads a log (issue 12 item 1: "Every command that reads a log shares these options").
+EVERY_LOG_COMMAND = (*LOG_COMMANDS, "fit-noise", "evaluate", "check", "fit-amcl")
 
 
 def _log_params(command: str) -> dict[str, tuple[str | None, object]]:
@@ -37,8 +39,18 @@ def _log_params(command: str) -> dict[str, tuple[str | None, object]]:
 def test_every_log_reading_command_takes_the_same_log_options():
     reference = _log_params("track")
     assert set(reference) == LOG_FLAGS
-    for command in (*LOG_COMMANDS[1:], "fit-noise", "evaluate"):
+    for command in EVERY_LOG_COMMAND[1:]:
         assert _log_params(command) == reference, command
+
+
+def test_no_other_command_takes_a_log_option():
+    """A command added later that reads logs must join EVERY_LOG_COMMAND (and so take all
+    of the options); one that does not must take none."""
+    from odomkit.cli import commands  # noqa: F401  (registers the commands)
+
+    names = typer.main.get_command(app).commands  # type: ignore[attr-defined]
+    with_options = {name for name in names if _log_params(name)}
+    assert with_options == set(EVERY_LOG_COMMAND)
 
 
 def cumulative_csv(run, path, offset=1000, compress=False):
@@ -145,16 +157,18 @@ def test_a_log_in_metres_is_not_scaled_by_the_robots_encoder(run_cli, tmp_path):
 
 
 @pytest.mark.parametrize("flags, message", [
-    (["--time-scale", "-1"], "--time-scale must be a positive number"),
-    (["--time-scale", "0"], "--time-scale must be a positive number"),
-    (["--time-scale", "nan"], "--time-scale must be a positive number"),
+    (["--time-scale", "-1"], "--time-unit must be one of s, ms, us, µs, ns or a positive number"),
+    (["--time-scale", "0"], "--time-unit must be one of s, ms, us, µs, ns or a positive number"),
+    (["--time-unit", "nan"], "--time-unit must be one of s, ms, us, µs, ns or a positive number"),
+    (["--time-unit", "min"], "--time-unit must be one of s, ms, us, µs, ns or a positive number"),
     (["--period", "0"], "--period must be a positive number of seconds, got 0.0"),
     (["--period", "-0.05"], "--period must be a positive number"),
     (["--wrap-bits", "12"], "--wrap-bits must be one of 8, 16, 24, 32, 64, got 12"),
     (["--decimate", "0"], "--decimate must be a positive integer"),
     (["--format", "rosbag"], "--format must be one of"),
     (["--cumulative"], "--cumulative does not apply to a optiodom log"),
-    (["--time-scale", "1e-3"], "--time-scale does not apply to a optiodom log"),
+    (["--time-scale", "1e-3"], "--time-unit does not apply to a optiodom log"),
+    (["--time-unit", "ms"], "--time-unit does not apply to a optiodom log"),
     (["--columns", "t=t"], "--columns does not apply to a optiodom log"),
 ])
 @pytest.mark.parametrize("command", LOG_COMMANDS)
@@ -197,3 +211,76 @@ def test_reported_warnings_one_line_each_also_before_an_error(capsys):
     merged = with_warnings({"warnings": ["b: second"]}, warned)
     assert merged == {"warnings": ["b: second", "a: first continued"]}
     assert with_warnings({}, []) == {}
+
+
+# --- text logs as they are (issue 12 item 1) ----------------------------------------------
+
+def public_style_log(run, path, *, delimiter=" ", unit_per_s=1, compress=False, header=False):
+    """The run as a text log of another style: ``#`` comment lines, no header (or one), the
+    given delimiter, time in another unit; the columns in a different order than OptiOdom's."""
+    log = read_run(run)
+    gt = log.ground_truth
+    lines = ["# recorded on the test robot", "# columns: stamp right left gx gy gth"]
+    if header:
+        lines.append(delimiter.join(["stamp", "right", "left", "gx", "gy", "gth"]))
+    lines += [delimiter.join(repr(v) for v in (t * unit_per_s, r, l, x, y, th))
+              for t, r, l, x, y, th in zip(log.t.tolist(), log.channels["ticks_right"].tolist(),
+                                            log.channels["ticks_left"].tolist(), *gt.T.tolist(), strict=True)]
+    text = ("\n".join(lines) + "\n").encode()
+    path.write_bytes(gzip.compress(text) if compress else text)
+    return path
+
+
+IN_ORDER = "t,ticks_right,ticks_left,gt_x,gt_y,gt_theta"
+
+
+def test_a_whitespace_log_with_comments_and_no_header_reads_with_columns_in_order(run_cli, tmp_path):
+    """A public-dataset style log (whitespace, # comments, no usable header, ns stamps, gzip)
+    gives the track of the same run read in its own format."""
+    path = public_style_log(RUNS[0], tmp_path / "run.txt.gz", unit_per_s=10**9, compress=True)
+    expected, _ = run_json(run_cli, "track", RUNS[0], "--robot", ROBOT)
+    got, err = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER, "--time-unit", "ns")
+    assert err == ""
+    same_numbers(got, expected)
+
+
+@pytest.mark.parametrize("command, extra", [
+    ("calibrate", ["--side", "0.75"]),
+    ("calibrate-noise", []),
+    ("umbmark", ["--side", "0.75"]),
+])
+def test_every_command_reads_semicolon_logs_in_ms(run_cli, tmp_path, command, extra):
+    runs = [public_style_log(run, tmp_path / f"r{i}.txt", delimiter=";", unit_per_s=1000, header=True)
+            for i, run in enumerate(RUNS)]
+    columns = "t=stamp,ticks_right=right,ticks_left=left,gt_x=gx,gt_y=gy,gt_theta=gth"
+    expected, _ = run_json(run_cli, command, *(["--runs"] if command == "umbmark" else []), *RUNS,
+                           "--robot", ROBOT, *extra)
+    got, err = run_json(run_cli, command, *(["--runs"] if command == "umbmark" else []), *runs,
+                        "--robot", ROBOT, *extra, "--columns", columns, "--time-unit", "ms")
+    assert err == ""
+    same_numbers(got, expected)
+
+
+def test_time_scale_is_kept_as_the_old_name_of_time_unit(run_cli, tmp_path):
+    path = public_style_log(RUNS[0], tmp_path / "run.csv", delimiter=",", unit_per_s=1000)
+    by_unit, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER, "--time-unit", "ms")
+    by_scale, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER,
+                           "--time-scale", "1e-3")
+    by_number, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER,
+                            "--time-unit", "0.001")
+    assert by_unit == by_scale == by_number
+    assert by_unit["duration"] == pytest.approx(read_run(RUNS[0]).t[-1], rel=1e-12)
+
+
+@pytest.mark.parametrize("text, columns, message", [
+    ("t;v;w\n0;1,5;0\n1;1,5;0,25\n", "t=t,speed=v,yaw_rate=w", "line 2: '1,5' has a decimal comma"),
+    ("0,0,0\n1,1,1\n0.5,2,2\n", "t,ticks_left,ticks_right", "line 3: time 0.5 is earlier than 1.0 on line 2"),
+    ("0,0,0\n1,1,1\n", "t=time,ticks_left=L,ticks_right=R", "--columns maps header names, but the file "
+                                                           "has no header"),
+])
+def test_bad_text_logs_exit_2_with_one_line(run_cli, tmp_path, text, columns, message):
+    path = tmp_path / "log.csv"
+    path.write_text(text)
+    code, _, err = run_cli("track", path, "--robot", ROBOT, "--columns", columns)
+    assert code == 2, err
+    assert message in err and err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1

@@ -34,12 +34,19 @@ def test_counter_wraparound_is_undone_in_both_directions(bits, tmp_path):
     assert np.array_equal(unwrap_counter(raw.astype(float), bits) - raw[0], true_counts - true_counts[0])
 
 
-def test_non_monotonic_timestamps_are_sorted_and_repeated_ones_give_zero_steps(tmp_path):
-    text = "time,L,R\n0,0,0\n0.2,20,20\n0.1,10,10\n0.2,20,20\n0.3,30,30\n"
+def test_decreasing_timestamps_are_refused_with_their_line(tmp_path):
+    """Issue 12 item 1: a clock that jumps back (or rows written out of order) is refused,
+    naming the line, rather than sorted: sorting would hide either."""
+    text = "# logger\ntime,L,R\n0,0,0\n0.2,20,20\n0.1,10,10\n0.3,30,30\n"
     path = write(tmp_path, "log.csv", text)
-    with pytest.warns(UserWarning, match="not monotonic"):
-        log = read_csv_log(path, {"t": "time", "ticks_left": "L", "ticks_right": "R"},
-                           cumulative=True)
+    with pytest.raises(InputError, match=r"log.csv, line 5: time 0.1 is earlier than 0.2 on line 4"):
+        read_csv_log(path, {"t": "time", "ticks_left": "L", "ticks_right": "R"}, cumulative=True)
+
+
+def test_repeated_timestamps_give_zero_length_steps(tmp_path):
+    text = "time,L,R\n0,0,0\n0.1,10,10\n0.2,20,20\n0.2,20,20\n0.3,30,30\n"
+    path = write(tmp_path, "log.csv", text)
+    log = read_csv_log(path, {"t": "time", "ticks_left": "L", "ticks_right": "R"}, cumulative=True)
     assert np.array_equal(log.t, [0, 0.1, 0.2, 0.2, 0.3])
     assert np.array_equal(log.channels["ticks_left"], [0, 10, 10, 0, 10])
     track = dead_reckon_log(log, DiffDrive(0.2))

@@ -86,3 +86,31 @@ def test_every_vehicle_takes_a_wheel_size(tmp_path, kind, cls, extra):
     robot, _ = read_robot(robot_file(tmp_path, body))
     assert isinstance(robot, cls)
     assert robot.m_per_tick == pytest.approx(math.pi * 0.2 / 1000, rel=1e-15)
+
+
+def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
+    """Issue 12 item 3: the car's geometry keys and the unicycle's corrections; a car's
+    encoder position is a word from a fixed set, named when wrong."""
+    from odomkit.io.robotfile import write_robot
+    from odomkit.noise import ParameterUncertainty, TricycleNoise
+    from odomkit.robot import Car, Unicycle
+
+    body = ('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = -0.8\nencoder_at = "front"\n'
+            'wheel_radius = 0.3\nencoder_resolution = 1000\nsteering_offset = 0.01\nc_scale = 1.02\n'
+            '[noise]\nsigma_speed = 0.05\nsigma_steer = 0.002\n'
+            '[noise.parameters]\nsigma_scale_left = 0.01\nsigma_steering_offset = 0.003\n')
+    robot, noise = read_robot(robot_file(tmp_path, body))
+    assert robot == Car(2.7, -0.8, "front", math.pi * 0.6 / 1000, 0.01, 1.02)
+    assert noise == (TricycleNoise(0.05, 0.002),
+                     ParameterUncertainty(sigma_scale_left=0.01, sigma_steering_offset=0.003))
+    again = write_robot(tmp_path / "again.toml", robot, noise)
+    assert read_robot(again) == (robot, noise)
+    uni, _ = read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nyaw_rate_bias = 0.002\n'))
+    assert uni == Unicycle(yaw_rate_bias=0.002)
+    for bad, message in (('encoder_at = "middle"\n', "encoder_at must be one of 'rear', 'front', got 'middle'"),
+                         ("", "needs 'wheel_base'")):
+        text = '[robot]\ntype = "car"\n' + ("wheel_base = 2.7\n" if bad else "") + bad
+        with pytest.raises(InputError, match=message):
+            read_robot(robot_file(tmp_path, text))
+    with pytest.raises(InputError, match="unknown field"):
+        read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nm_per_tick = 0.1\nwheel_base = 1\n'))

@@ -149,7 +149,7 @@ def test_sigma_is_carried(tmp_path):
     (["# only a comment"], {}, "empty"),
     (["1,2,3,4,5"], {}, "cannot tell the truth format"),
     (["0,0,0"], {"fmt": "xyz"}, "unknown truth format"),
-    (["0,0,0"], {"time_unit": "min"}, "unknown time unit"),
+    (["0,0,0"], {"time_unit": "min"}, "--truth-time-unit must be one of s, ms"),
     (["0 0 0 0 0 0 0 0"], {}, "quaternion is zero"),
     (["a,b,c", "0,0,0"], {}, r"no column for t, x, y"),
     (["0,0,0"], {"columns": "t=a,x=b,y=c"}, "no header"),

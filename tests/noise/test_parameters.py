@@ -22,7 +22,7 @@ from odomkit.noise.parameters import (
 )
 from odomkit.propagate.recursion import track_covariance
 from odomkit.propagate.transition import parameter_sensitivity
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 
 finite = dict(allow_nan=False, allow_infinity=False)
 
@@ -59,19 +59,42 @@ def test_scale_parameter_jacobian(numeric_jacobian):
 
 
 def test_parameters_per_robot_type():
-    """Which parameters exist depends on the vehicle: diff (b, ε_L, ε_R), tricycle (L, ε),
-    gyro and compass one distance scale ε; the others are refused, not ignored."""
+    """Which parameters exist depends on the vehicle (issue 11 item 1): diff (b, ε_L, ε_R),
+    tricycle and car (L, ε, δα), gyro and unicycle (ε, δω, ε_ω), compass (ε, δh); the
+    others are refused, not ignored."""
     pu = ParameterUncertainty(0.01, 0.02, 0.03)
     assert np.allclose(pu.bias_variances(DiffDrive(0.4)), [1e-4, 4e-4, 9e-4], rtol=1e-14)
-    tri = ParameterUncertainty(0.01, 0.02)
-    assert np.allclose(tri.bias_variances(Tricycle(0.7)), [1e-4, 4e-4], rtol=1e-14)
-    scale = ParameterUncertainty(sigma_scale_left=0.02)
-    for robot in (GyroOdometry(), CompassOdometry()):
-        assert np.allclose(scale.bias_variances(robot), [4e-4], rtol=1e-14)
-        with pytest.raises(ModelError, match="only sigma_scale_left"):
+    steered = ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.005)
+    for robot in (Tricycle(0.7), Car(2.7)):
+        assert np.allclose(steered.bias_variances(robot), [1e-4, 4e-4, 2.5e-5], rtol=1e-14)
+    rate = ParameterUncertainty(sigma_scale_left=0.02, sigma_yaw_rate_offset=0.001,
+                                sigma_yaw_rate_scale=0.03)
+    for robot in (GyroOdometry(), Unicycle()):
+        assert np.allclose(rate.bias_variances(robot), [4e-4, 1e-6, 9e-4], rtol=1e-14)
+        assert not rate.bias_heading(robot).any()
+        with pytest.raises(ModelError, match="sigma_wheel_base does not apply"):
             pu.check_robot(robot)
+    compass = ParameterUncertainty(sigma_scale_left=0.02, sigma_heading_offset=0.01)
+    assert np.allclose(compass.bias_variances(CompassOdometry()), [4e-4, 1e-4], rtol=1e-14)
+    assert compass.bias_heading(CompassOdometry()).tolist() == [0.0, 1.0]
     with pytest.raises(ModelError, match="one traction wheel"):
         pu.bias_variances(Tricycle(0.7))
+    with pytest.raises(ModelError, match="sigma_steering_offset does not apply to a DiffDrive"):
+        steered.check_robot(DiffDrive(0.4))
+
+
+def test_car_parameter_jacobian_matches_finite_differences(numeric_jacobian):
+    """∂(Δd, Δθ)/∂(L, ε, δα) of a car, both encoder positions, against its body steps."""
+    from odomkit.kinematics import car_body_steps
+    from odomkit.noise.parameters import car_parameter_jacobian
+
+    for at in ("rear", "front"):
+        for s, a in ((0.3, 0.2), (-0.1, -0.5)):
+            def body(p, s=s, a=a, at=at):
+                return np.array(car_body_steps(s * (1 + p[1]), a + p[2], p[0], 0.7, at))
+
+            got = car_parameter_jacobian(s, a, 2.5, 0.7, at)
+            assert np.allclose(got, numeric_jacobian(body, [2.5, 0.0, 0.0]), atol=1e-9)
 
 
 def test_mode_sets_the_kind_and_white_mode_repeats_the_parameters_every_step():
@@ -196,3 +219,73 @@ def test_parameter_sensitivity_function_and_white_cov(numeric_jacobian):
     k = diff_parameter_jacobian(d_l, d_r, 0.4)
     q = white_parameter_cov(k, [1e-4, 0.0, 0.0])
     assert np.allclose(q[:, 1, 1], 1e-4 * k[:, 1, 0] ** 2) and not q[:, 0, 0].any()
+
+
+# --- every vehicle's bias through the engines (issue 11 item 1) ----------------------
+# Each β maps onto the robot's own calibration fields, so the independent truth is the
+# whole pipeline (log channels -> body steps -> dead reckoning) differentiated by finite
+# differences in those fields.
+def _vehicle_cases():
+    from dataclasses import replace
+
+    from odomkit.log import OdometryLog
+
+    rng = np.random.default_rng(21)
+    n = 120
+    t = np.cumsum(np.r_[0.0, rng.uniform(0.05, 0.15, n - 1)])
+    steer = 0.3 * np.sin(np.linspace(0, 4, n)) + 0.05
+    ticks = rng.uniform(80, 120, n)
+    rate = 0.4 * np.cos(np.linspace(0, 3, n))
+    logs = {
+        "diff": OdometryLog(t, {"ticks_left": ticks, "ticks_right": ticks * 1.15}),
+        "steered": OdometryLog(t, {"speed": rng.uniform(0.5, 1.0, n), "steer": steer}),
+        "rate": OdometryLog(t, {"ticks": ticks, "yaw_rate": rate}),
+        "unicycle": OdometryLog(t, {"speed": rng.uniform(0.5, 1.0, n), "yaw_rate": rate}),
+        "compass": OdometryLog(t, {"ticks": ticks, "heading": np.cumsum(rate * 0.1)}),
+    }
+    # (robot, log, noise, β -> robot with the parameters perturbed)
+    return [
+        ("diff", DiffDrive(0.4, 1e-4, 1e-4), logs["diff"],
+         ParameterUncertainty(0.01, 0.02, 0.03),
+         lambda r, p: replace(r, wheel_base=r.wheel_base + p[0], c_left=1 + p[1], c_right=1 + p[2])),
+        ("tricycle", Tricycle(0.7), logs["steered"],
+         ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01),
+         lambda r, p: replace(r, wheel_to_axle=r.wheel_to_axle + p[0], c_scale=1 + p[1], steering_offset=p[2])),
+        ("car-rear", Car(2.7, 0.8), logs["steered"],
+         ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01),
+         lambda r, p: replace(r, wheel_base=r.wheel_base + p[0], c_scale=1 + p[1], steering_offset=p[2])),
+        ("car-front", Car(2.7, -0.8, "front"), logs["steered"],
+         ParameterUncertainty(0.01, 0.02, sigma_steering_offset=0.01),
+         lambda r, p: replace(r, wheel_base=r.wheel_base + p[0], c_scale=1 + p[1], steering_offset=p[2])),
+        # an additive yaw-rate error δω is a gyro_bias of −δω (gyro_scale 1)
+        ("gyro", GyroOdometry(1e-4), logs["rate"],
+         ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.003, sigma_yaw_rate_scale=0.02),
+         lambda r, p: replace(r, m_per_tick=1e-4 * (1 + p[0]), gyro_bias=-p[1], gyro_scale=1 + p[2])),
+        ("unicycle", Unicycle(), logs["unicycle"],
+         ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.003, sigma_yaw_rate_scale=0.02),
+         lambda r, p: replace(r, c_scale=1 + p[0], yaw_rate_bias=-p[1], yaw_rate_scale=1 + p[2])),
+        ("compass", CompassOdometry(1e-4), logs["compass"],
+         ParameterUncertainty(0, 0.02, sigma_heading_offset=0.01),
+         lambda r, p: replace(r, m_per_tick=1e-4 * (1 + p[0]), heading_offset=p[1])),
+    ]
+
+
+@pytest.mark.parametrize("case", _vehicle_cases(), ids=lambda c: c[0])
+@pytest.mark.parametrize("engine", ["recursion", "transition"])
+def test_every_vehicles_bias_is_the_whole_track_sensitivity(numeric_jacobian, case, engine):
+    """cov_k = S_k diag(σ²) S_kᵀ with S_k = ∂pose_k/∂β from finite differences of the
+    whole dead reckoning, at every 10th row (row 0 too: a compass's heading offset moves
+    its measured start heading), chunked so that S crosses chunk boundaries."""
+    from odomkit.track import dead_reckon_log
+
+    _, robot, log, noise, perturbed = case
+    track = dead_reckon_log(log, robot)
+    var = noise.bias_variances(robot)
+    cov = track_covariance(track.steps, track.poses, noise, np.zeros((3, 3)), engine=engine,
+                           chunk_size=37)
+    p0 = np.zeros(var.size)
+    rows = np.arange(0, len(log), 10)
+    sens = numeric_jacobian(lambda p: dead_reckon_log(log, perturbed(robot, p)).poses[rows].ravel(), p0, 1e-6)
+    sens = sens.reshape(rows.size, 3, var.size)
+    want = np.einsum("nip,p,njp->nij", sens, var, sens)
+    assert np.allclose(cov[rows], want, rtol=1e-5, atol=1e-12 * np.abs(want).max())

@@ -73,5 +73,5 @@ def test_tricycle_noise_needs_travel_and_steering():
                       DiffDrive(0.4))
     with pytest.raises(ModelError, match="TricycleNoise needs the per-step input 'travel'"):
         TricycleNoise(0.01, 0.02).input_cov(steps, 0, 3)
-    with pytest.raises(ModelError, match="TricycleNoise applies to a Tricycle robot"):
+    with pytest.raises(ModelError, match="TricycleNoise applies to a Tricycle or Car robot"):
         TricycleNoise(0.01, 0.02).check_robot(steps.robot)

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from odomkit.errors import ModelError
-from odomkit.kinematics import BodySteps, diff_body_steps, tricycle_body_steps
+from odomkit.kinematics import BodySteps, diff_body_steps, steering_body_steps
 from odomkit.noise import NOISE_MODELS, NoiseModel, ParameterUncertainty, WheelNoise
 from odomkit.noise.base import variance_power
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 
 M = 50
 
@@ -26,19 +26,20 @@ def _steps(robot):
         dl, dr = rng.uniform(0.005, 0.02, (2, M))
         dd, dth = diff_body_steps(dl, dr, robot.effective_wheel_base)
         return BodySteps(dd, dth, dt, {"d_left": dl, "d_right": dr}, robot)
-    if isinstance(robot, Tricycle):
+    if isinstance(robot, Tricycle | Car):
         travel, steer = rng.uniform(0.005, 0.02, M), rng.uniform(-0.5, 0.5, M)
-        dd, dth = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+        dd, dth = steering_body_steps(robot, travel, steer)
         return BodySteps(dd, dth, dt, {"travel": travel, "steer": steer}, robot)
     dd = rng.uniform(0.005, 0.02, M)
-    if isinstance(robot, GyroOdometry):
+    if isinstance(robot, GyroOdometry | Unicycle):
         rate = rng.normal(0, 0.3, M)
         return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
     heading = np.cumsum(rng.normal(0, 0.05, M + 1))
     return BodySteps(dd, np.diff(heading), dt, {"heading": heading}, robot)
 
 
-ROBOTS = [DiffDrive(0.3), Tricycle(0.15), GyroOdometry(), CompassOdometry()]
+ROBOTS = [DiffDrive(0.3), Tricycle(0.15), GyroOdometry(), CompassOdometry(), Unicycle(),
+          Car(2.7, 0.8)]
 
 
 def _zero(cls: type[NoiseModel]) -> NoiseModel:
@@ -96,8 +97,16 @@ def test_only_parameters_that_apply_to_the_robot_are_listed():
     pu = ParameterUncertainty()
     assert set(pu.variance_parameters(DiffDrive(0.3))) == {"sigma_wheel_base", "sigma_scale_left",
                                                            "sigma_scale_right"}
-    assert set(pu.variance_parameters(Tricycle(0.15))) == {"sigma_wheel_base", "sigma_scale_left"}
-    assert set(pu.variance_parameters(GyroOdometry())) == {"sigma_scale_left"}
+    steered = {"sigma_wheel_base", "sigma_scale_left", "sigma_steering_offset"}
+    assert set(pu.variance_parameters(Tricycle(0.15))) == steered
+    assert set(pu.variance_parameters(Car(2.7))) == steered
+    rate = {"sigma_scale_left", "sigma_yaw_rate_offset", "sigma_yaw_rate_scale"}
+    assert set(pu.variance_parameters(GyroOdometry())) == rate
+    assert set(pu.variance_parameters(Unicycle())) == rate
+    assert set(pu.variance_parameters(CompassOdometry())) == {"sigma_scale_left", "sigma_heading_offset"}
+    # the heading offset has no white mode (that is CompassNoise)
+    white = ParameterUncertainty(mode="white")
+    assert set(white.variance_parameters(CompassOdometry())) == {"sigma_scale_left"}
     assert "mode" not in pu.variance_parameters()
 
 

@@ -19,7 +19,7 @@ from odomkit.noise import (
     TricycleNoise,
     WheelNoise,
 )
-from odomkit.path import Arc, KellyArc, Spin, Straight
+from odomkit.path import Arc, KellyArc, Spin, SteerArc, Straight
 from odomkit.propagate.paths import (
     check_partitions,
     check_segments,
@@ -28,7 +28,7 @@ from odomkit.propagate.paths import (
     path_steps,
     segment_motion,
 )
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 
 ACCEPTED = [
     (WheelNoise(0.01, 0.02), "wheel", DiffDrive),
@@ -37,6 +37,10 @@ ACCEPTED = [
     ((SpeedNoise(1e-3), GyroNoise(1e-4)), "gyro", GyroOdometry),
     (CompassNoise(1e-4), "compass", CompassOdometry),
     (NoiseSet.of((SpeedNoise(1e-3), CompassNoise(1e-4))), "compass", CompassOdometry),
+    # every family but the classical takes the vehicle's bias (issue 11 item 1)
+    ((WheelNoise(0.01, 0.02), ParameterUncertainty(0.01)), "wheel", DiffDrive),
+    ((GyroNoise(1e-4), ParameterUncertainty(sigma_yaw_rate_offset=1e-3)), "gyro", GyroOdometry),
+    ((CompassNoise(1e-4), ParameterUncertainty(sigma_heading_offset=1e-3)), "compass", CompassOdometry),
 ]
 
 
@@ -54,9 +58,8 @@ def test_path_model_picks_family_and_vehicle(noise, family, vehicle):
 
 REJECTED = [
     SpeedNoise(1e-3),                                   # joins a family, selects none
-    TricycleNoise(0.01, 0.02),                          # no closed-form path family
     (WheelNoise(0.01, 0.02), SpeedNoise(1e-3)),         # not part of the wheel family
-    (WheelNoise(0.01, 0.02), ParameterUncertainty(0.01)),
+    (GyroNoise(1e-4), TricycleNoise(0.01, 0.02)),      # not part of the gyro family
     (GyroNoise(1e-4), CompassNoise(1e-4)),              # two families
     (),
 ]
@@ -159,7 +162,8 @@ def test_path_steps_of_kelly_segments():
     assert np.allclose(steps.dd, np.repeat([2.0, 3.0], 5) / 5, rtol=1e-14)
     assert np.allclose(steps.dtheta, np.repeat([0.4, 0.0], 5) / 5, rtol=1e-14)
     assert np.allclose(steps.dt, np.repeat([4.0, 3.0], 5) / 5, rtol=1e-14)
-    assert dict(steps.inputs) == {} and isinstance(steps.robot, GyroOdometry)
+    assert isinstance(steps.robot, GyroOdometry)
+    assert np.allclose(steps.inputs["yaw_rate"], np.repeat([0.1, 0.0], 5), rtol=1e-14)
     assert len(path_steps([], model, 5)) == 0
 
 
@@ -178,3 +182,51 @@ def test_path_steps_drive_commanded_travels_with_a_true_robot():
     assert steps.robot is true
     with pytest.raises(ModelError, match="partitions"):
         path_steps([Spin(phi)], model, 0)
+
+
+def test_a_robot_picks_the_vehicle_and_steered_vehicles_need_one():
+    """Issue 12 item 3: a unicycle drives KellyArc segments with the gyro family's noise;
+    a tricycle or car drives SteerArc segments ("steering" family), and bias alone is a
+    model once the robot says which vehicle it is."""
+    uni = path_model((SpeedNoise(1e-3), GyroNoise(1e-4)), robot=Unicycle())
+    assert (uni.family, uni.robot) == ("gyro", Unicycle())
+    car = Car(2.7, 0.8)
+    for noise in (TricycleNoise(0.01, 0.02), ParameterUncertainty(sigma_steering_offset=0.01),
+                  (TricycleNoise(0.01, 0.02), SpeedNoise(1e-3), ParameterUncertainty(0.01))):
+        model = path_model(noise, robot=car)
+        assert (model.family, model.robot, model.steered) == ("steering", car, True)
+    assert path_model(ParameterUncertainty(0.01), robot=DiffDrive(0.3)).family == "wheel"
+    with pytest.raises(ModelError, match="without a robot: it describes a steered vehicle"):
+        path_model(TricycleNoise(0.01, 0.02))
+    with pytest.raises(ModelError, match="is a gyro model, not one of a car robot"):
+        path_model(GyroNoise(1e-4), robot=car)
+    with pytest.raises(ModelError, match="wheel_base 0.5 m differs"):
+        path_model(WheelNoise(0.01, 0.01), 0.5, robot=DiffDrive(0.4))
+    with pytest.raises(ModelError, match="needs SteerArc"):
+        check_segments([KellyArc(1.0, 0.1, 2.0)], path_model(TricycleNoise(0.01, 0.02), robot=car))
+    with pytest.raises(ModelError, match="needs KellyArc"):
+        check_segments([SteerArc(1.0, 0.1, 2.0)], uni)
+    with pytest.raises(ModelError, match="within ±π/2"):
+        SteerArc(1.0, 2.0, 1.0)
+
+
+@pytest.mark.parametrize("robot", [Tricycle(0.7), Car(2.7, 0.8), Car(2.7, -0.8, "front")],
+                         ids=["tricycle", "car-rear", "car-front"])
+def test_steer_arc_steps_are_the_vehicles_circle(robot):
+    """Hand geometry: a SteerArc turns the rear-axle centre on a circle of radius
+    R = L/tan α, whose measuring wheel runs on √(x_w² + (R − H)²) (x_w = L at the front,
+    0 at the rear): driven for one turn of that wheel's circle it closes the circle."""
+    alpha, length = 0.35, getattr(robot, "wheel_base", None) or robot.wheel_to_axle
+    offset = getattr(robot, "encoder_offset", 0.0)
+    front = not isinstance(robot, Car) or robot.encoder_at == "front"
+    radius = length / np.tan(alpha)
+    wheel = np.hypot(length if front else 0.0, radius - offset)
+    seg = SteerArc(1.5, alpha, 2 * np.pi * wheel / 1.5)
+    model = path_model(TricycleNoise(0.01, 0.01), robot=robot)
+    steps = path_steps([seg], model, 200)
+    assert steps.inputs["travel"].sum() == pytest.approx(2 * np.pi * wheel, rel=1e-12)
+    assert np.all(steps.inputs["steer"] == alpha) and steps.dt.sum() == pytest.approx(seg.duration)
+    assert steps.dtheta.sum() == pytest.approx(2 * np.pi, rel=1e-12)
+    assert steps.dd.sum() == pytest.approx(2 * np.pi * radius, rel=1e-12)
+    assert np.allclose(dead_reckon(steps.dd, steps.dtheta)[-1], [0, 0, 2 * np.pi], atol=1e-9)
+    assert segment_motion(seg, 1.0, robot) == pytest.approx((2 * np.pi * radius, 2 * np.pi), rel=1e-12)

@@ -26,8 +26,9 @@ def test_the_counter_widths_agree_with_the_reader():
 
 @pytest.mark.parametrize("kwargs, flag", [
     ({"period": 0.0}, "--period"), ({"period": -1.0}, "--period"), ({"period": math.nan}, "--period"),
-    ({"time_scale": 0.0}, "--time-scale"), ({"time_scale": -1.0}, "--time-scale"),
-    ({"time_scale": math.inf}, "--time-scale"), ({"wrap_bits": 12}, "--wrap-bits"),
+    ({"time_unit": 0.0}, "--time-unit"), ({"time_unit": "-1"}, "--time-unit"),
+    ({"time_unit": math.inf}, "--time-unit"), ({"time_unit": "min"}, "--time-unit"),
+    ({"time_unit": True}, "--time-unit"), ({"wrap_bits": 12}, "--wrap-bits"),
     ({"decimate": 0}, "--decimate"), ({"decimate": 2.0}, "--decimate"), ({"format": "rosbag"}, "--format"),
 ])
 def test_bad_values_are_refused_by_flag(kwargs, flag):
@@ -71,7 +72,7 @@ def test_a_gzip_run_is_detected_and_read(tmp_path):
     (LogOptions(period=0.05), "--period does not apply to a optiodom log"),
     (LogOptions(format="csv", columns="t=t", period=0.05), "--period does not apply to a csv log"),
     (LogOptions(format="snowhite", wrap_bits=16), "--wrap-bits does not apply to a snowhite log"),
-    (LogOptions(format="khepera", time_scale=1e-3), "--time-scale does not apply to a khepera log"),
+    (LogOptions(format="khepera", time_unit="ms"), "--time-unit does not apply to a khepera log"),
     (LogOptions(format="csv", columns="t=t", wrap_bits=16), "--wrap-bits unwraps cumulative counters"),
 ])
 def test_an_option_the_format_ignores_is_an_error(options, message):

@@ -28,7 +28,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -76,7 +76,7 @@ def calibrate_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -87,7 +87,7 @@ def calibrate_command(
     """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
     from odomkit.workflows.calibration import calibrate_files
 
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.
@@ -139,7 +139,7 @@ def calibrate_noise_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -156,7 +156,7 @@ def calibrate_noise_command(
     kwargs: dict[str, Any] = {"components": comps, "level": level}
     if known_mean:
         kwargs["mean"] = [0.0] * len(comps)
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force, **kwargs)

@@ -24,7 +24,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -61,7 +61,7 @@ def check_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -74,7 +74,7 @@ def check_command(
     and say what to record next. Exit status 1 when a check fails."""
     from odomkit.workflows.check import check_file
 
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     topts = truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     out = check_file(log, robot, topts, log_options=options, spin=spin)

@@ -22,7 +22,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -79,7 +79,7 @@ def evaluate_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -99,7 +99,7 @@ def evaluate_command(
     distances = _distances(rpe)
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_file = truth_options_per_log(base, list(truth or []), len(files))
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     if robot is None:
         if window is not None:

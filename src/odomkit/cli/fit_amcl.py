@@ -22,7 +22,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -70,7 +70,7 @@ def fit_amcl_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -88,7 +88,7 @@ def fit_amcl_command(
 
     if not 0 < level < 1:
         raise InputError(f"--level must be in (0, 1), got {level}")
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_file = truth_options_per_log(base, list(truth or []), len(odometry))

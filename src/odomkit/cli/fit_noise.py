@@ -23,7 +23,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -78,7 +78,7 @@ def fit_noise_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -97,7 +97,7 @@ def fit_noise_command(
         raise InputError(f"--level must be in (0, 1), got {level}")
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_log = truth_options_per_log(base, list(truth or []), len(log))

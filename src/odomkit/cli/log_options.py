@@ -1,11 +1,16 @@
 """The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
-files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-scale
+files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-unit
 --decimate --topic --joints --bag-time --truth-topic``, declared once here and parsed into
 :class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
 it) raises, shown as one line each.
 
-``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise`` and ``evaluate``
-take these options alike (``tests/cli/test_log_options.py`` checks that no command lacks one).
+``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise``, ``evaluate``,
+``check`` and ``fit-amcl`` take these options alike (``tests/cli/test_log_options.py`` checks
+that no command lacks one).
+
+``--time-scale F`` (seconds per unit), the flag before ``--time-unit``, is kept as a second
+name of ``--time-unit``, which takes a unit (s, ms, us, ns) or such a number: old scripts
+run unchanged.
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from odomkit.workflows.logs import LOG_FORMATS, LogOptions
 
 __all__ = [
     "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "JointsOption",
-    "log_options", "PeriodOption", "reported_warnings", "TimeScaleOption", "TopicOption", "TruthTopicOption",
+    "log_options", "PeriodOption", "reported_warnings", "TimeUnitOption", "TopicOption", "TruthTopicOption",
     "with_warnings", "WrapBitsOption",
 ]
 
@@ -30,7 +35,9 @@ FormatOption = Annotated[str, typer.Option(
     "--format", help=f"Log format: {', '.join(LOG_FORMATS)} (auto: from the file name; a .bag, "
                      ".db3, .mcap or ROS 2 bag folder is a bag). Plain or gzip (.gz) text.")]
 ColumnsOption = Annotated[str | None, typer.Option(
-    "--columns", help="CSV column mapping, e.g. t=time,ticks_left=L,ticks_right=R.")]
+    "--columns", help="Text log columns: header names t=time,ticks_left=L,ticks_right=R, or in order "
+                      "for a headerless file t,ticks_left,_,ticks_right (_ skips a column). Comma, "
+                      "semicolon, tab or whitespace separated; # comments.")]
 CumulativeOption = Annotated[bool, typer.Option(
     "--cumulative/--no-cumulative",
     help="CSV ticks_*/dist_* columns are cumulative counters (differenced, integers exactly).")]
@@ -38,8 +45,10 @@ WrapBitsOption = Annotated[int | None, typer.Option(
     "--wrap-bits", help="Unwrap cumulative counters of this width: 8, 16, 24, 32 or 64.")]
 PeriodOption = Annotated[float | None, typer.Option(
     "--period", help="Sample period [s] of a log without time (khepera, snowhite).")]
-TimeScaleOption = Annotated[float, typer.Option(
-    "--time-scale", help="Seconds per unit of the CSV time column (1e-9 for ns stamps).")]
+TimeUnitOption = Annotated[str, typer.Option(
+    "--time-unit", "--time-scale",
+    help="Unit of the text log's time column: s, ms, us, ns, or seconds per unit (1e-4 for 100 µs "
+         "ticks). --time-scale is its old name.")]
 DecimateOption = Annotated[int, typer.Option(
     "--decimate", help="Use every n-th row (increments summed, rates sampled).")]
 TopicOption = Annotated[list[str] | None, typer.Option(
@@ -56,14 +65,14 @@ TruthTopicOption = Annotated[str | None, typer.Option(
 
 
 def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: int | None,
-                period: float | None, time_scale: float, decimate: int, topic: list[str] | None = None,
+                period: float | None, time_unit: str, decimate: int, topic: list[str] | None = None,
                 joints: str | None = None, bag_time: bool = False,
                 truth_topic: str | None = None) -> LogOptions:
     """The parsed log options; a bad value is one line naming its flag (exit 2). ``--topic``
     may also be comma-separated; ``--joints`` is."""
     topics = tuple(name.strip() for text in topic or () for name in text.split(","))
     joint_names = tuple(name.strip() for name in joints.split(",")) if joints is not None else ()
-    return LogOptions(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    return LogOptions(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                       topics, joint_names, bag_time, truth_topic)
 
 

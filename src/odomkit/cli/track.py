@@ -16,7 +16,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -65,7 +65,7 @@ def track(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -88,6 +88,9 @@ def track(
         help="Covariance engine: recursion (step recursion) | transition (Kelly).")] = "recursion",
     out: Annotated[Path | None, typer.Option(help="Write the track as CSV here.")] = None,
     tum: Annotated[Path | None, typer.Option(help="Write a TUM trajectory here.")] = None,
+    kitti: Annotated[Path | None, typer.Option(
+        help="Write KITTI poses here (12 numbers a row, planar: z = 0, rotation about z) and their "
+             "times beside it, NAME.times.txt (evo pairs KITTI poses by index).")] = None,
     bag_out: Annotated[Path | None, typer.Option(
         help="Write nav_msgs/Odometry (pose and twist with covariance) as a ROS bag here: a .bag "
              "path is ROS 1, any other path a ROS 2 bag folder.")] = None,
@@ -101,7 +104,7 @@ def track(
     """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     from odomkit.workflows.track import run_track
 
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     with reported_warnings() as warned:
         result = run_track(
@@ -109,7 +112,7 @@ def track(
             log_options=options, pose0=parse_pose(initial_pose, theta0_deg),
             cov0=parse_initial_cov(initial_cov),
             truth=truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap),
-            with_covariance=covariance, engine=engine, out=out, tum=tum, overwrite=force,
+            with_covariance=covariance, engine=engine, out=out, tum=tum, kitti=kitti, overwrite=force,
             bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
         )
         summary = result.summary()

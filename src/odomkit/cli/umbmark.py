@@ -28,7 +28,7 @@ from odomkit.cli.log_options import (
     FormatOption,
     JointsOption,
     PeriodOption,
-    TimeScaleOption,
+    TimeUnitOption,
     TopicOption,
     TruthTopicOption,
     WrapBitsOption,
@@ -91,7 +91,7 @@ def umbmark_command(
     cumulative: CumulativeOption = False,
     wrap_bits: WrapBitsOption = None,
     period: PeriodOption = None,
-    time_scale: TimeScaleOption = 1.0,
+    time_unit: TimeUnitOption = "s",
     decimate: DecimateOption = 1,
     topic: TopicOption = None,
     joints: JointsOption = None,
@@ -103,7 +103,7 @@ def umbmark_command(
     from odomkit.workflows import umbmark as workflow
 
     positional = list(errors_csv or [])
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_scale, decimate,
+    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"--side must be a positive length in metres, got {side!r} "

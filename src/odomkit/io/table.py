@@ -10,6 +10,7 @@ that a 64-bit encoder count keeps its low bits (a float64 holds 2**63 only to ±
 from __future__ import annotations
 
 import io
+import re
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -30,6 +31,9 @@ __all__ = [
 COUNTER_BITS = (8, 16, 24, 32, 64)
 """Counter widths whose wrap-around can be undone."""
 
+# Leading blanks of a line that holds only a comment or blanks (the line itself stays, so
+# that line numbers hold).
+_INDENTED_EMPTY = re.compile(r"^[ \t]+(?=#|\r?$)", re.MULTILINE)
 # A column that only ever grows is flagged when it takes at least this many distinct values
 # (and 1 % of the rows): fewer could be increments that merely rose during a short log.
 _MIN_DISTINCT = 16
@@ -130,6 +134,9 @@ def read_table(
     body = text.split("\n", skip_header)[-1] if skip_header else text
     if skip_header and text.count("\n") < skip_header:
         body = ""
+    if _INDENTED_EMPTY.search(body):
+        # numpy and polars take '  # note' or '   ' for a row when a delimiter is set
+        body = _INDENTED_EMPTY.sub("", body)
     found = _read_with_polars(body, ncols, delimiter, integer_columns)
     if found is None:
         found = _read_with_numpy(body, ncols, delimiter, integer_columns, source, text, skip_header)

@@ -136,10 +136,15 @@ def content_lines(text: str) -> Iterator[tuple[int, str]]:
     """(1-based line number, content) of every line that holds something: ``#`` starts a
     comment anywhere on a line (as numpy reads it), blank and comment-only lines are left
     out, and the content is stripped of surrounding whitespace (``\\r`` included)."""
-    for lineno, line in enumerate(text.split("\n"), start=1):
-        content = line.split("#", 1)[0].strip()
+    start, lineno = 0, 0
+    while start <= len(text):  # lazily: a log may be long, and only its first lines are sniffed
+        end = text.find("\n", start)
+        end = len(text) if end < 0 else end
+        lineno += 1
+        content = text[start:end].split("#", 1)[0].strip()
         if content:
             yield lineno, content
+        start = end + 1
 
 
 def split_fields(content: str, delimiter: str | None) -> list[str]:
@@ -209,12 +214,15 @@ def _decimal_comma(sample: list[tuple[int, str]], source: str) -> InputError | N
     """The error for a table of decimal-comma numbers (``1,5;2,25``), or None: some
     non-comma separator splits every sampled line into the same two or more fields, each a
     number or a number with a decimal comma, and at least one has the comma."""
+    def numeric(field: str) -> bool:
+        return is_number(field) or _DECIMAL_COMMA.fullmatch(field) is not None
+
     for delimiter in (";", "\t", None):
         rows = [(n, split_fields(c, delimiter)) for n, c in sample]
-        data = rows[1:] if not all(map(is_number, rows[0][1])) else rows
+        data = rows if all(map(numeric, rows[0][1])) else rows[1:]
         if not data or len(data[0][1]) < 2 or any(len(r) != len(data[0][1]) for _, r in data):
             continue
-        if not all(is_number(f) or _DECIMAL_COMMA.fullmatch(f) for _, r in data for f in r):
+        if not all(numeric(f) for _, r in data for f in r):
             continue
         for lineno, row in data:
             comma = next((f for f in row if _DECIMAL_COMMA.fullmatch(f)), None)

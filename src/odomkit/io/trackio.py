@@ -1,4 +1,4 @@
-"""Pose tracks: odomkit CSV (with covariance and optional truth) and TUM trajectory files."""
+"""Pose tracks: odomkit CSV (with covariance and optional truth), TUM and KITTI trajectory files."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ from odomkit.io.files import refuse_overwrite
 from odomkit.io.table import polars_module
 from odomkit.track import Track
 
-__all__ = ["read_track_csv", "TRACK_COLUMNS", "track_table", "TrackFile", "TRUTH_COLUMNS", "write_track_csv",
-           "write_tum"]
+__all__ = ["kitti_times_path", "read_track_csv", "TRACK_COLUMNS", "track_table", "TrackFile", "TRUTH_COLUMNS",
+           "write_kitti", "write_track_csv", "write_tum"]
 
 TRACK_COLUMNS = ("t", "x", "y", "theta", "cov_xx", "cov_xy", "cov_xtheta", "cov_yy",
                  "cov_ytheta", "cov_thetatheta")
@@ -182,3 +182,47 @@ def write_tum(path: str | Path, track: Track, overwrite: bool = False) -> Path:
                              np.zeros(n), np.zeros(n), np.sin(theta / 2), np.cos(theta / 2)))
     np.savetxt(path, table, fmt="%.9f", delimiter=" ")
     return path
+
+
+def kitti_times_path(path: str | Path) -> Path:
+    """Where :func:`write_kitti` puts the times of a KITTI pose file: beside it, its last
+    suffix replaced by ``.times.txt`` (``run.kitti`` -> ``run.times.txt``, ``poses.txt`` ->
+    ``poses.times.txt``).
+
+    >>> kitti_times_path("out/run.kitti").as_posix()
+    'out/run.times.txt'
+    """
+    path = Path(path)
+    return path.with_name(path.stem + ".times.txt")
+
+
+def write_kitti(path: str | Path, track: Track, overwrite: bool = False) -> tuple[Path, Path]:
+    """Write a KITTI pose file and its times (:func:`kitti_times_path`), readable by evo
+    (``evo_traj kitti``, ``evo_ape kitti``).
+
+    A KITTI pose is the 3×4 matrix [R | p] of the pose in the first frame's world, written
+    row by row: 12 numbers a line, ``r11 r12 r13 px r21 r22 r23 py r31 r32 r33 pz`` (KITTI
+    odometry development kit, readme). The planar pose is a rotation about z by θ and
+    z = 0: R = [[cos θ, −sin θ, 0], [sin θ, cos θ, 0], [0, 0, 1]], p = (x, y, 0), so the
+    plane is x–y with z up (KITTI's own camera frame has its ground in x–z; evo compares
+    any two files alike). KITTI rows carry no time, and evo pairs KITTI poses by their
+    index: the times go to a file of their own, one per line in seconds, as KITTI's
+    ``times.txt``. ``paste -d' ' TIMES POSES`` makes the 13-number rows that
+    ``--truth-format kitti`` reads. Numbers are written with 17 significant digits (they
+    read back to the same doubles).
+
+    Returns
+    -------
+    (Path, Path)
+        The pose file and the times file.
+    """
+    path = Path(path)
+    times = kitti_times_path(path)
+    refuse_overwrite(path, times, overwrite=overwrite)
+    x, y, theta = track.poses.T
+    c, s = np.cos(theta), np.sin(theta)
+    zero, one = np.zeros_like(x), np.ones_like(x)
+    rows = np.column_stack((c, -s, zero, x, s, c, zero, y, zero, zero, one, zero))
+    np.savetxt(path, rows, fmt="%.17g", delimiter=" ")
+    np.savetxt(times, track.t, fmt="%.17g")
+    return path, times

@@ -22,8 +22,9 @@ Formats (``--truth-format``):
     A header means ``csv``; otherwise 8 columns mean ``tum``, 13 (or 12) ``kitti``, 3 or 4
     ``csv``.
 
-Every format: comma, semicolon, tab or whitespace separated, ``#`` comment lines, plain or
-gzip (``.gz``), time in s, ms, us or ns (``--truth-time-unit``). Rows are put in time order
+Every format: comma, semicolon, tab or whitespace separated, ``#`` comments, plain or gzip
+(``.gz``), sniffed as a log's text is (:func:`odomkit.io.text.sniff_layout`); time in s, ms,
+us or ns, or seconds per unit as a number (``--truth-time-unit``). Rows are put in time order
 (with a warning) and repeated times dropped (with a warning that counts them); a NaN is an
 error naming its line: leave such fixes out, and the gap is left out and counted.
 """
@@ -39,14 +40,13 @@ from numpy.typing import NDArray
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
-from odomkit.io.text import read_text
+from odomkit.io.table import to_seconds
+from odomkit.io.text import content_lines, is_number, read_text, seconds_per_unit, sniff_layout, split_fields
 from odomkit.truth import Truth
 
-__all__ = ["TIME_UNITS", "TRUTH_FORMATS", "parse_truth_columns", "read_truth"]
+__all__ = ["TRUTH_FORMATS", "parse_truth_columns", "read_truth"]
 
 TRUTH_FORMATS = ("auto", "tum", "kitti", "csv")
-#: Seconds per unit of the time column.
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 _TARGETS = ("t", "x", "y", "theta", "theta_deg")
 _HEADER_NAMES = {
     "t": ("t", "time", "timestamp", "stamp", "time_s"),
@@ -55,33 +55,6 @@ _HEADER_NAMES = {
     "theta": ("theta", "gt_theta", "theta_gt", "yaw", "heading", "th"),
     "theta_deg": ("theta_deg", "yaw_deg", "heading_deg"),
 }
-
-
-def _data_lines(path: Path) -> list[tuple[int, str]]:
-    """(line number, text) of every data line: blank and ``#`` lines dropped, gzip read
-    (:func:`odomkit.io.text.read_text`)."""
-    text = read_text(path, kind="truth file")
-    return [(n, s.strip()) for n, s in enumerate(text.splitlines(), start=1)
-            if s.strip() and not s.lstrip().startswith("#")]
-
-
-def _delimiter(line: str) -> str | None:
-    for d in (",", ";"):
-        if d in line:
-            return d
-    return None  # tabs and spaces
-
-
-def _split(line: str, delimiter: str | None) -> list[str]:
-    return [f.strip() for f in line.split(delimiter)] if delimiter else line.split()
-
-
-def _is_number(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
 
 
 def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
@@ -120,7 +93,7 @@ def _table(path: Path, rows: list[tuple[int, list[str]]], ncols: int) -> NDArray
     except ValueError:
         for lineno, fields in rows:
             for col, text in enumerate(fields, start=1):
-                if not _is_number(text):
+                if not is_number(text):
                     raise InputError(f"column {col}: {text!r} is not a number", source=str(path),
                                      line=lineno) from None
         raise
@@ -186,7 +159,8 @@ def read_truth(
     path : the file (``.gz`` read transparently)
     fmt : {"auto", "tum", "kitti", "csv"}
     columns : ``--truth-columns`` text (csv only), see :func:`parse_truth_columns`
-    time_unit : {"s", "ms", "us", "ns"}, unit of the time column
+    time_unit : {"s", "ms", "us", "ns"} or seconds per unit, unit of the time column
+        (:func:`odomkit.io.text.seconds_per_unit`)
     sigma : standard deviation of each truth position per axis [m]
 
     Returns
@@ -199,22 +173,18 @@ def read_truth(
         raise InputError("no such file", source=str(path))
     if fmt not in TRUTH_FORMATS:
         raise InputError(f"unknown truth format {fmt!r}; expected one of {', '.join(TRUTH_FORMATS)}")
-    if time_unit not in TIME_UNITS:
-        raise InputError(f"unknown time unit {time_unit!r}; expected one of {', '.join(TIME_UNITS)}")
+    seconds = seconds_per_unit(time_unit, "--truth-time-unit")
     spec = parse_truth_columns(columns) if columns else None
     if spec is not None and fmt in ("tum", "kitti"):
         raise InputError(f"--truth-columns applies to csv truth, not {fmt}")
-    lines = _data_lines(path)
+    text = read_text(path, kind="truth file")
+    layout = sniff_layout(text, str(path))
+    delimiter = layout.delimiter
+    header = None if layout.header is None else list(layout.header)
+    lines = [(n, s) for n, s in content_lines(text) if n > layout.header_line]
     if not lines:
-        raise InputError("the file is empty: no data rows", source=str(path))
-    delimiter = _delimiter(lines[0][1])
-    first = _split(lines[0][1], delimiter)
-    header = None if all(_is_number(f) for f in first) else first
-    if header is not None:
-        lines = lines[1:]
-        if not lines:
-            raise InputError("the file has a header but no data rows", source=str(path))
-    ncols = len(header) if header is not None else len(first)
+        raise InputError("the file has a header but no data rows", source=str(path))
+    ncols = layout.ncols
     if fmt == "auto":
         fmt = ("csv" if header is not None or spec is not None or ncols in (3, 4)
                else {8: "tum", 12: "kitti", 13: "kitti"}.get(ncols, ""))
@@ -222,13 +192,13 @@ def read_truth(
             raise InputError(f"cannot tell the truth format from {ncols} columns; give --truth-format "
                              "tum|kitti|csv (and --truth-columns for csv)", source=str(path))
     if fmt in ("tum", "kitti") and header is not None:
-        raise InputError(f"a {fmt} file has no header, but line {lines[0][0] - 1} is not numbers",
-                         source=str(path))
+        raise InputError(f"a {fmt} file has no header, but this line is not numbers",
+                         source=str(path), line=layout.header_line)
     if fmt == "kitti" and ncols == 12:
         raise InputError("KITTI pose rows carry no time, and truth needs a clock: put the time first "
                          "(13 numbers: t r11 r12 r13 px r21 r22 r23 py r31 r32 r33 pz)", source=str(path))
     want = {"tum": 8, "kitti": 13}.get(fmt, ncols)
-    data = _table(path, [(n, _split(s, delimiter)) for n, s in lines], want)
+    data = _table(path, [(n, split_fields(s, delimiter)) for n, s in lines], want)
     theta: NDArray[np.float64] | None
     if fmt == "tum":
         t, xy = data[:, 0], data[:, 1:3]
@@ -249,7 +219,7 @@ def read_truth(
         t, xy = data[:, index["t"]], data[:, [index["x"], index["y"]]]
         theta = (data[:, index["theta"]] if "theta" in index
                  else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
-    t = t * TIME_UNITS[time_unit]
+    t = to_seconds(t, seconds)
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):
         warnings.warn(f"{path}: truth times are not in order; rows were sorted by time", stacklevel=2)

@@ -5,14 +5,20 @@ One place decides what a noise argument means for a *path* (``odomkit predict`` 
 (the closed-form family, the vehicle, the noise set), and :func:`path_steps` cuts the
 segments into equal steps that the same engines as a logged track consume.
 
-=================================  ==========  ========  ==============================
-noise                              family      vehicle   segments
-=================================  ==========  ========  ==============================
-``WheelNoise``                     wheel       diff      Arc, Straight, Spin
-``ClassicalNoise``                 classical   diff      Arc, Straight, Spin
-``(SpeedNoise, GyroNoise)``        gyro        gyro      KellyArc
-``(SpeedNoise, CompassNoise)``     compass     compass   KellyArc
-=================================  ==========  ========  ==============================
+=================================  ==========  ==============  ==========================
+noise                              family      vehicle         segments
+=================================  ==========  ==============  ==========================
+``WheelNoise``                     wheel       diff            Arc, Straight, Spin
+``ClassicalNoise``                 classical   diff            Arc, Straight, Spin
+``(SpeedNoise, GyroNoise)``        gyro        gyro, unicycle  KellyArc
+``(SpeedNoise, CompassNoise)``     compass     compass         KellyArc
+``TricycleNoise``, ``SpeedNoise``  steering    tricycle, car   SteerArc
+=================================  ==========  ==============  ==========================
+
+Any family but the classical takes a :class:`~odomkit.noise.ParameterUncertainty` (the
+vehicle's bias) too. The vehicle is the family's first unless a ``robot`` is given (a
+unicycle, a steered vehicle, or a robot with its own geometry); a set of models that names
+no family (bias alone, steering noise) needs the robot.
 
 A compass path also needs the compass's sample period T (``compass_period``, default
 :data:`odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`): its steps are the compass samples,
@@ -33,7 +39,8 @@ from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise import CompassNoise, NoiseModel, NoiseSet
 from odomkit.noise.kelly import DEFAULT_COMPASS_PERIOD, compass_sample_count
-from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
+from odomkit.kinematics import steering_body_steps
+from odomkit.path import Arc, KellyArc, Segment, Spin, SteerArc, Straight
 from odomkit.robot import ROBOT_TYPES, DiffDrive, Robot
 
 __all__ = [
@@ -47,14 +54,24 @@ __all__ = [
     "check_wheel_base",
 ]
 
-# family -> (the models it may hold, the vehicle it describes); SpeedNoise is optional.
-_FAMILIES: dict[str, tuple[frozenset[str], str]] = {
-    "wheel": (frozenset({"WheelNoise"}), "diff"),
-    "classical": (frozenset({"ClassicalNoise"}), "diff"),
-    "gyro": (frozenset({"GyroNoise", "SpeedNoise"}), "gyro"),
-    "compass": (frozenset({"CompassNoise", "SpeedNoise"}), "compass"),
+# family -> (the models it may hold, the vehicles it describes: the first by default);
+# SpeedNoise and ParameterUncertainty are optional.
+_FAMILIES: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
+    "wheel": (frozenset({"WheelNoise", "ParameterUncertainty"}), ("diff",)),
+    "classical": (frozenset({"ClassicalNoise"}), ("diff",)),
+    "gyro": (frozenset({"GyroNoise", "SpeedNoise", "ParameterUncertainty"}), ("gyro", "unicycle")),
+    "compass": (frozenset({"CompassNoise", "SpeedNoise", "ParameterUncertainty"}), ("compass",)),
+    "steering": (frozenset({"TricycleNoise", "SpeedNoise", "ParameterUncertainty"}), ("tricycle", "car")),
 }
-_EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise)")
+_EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise), "
+             "with or without a ParameterUncertainty; or a robot and its noise")
+# The segments each vehicle drives.
+_SEGMENTS: dict[str, tuple[type, ...]] = {
+    "diff": (Arc, Straight, Spin), "gyro": (KellyArc,), "unicycle": (KellyArc,),
+    "compass": (KellyArc,), "tricycle": (SteerArc,), "car": (SteerArc,),
+}
+_SEGMENT_NAMES = {"diff": "Arc, Straight or Spin", "gyro": "KellyArc (speed, yaw rate, duration)",
+                  "tricycle": "SteerArc (wheel speed, steering angle, duration)"}
 
 
 @dataclass(frozen=True)
@@ -63,13 +80,14 @@ class PathModel:
 
     Attributes
     ----------
-    family : {"wheel", "classical", "gyro", "compass"}
-        The closed-form family (Chong–Kleeman or Kelly).
+    family : {"wheel", "classical", "gyro", "compass", "steering"}
+        The family (Chong–Kleeman's or Kelly's closed forms; steered vehicles have none).
     noise : NoiseSet
         The validated models.
     robot : Robot
-        The vehicle: ``DiffDrive(wheel_base)`` for the differential-drive families, a
-        nominal ``GyroOdometry``/``CompassOdometry`` for Kelly's.
+        The vehicle: the ``robot`` given, else ``DiffDrive(wheel_base)`` for the
+        differential-drive families, a nominal ``GyroOdometry``/``CompassOdometry`` for
+        Kelly's.
     compass_period : float or None
         Compass family: the compass's sample period T [s]; None for the others.
     """
@@ -84,12 +102,18 @@ class PathModel:
         """Compass family: variance of one compass reading, σ_θθ/T [rad²]."""
         if self.compass_period is None:
             raise ModelError(f"the {self.family} model has no compass")
-        return self.noise.require(CompassNoise).sample_variance(self.compass_period)
+        compass = self.noise.get(CompassNoise)
+        return 0.0 if compass is None else compass.sample_variance(self.compass_period)
 
     @property
     def diff(self) -> bool:
         """Segments are wheel travels (Arc, Straight, Spin), not speed/yaw rate (KellyArc)."""
         return self.robot.type_name == "diff"
+
+    @property
+    def steered(self) -> bool:
+        """Segments are a steered vehicle's wheel speed and steering angle (SteerArc)."""
+        return self.robot.type_name in ("tricycle", "car")
 
 
 def check_partitions(partitions: int) -> int:
@@ -106,7 +130,7 @@ def check_wheel_base(wheel_base: float | None) -> float:
 
 def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
                wheel_base: float | None = None, purpose: str = "prediction",
-               compass_period: float | None = None) -> PathModel:
+               compass_period: float | None = None, robot: Robot | None = None) -> PathModel:
     """Validate a noise argument for a path and pick its family and vehicle.
 
     Parameters
@@ -114,12 +138,14 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
     noise : NoiseModel, sequence of NoiseModel, or NoiseSet
         See the module table; SpeedNoise may be left out of the Kelly families.
     wheel_base : float, optional
-        B [m], required by the differential-drive families.
+        B [m], required by the differential-drive families unless ``robot`` is given.
     purpose : str
         Named in the error message (``"prediction"`` or ``"simulation"``).
     compass_period : float, optional
         Compass family: the sample period T [s] of the compass (default
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); an error for the others.
+    robot : Robot, optional
+        The vehicle (default: the family's, see the module docstring).
 
     >>> from odomkit.noise import WheelNoise
     >>> path_model(WheelNoise(0.001, 0.001), 0.4).family
@@ -127,13 +153,28 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
     """
     models = NoiseSet.of(noise)
     names = frozenset(type(m).__name__ for m in models.models)
+    listed = ", ".join(type(m).__name__ for m in models.models) or "nothing"
     family = models.family
+    if family is None and robot is not None:
+        family = next((f for f, (_, vehicles) in _FAMILIES.items() if robot.type_name in vehicles
+                       and f != "classical"), None)
+    elif family is None and "TricycleNoise" in names and names <= _FAMILIES["steering"][0]:
+        raise ModelError(f"noise ({listed}) is not a {purpose} model without a robot: it "
+                         "describes a steered vehicle; give the robot (a Tricycle or Car)")
     if family not in _FAMILIES or not names <= _FAMILIES[family][0]:
-        listed = ", ".join(type(m).__name__ for m in models.models) or "nothing"
-        raise ModelError(f"noise ({listed}) is not a {purpose} model; expected {_EXPECTED}")
-    vehicle = _FAMILIES[family][1]
-    robot: Robot = (DiffDrive(check_wheel_base(wheel_base)) if vehicle == "diff"
-                    else ROBOT_TYPES[vehicle]())
+        raise ModelError(f"noise ({listed}) is not a {purpose} model"
+                         + (f" of a {robot.type_name} robot" if robot is not None else "")
+                         + f"; expected {_EXPECTED}")
+    vehicles = _FAMILIES[family][1]
+    if robot is None:
+        vehicle = vehicles[0]
+        robot = (DiffDrive(check_wheel_base(wheel_base)) if vehicle == "diff"
+                 else ROBOT_TYPES[vehicle]())
+    elif robot.type_name not in vehicles:
+        raise ModelError(f"noise ({listed}) is a {family} model, not one of a {robot.type_name} robot")
+    elif robot.type_name == "diff" and wheel_base is not None and wheel_base != robot.wheel_base:  # type: ignore[union-attr]
+        raise ModelError(f"wheel_base {wheel_base!r} m differs from the robot's "
+                         f"{robot.wheel_base!r} m; give one")  # type: ignore[union-attr]
     models.check_robot(robot)
     if family == "compass":
         period = DEFAULT_COMPASS_PERIOD if compass_period is None else compass_period
@@ -148,10 +189,11 @@ def check_segments(segments: Iterable[Segment], model: PathModel) -> list[Segmen
     """The segments as a list, each of the kind the model's vehicle drives (and, for a
     compass, lasting a whole number of compass periods: :func:`compass_samples`)."""
     segs = list(segments)
+    kinds = _SEGMENTS[model.robot.type_name]
     for k, seg in enumerate(segs):
-        ok = isinstance(seg, Arc | Straight | Spin) if model.diff else isinstance(seg, KellyArc)
-        if not ok:
-            want = "Arc, Straight or Spin" if model.diff else "KellyArc (speed, yaw rate, duration)"
+        if not isinstance(seg, kinds):
+            want = _SEGMENT_NAMES.get(model.robot.type_name) or _SEGMENT_NAMES[
+                "tricycle" if model.steered else "gyro"]
             raise ModelError(f"segment {k + 1} is {seg!r}; the {model.family} model needs {want}")
     if model.compass_period is not None:
         compass_samples(segs, model.compass_period)
@@ -175,10 +217,16 @@ def compass_samples(segments: Sequence[Segment], period: float) -> list[int]:
             for k, seg in enumerate(segments)]
 
 
-def segment_motion(seg: Segment, wheel_base: float) -> tuple[float, float]:
-    """(arc length [m], heading change [rad]) of one segment."""
+def segment_motion(seg: Segment, wheel_base: float, robot: Robot | None = None) -> tuple[float, float]:
+    """(arc length [m], heading change [rad]) of one segment (a SteerArc needs its
+    ``robot``, a Tricycle or Car)."""
     if isinstance(seg, KellyArc):
         return seg.speed * seg.duration, seg.yaw_rate * seg.duration
+    if isinstance(seg, SteerArc):
+        if robot is None:
+            raise ModelError("a SteerArc's motion depends on the vehicle: give the robot")
+        d, a = steering_body_steps(robot, seg.speed * seg.duration, seg.steer)  # type: ignore[arg-type]
+        return float(d), float(a)
     left, right = seg.wheel_travel(wheel_base)
     return 0.5 * (left + right), (right - left) / wheel_base  # Chong–Kleeman eq. (14)
 
@@ -207,9 +255,10 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     Returns
     -------
     BodySteps
-        S·n steps: ``dd``, ``dtheta``, ``dt`` (Kelly segments; zero for wheel segments)
-        and the raw inputs the noise models ask for (``d_left``/``d_right`` [m] of a
-        differential drive; ``heading`` (M + 1,) [rad] of a compass).
+        S·n steps: ``dd``, ``dtheta``, ``dt`` (Kelly and steering segments; zero for wheel
+        segments) and the raw inputs the noise models ask for (``d_left``/``d_right`` [m]
+        of a differential drive; ``travel`` [m] and ``steer`` [rad] of a steered vehicle;
+        ``yaw_rate`` [rad/s] of gyro and unicycle; ``heading`` (M + 1,) [rad] of a compass).
 
     Examples
     --------
@@ -223,8 +272,17 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
         return _compass_steps(segments, model, float(theta0))
     n = check_partitions(partitions)
     robot = model.robot if robot is None else robot
-    dd, dth, dt, d_left, d_right = [], [], [], [], []
+    dd, dth, dt, d_left, d_right, travel, steer = [], [], [], [], [], [], []
     for seg in segments:
+        if model.steered:
+            s_k = seg.speed * seg.duration / n  # type: ignore[union-attr]
+            travel.append(np.full(n, s_k))
+            steer.append(np.full(n, seg.steer))  # type: ignore[union-attr]
+            step_d, step_a = steering_body_steps(robot, s_k, seg.steer)  # type: ignore[arg-type, union-attr]
+            dt.append(np.full(n, seg.duration / n))  # type: ignore[union-attr]
+            dd.append(np.full(n, float(step_d)))
+            dth.append(np.full(n, float(step_a)))
+            continue
         if model.diff:
             # commanded travels use the nominal wheel base (a spin is commanded with it)
             left, right = seg.wheel_travel(model.robot.wheel_base)  # type: ignore[union-attr]
@@ -243,8 +301,15 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     def cat(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
         return np.concatenate(parts) if parts else np.zeros(0)
 
-    inputs = {"d_left": cat(d_left), "d_right": cat(d_right)} if model.diff else {}
-    return BodySteps(cat(dd), cat(dth), cat(dt), inputs, robot)
+    steps_dd, steps_dth, steps_dt = cat(dd), cat(dth), cat(dt)
+    if model.diff:
+        inputs = {"d_left": cat(d_left), "d_right": cat(d_right)}
+    elif model.steered:
+        inputs = {"travel": cat(travel), "steer": cat(steer)}
+    else:
+        rate = np.divide(steps_dth, steps_dt, out=np.zeros_like(steps_dth), where=steps_dt > 0)
+        inputs = {"yaw_rate": rate}
+    return BodySteps(steps_dd, steps_dth, steps_dt, inputs, robot)
 
 
 def _compass_steps(segments: Sequence[Segment], model: PathModel, theta0: float) -> BodySteps:

@@ -45,6 +45,9 @@ class NoisePlan:
         Direct heading: variance of each heading sample [rad²].
     var_params : ndarray, shape (p,), or None
         Bias parameter variances; None when there is no bias term.
+    bias_heading : ndarray, shape (p,), or None
+        Direct heading with a bias term: ∂θ_k/∂β of every measured heading (a heading
+        offset: 1); None otherwise.
     wheel : WheelInputs or None
         Set when a model can have its Q_k formed inside the compiled recursion and is the
         only white source.
@@ -57,6 +60,7 @@ class NoisePlan:
     var_heading: NDArray[np.float64] | None = None
     var_params: NDArray[np.float64] | None = None
     wheel: WheelInputs | None = None
+    bias_heading: NDArray[np.float64] | None = None
 
     def cov_input(self, a: int, b: int) -> NDArray[np.float64]:
         """Summed white input covariance of steps a … b−1, (b − a, 2, 2)."""
@@ -100,7 +104,8 @@ def plan_noise(steps: BodySteps, noise: NoiseArg, method: str = "exact") -> Nois
         if var_heading is None:
             var_heading = np.zeros(np.asarray(steps.dd).size + 1)
     var_params = models.bias_variances(robot) if models.bias else None
+    bias_heading = models.bias_heading(robot) if direct and models.bias else None
     white = models.white
     wheel = white[0].compiled_inputs(steps) if len(white) == 1 and not direct else None
     return NoisePlan(models.step_map(method), direct, models, steps, var_heading, var_params,
-                     wheel)
+                     wheel, bias_heading)

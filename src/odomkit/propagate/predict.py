@@ -11,7 +11,14 @@ noise                              segments     closed form
 ``(SpeedNoise, GyroNoise)``        KellyArc     Kelly eq. (11), (13), (15)
 ``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10) sampled every T (see
                                                :func:`~odomkit.propagate.closed_kelly.compass_arc_cov`)
+``TricycleNoise`` (+ ``robot``)    SteerArc     none: ``recursion`` or ``transition``
 =================================  ===========  ========================================
+
+Bias noise (:class:`~odomkit.noise.ParameterUncertainty`, a constant error over the run)
+joins any family but the classical and is predicted by the ``recursion`` and
+``transition`` engines (the same bias path as ``odomkit track``); the closed forms are
+white noise only. A ``robot`` names the vehicle (a unicycle, a tricycle or car with its
+geometry, a robot whose bias sensitivities need its parameters).
 
 Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` and
 ``transition`` cut each segment into ``partitions`` exact-arc steps and hand them to the
@@ -55,6 +62,7 @@ from odomkit.propagate.paths import (
     segment_motion,
 )
 from odomkit.propagate.plan import NoiseArg
+from odomkit.robot import Robot
 
 __all__ = [
     "Engine",
@@ -84,7 +92,7 @@ class Prediction:
         Covariance in the order x, y, θ [m², m·rad, rad²]. For compass odometry the θ
         variance is that of the last compass reading, σ_θθ/T.
     model : str
-        ``wheel``, ``classical``, ``gyro`` or ``compass``.
+        ``wheel``, ``classical``, ``gyro``, ``compass`` or ``steering``.
     engine : str
     """
 
@@ -149,6 +157,7 @@ def discretise_path(
     wheel_base: float | None = None,
     partitions: int = DEFAULT_PARTITIONS,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
+    robot: Robot | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Cut each segment into ``partitions`` equal exact-arc steps with their input noise.
 
@@ -173,7 +182,7 @@ def discretise_path(
     >>> dd.tolist(), round(float(q[0, 0, 0]), 15)  # var(Δd) = (k²·0.5 + k²·0.5)/4
     ([0.5, 0.5, 0.5, 0.5], 0.0025)
     """
-    model = path_model(noise, wheel_base)
+    model = path_model(noise, wheel_base, robot=robot)
     segs = check_segments(segments, model)
     if model.robot.measures_heading:
         raise ModelError("a compass path's steps are its compass samples, with no per-step "
@@ -230,9 +239,9 @@ def _compass_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float
 
     steps = path_steps(segs, model, 1, theta0=float(p0[2]))
     poses = dead_reckon(steps.dd, steps.dtheta, p0, "exact")
-    if len(steps) == 0:  # no reading after the first: the start is the end
+    if len(steps) == 0 and not model.noise.bias:  # no reading after the first: the start is the end
         return Prediction(poses[-1].copy(), c0, model.family, engine)
-    if engine == "recursion":
+    if engine == "recursion" or model.noise.bias:
         from odomkit.propagate.recursion import iter_track_covariance
 
         cov_end = c0
@@ -253,6 +262,21 @@ def _compass_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float
 _CLOSED_FORMS = {"wheel": _wheel_closed, "gyro": _gyro_closed, "compass": _compass_closed}
 
 
+def _track_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float64],
+                   c0: NDArray[np.float64], engine: str, partitions: int) -> Prediction:
+    """The track's engines (:func:`odomkit.propagate.recursion.iter_track_covariance`,
+    white and bias) on the path cut into equal steps: bias noise and steered vehicles."""
+    from odomkit.propagate.recursion import iter_track_covariance
+
+    steps = path_steps(segs, model, partitions)
+    poses = dead_reckon(steps.dd, steps.dtheta, p0, "exact")
+    cov_end = c0
+    for _, chunk in iter_track_covariance(steps, poses, model.noise, c0, "exact", engine):
+        cov_end = chunk[-1]
+    cov_end = np.asarray(cov_end, dtype=float)
+    return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
+
+
 def predict(
     segments: Iterable[Segment],
     noise: NoiseArg,
@@ -262,6 +286,7 @@ def predict(
     engine: Engine = "closed",
     partitions: int | None = None,
     compass_period: float | None = None,
+    robot: Robot | None = None,
 ) -> Prediction:
     """Predict the end pose of a path of segments and its covariance.
 
@@ -290,6 +315,9 @@ def predict(
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
         whole number of periods. Each reading has an error of variance σ_θθ/T, which is
         the end heading's variance; the θ row and column of ``cov0`` give way to it.
+    robot : Robot, optional
+        The vehicle (:func:`odomkit.propagate.paths.path_model`): required for a tricycle
+        or car (SteerArc segments), optional otherwise.
 
     Returns
     -------
@@ -314,15 +342,21 @@ def predict(
     """
     if engine not in ENGINES:
         raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
-    model = path_model(noise, wheel_base, compass_period=compass_period)
+    model = path_model(noise, wheel_base, compass_period=compass_period, robot=robot)
     segs = check_segments(segments, model)
     p0 = validate.pose(pose0)
     c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
     b = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
+    if engine == "closed" and (model.noise.bias or model.family not in (*_CLOSED_FORMS, "classical")):
+        what = "bias noise" if model.noise.bias else f"the {model.family} model"
+        raise ModelError(f"{what} has no closed form here; use engine 'recursion' or 'transition'")
     if model.compass_period is not None:
         c0 = _compass_start(c0, model)
         if engine != "closed":
             return _compass_engines(segs, model, p0, c0, engine)
+    if engine != "closed" and (model.noise.bias or model.steered):
+        n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)
+        return _track_engines(segs, model, p0, c0, engine, n)
 
     if engine != "closed":
         n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)

@@ -36,11 +36,10 @@ from odomkit.propagate.transition import (
     check_cov3,
     check_cov_input,
     check_method,
+    bias_sensitivity_chunk,
     check_steps,
     direct_heading_chunk,
     input_terms,
-    sensitivity_chunk,
-    sensitivity_terms,
     transition_chunk,
 )
 
@@ -244,15 +243,11 @@ def _white_chunk(plan: NoisePlan, engine: str, theta, dd, dtheta, a: int, b: int
 
 
 def _bias_chunk(plan: NoisePlan, theta, dd, dtheta, a: int, b: int, S):
-    """Parameter sensitivity after steps a … b−1 (n, 3, p), from S at row a."""
-    K = plan.param_jacobian(a, b)
-    u, C = sensitivity_terms(step_terms(theta, dd, dtheta, plan.method), K)
-    if plan.direct:
-        # Direct heading: the heading is measured, so a distance-scale error (K's Δθ
-        # row is zero) moves the position only, along ∂Δp/∂Δd; no θ error exists to
-        # be carried by the shear, so u = 0 (Kelly section 3.1: Φ = I).
-        u = np.zeros_like(u)
-    return sensitivity_chunk(u, C, S)
+    """Parameter sensitivity after steps a … b−1 (n, 3, p), from S at row a
+    (:func:`odomkit.propagate.transition.bias_sensitivity_chunk`; direct heading: S's θ
+    row is the heading sensor's constant ∂θ/∂β, set at row 0 by :func:`_chunks`)."""
+    return bias_sensitivity_chunk(step_terms(theta, dd, dtheta, plan.method),
+                                  plan.param_jacobian(a, b), S, plan.direct)
 
 
 def iter_track_covariance(
@@ -291,7 +286,12 @@ def _chunks(steps: BodySteps, poses: ArrayLike, noise: NoiseArg, cov0: ArrayLike
         P[2, 2] = plan.var_heading[0]
     var_params = plan.var_params
     S = None if var_params is None else np.zeros((3, var_params.size))
-    yield 0, P[None].copy()
+    if S is not None and plan.bias_heading is not None and plan.bias_heading.any():
+        # A heading-sensor offset moves the measured start heading too (θ_0 = θ_meas,0 + δ).
+        S[2] = plan.bias_heading
+        yield 0, (P + np.einsum("ip,p,jp->ij", S, var_params, S))[None]
+    else:
+        yield 0, P[None].copy()
     n = max(int(chunk_size), 1)
     state = new_heading_state()
     stream = out is not None and out.shape[0] >= _STREAM_ROWS

@@ -36,7 +36,8 @@ from odomkit.errors import ModelError
 from odomkit.propagate.inputs import ENGINE_METHODS, step_terms
 
 __all__ = [
-    "DEFAULT_CHUNK", "check_cov3", "check_cov_input", "check_method", "check_steps", "direct_heading_chunk",
+    "DEFAULT_CHUNK", "bias_sensitivity_chunk", "check_cov3", "check_cov_input", "check_method", "check_steps",
+    "direct_heading_chunk",
     "input_terms", "iter_transition", "parameter_sensitivity", "propagate_direct_heading",
     "propagate_transition", "sensitivity_chunk", "sensitivity_terms", "transition_chunk", "transition_matrix"
 ]
@@ -277,6 +278,34 @@ def sensitivity_chunk(
     for r in (0, 1):
         S[:, r, :] = S_start[r] + np.cumsum(C[:, r, :] + u[:, r, None] * theta_before, axis=0)
     return S
+
+
+def bias_sensitivity_chunk(
+    terms: tuple[NDArray[np.float64], ...], K: NDArray[np.float64], S_start: NDArray[np.float64],
+    direct: bool = False,
+) -> NDArray[np.float64]:
+    """Sensitivity S = ∂pose/∂β after each of n steps of constant (bias) parameters β,
+    (n, 3, p), from S_start (3, p): the one bias path of every engine.
+
+    ``terms`` are the steps' :func:`odomkit.propagate.inputs.step_terms`, K (n, 2, p)
+    their ∂(Δd, Δθ)/∂β. Integrated heading: S_{k+1} = F_k S_k + G_k K_k
+    (:func:`sensitivity_chunk`). Direct heading (``direct``; Kelly section 3.1, the
+    heading is measured and Φ = I for it): the heading row is not integrated but stays
+    ∂θ_k/∂β of the heading sensor, the same at every row, which the caller puts in
+    S_start[2] at row 0 (:meth:`odomkit.noise.NoiseModel.bias_heading`: 1 for a heading
+    offset, θ_k = θ_meas,k + δ); each step's position then moves by ∂Δp/∂θ = (−Δy, Δx)
+    times it, plus ∂Δp/∂Δd times K's Δd row (a distance scale).
+
+    >>> from odomkit.propagate.inputs import step_terms
+    >>> terms = step_terms(np.zeros(10), np.full(10, 0.1), np.zeros(10), "exact")
+    >>> S = bias_sensitivity_chunk(terms, np.zeros((10, 2, 1)), np.array([[0.0], [0.0], [1.0]]), True)
+    >>> S[-1, :, 0].round(12).tolist()   # a heading offset swings a 1 m line sideways by 1 m/rad
+    [0.0, 1.0, 1.0]
+    """
+    u, C = sensitivity_terms(terms, K)
+    if direct:
+        C[:, 2, :] = 0.0  # a measured heading accumulates nothing
+    return sensitivity_chunk(u, C, S_start)
 
 
 def parameter_sensitivity(

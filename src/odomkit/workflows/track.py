@@ -16,7 +16,7 @@ from odomkit.io.bag_writer import check_bag_out, write_track_bag
 from odomkit.io.files import check_outputs
 from odomkit.io.robotfile import read_robot
 from odomkit.io.ros import ros_pose_covariance
-from odomkit.io.trackio import write_track_csv, write_tum
+from odomkit.io.trackio import kitti_times_path, write_kitti, write_track_csv, write_tum
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.track import Track, dead_reckon_log
@@ -80,6 +80,7 @@ def run_track(
     engine: str = "recursion",
     out: str | Path | None = None,
     tum: str | Path | None = None,
+    kitti: str | Path | None = None,
     overwrite: bool = False,
     bag_out: str | Path | None = None,
     bag_format: str | None = None,
@@ -89,8 +90,9 @@ def run_track(
     """Read a robot file and a log, dead-reckon, write the requested outputs.
 
     ``log_options`` (:class:`~odomkit.workflows.logs.LogOptions`, default: format guessed
-    from the file name) says how to read (and decimate) the log; ``out``/``tum`` are written only when
-    new, or when ``overwrite``. ``truth`` (:class:`~odomkit.workflows.truth.TruthOptions`)
+    from the file name) says how to read (and decimate) the log; ``out``/``tum``/``kitti`` (KITTI
+    poses and, beside them, their times: :func:`odomkit.io.trackio.write_kitti`) are written only
+    when new, or when ``overwrite``. ``truth`` (:class:`~odomkit.workflows.truth.TruthOptions`)
     names a truth file; without one the log's own ground truth is used, if it has any.
     With truth the track starts at the truth pose at the first log time unless ``pose0``
     is given, and ``cov0`` defaults to that pose's uncertainty (``--truth-sigma``, and the
@@ -101,7 +103,9 @@ def run_track(
     options = truth or TruthOptions()
     inputs = [p for p in (log_path, robot_path, options.path) if p is not None]
     bag = None if bag_out is None else check_bag_out(bag_out, bag_format, overwrite=overwrite, inputs=inputs)
-    check_outputs({"--out": out, "--tum": tum, "--bag-out": None if bag is None else bag.file_check},
+    check_outputs({"--out": out, "--tum": tum, "--kitti": kitti,
+                   "--kitti (its times)": None if kitti is None else kitti_times_path(kitti),
+                   "--bag-out": None if bag is None else bag.file_check},
                   overwrite=overwrite, inputs=inputs)
     robot, noise = read_robot(robot_path)
     log = load_log(log_path, robot, log_options or LogOptions())
@@ -129,6 +133,9 @@ def run_track(
         outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
     if tum is not None:
         outputs["tum"] = str(write_tum(tum, track, overwrite))
+    if kitti is not None:
+        poses, times = write_kitti(kitti, track, overwrite)
+        outputs["kitti"], outputs["kitti_times"] = str(poses), str(times)
     if bag is not None:
         outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
                                              child_frame_id=child_frame_id))

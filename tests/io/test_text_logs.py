@@ -1,0 +1,241 @@
+"""Text logs as they are (issue 12 item 1; DESIGN.md "Text logs and truth files").
+
+The independent truth is a log made in memory: written out in every delimiter, header,
+comment, gzip, line-ending and time-unit combination, and read back through
+:func:`odomkit.workflows.logs.load_log` by both parsers (polars and numpy), it must give the
+identical track, bit for bit (times are dyadic, so every spelling of them is exact).
+"""
+
+from __future__ import annotations
+
+import gzip
+import re
+import tempfile
+from fractions import Fraction
+from pathlib import Path
+
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import odomkit.io.table as table
+from odomkit.errors import InputError
+from odomkit.io.csvlog import parse_columns, read_csv_log
+from odomkit.io.text import sniff_layout
+from odomkit.io.truth import read_truth
+from odomkit.log import OdometryLog
+from odomkit.robot import Unicycle
+from odomkit.track import dead_reckon_log
+from odomkit.workflows.logs import LogOptions, load_log
+
+ROBOT = Unicycle()
+UNITS = {"s": 1, "ms": 1000, "us": 10**6, "ns": 10**9}
+NAMES = {"t": "time", "speed": "v_mps", "yaw_rate": "w_radps", "_": "temp_C"}
+DELIMITERS = [",", ";", "\t", " ", "   ", ", ", " ; ", " \t"]
+
+
+def exact_decimal(value: Fraction) -> str:
+    """The exact decimal spelling of a dyadic fraction with denominator up to 2**6."""
+    scaled = value * 10**6
+    assert scaled.denominator == 1
+    sign, digits = ("-" if scaled < 0 else ""), f"{abs(scaled.numerator):07d}"
+    whole, frac = digits[:-6], digits[-6:].rstrip("0")
+    return f"{sign}{whole}.{frac}" if frac else f"{sign}{whole}"
+
+
+@st.composite
+def logs(draw):
+    n = draw(st.integers(2, 30))
+    start = Fraction(draw(st.integers(0, 2**20)), 64)
+    steps = draw(st.lists(st.integers(0, 8), min_size=n - 1, max_size=n - 1))  # 0: a repeated time
+    t = [start]
+    for k in steps:
+        t.append(t[-1] + Fraction(k, 64))
+    floats = st.floats(-5, 5, allow_nan=False, allow_subnormal=False)
+    speed = draw(st.lists(floats, min_size=n, max_size=n))
+    yaw = draw(st.lists(floats, min_size=n, max_size=n))
+    temp = draw(st.lists(floats, min_size=n, max_size=n))
+    return t, speed, yaw, temp
+
+
+@st.composite
+def layouts(draw):
+    return {
+        "delimiter": draw(st.sampled_from(DELIMITERS)),
+        "order": draw(st.permutations(["t", "speed", "yaw_rate", "_"])),
+        "header": draw(st.booleans()),
+        "leading_comments": draw(st.integers(0, 3)),
+        "comment_every": draw(st.sampled_from([0, 2, 5])),
+        "inline_comment": draw(st.booleans()),
+        "blank_lines": draw(st.booleans()),
+        "gzip": draw(st.booleans()),
+        "crlf": draw(st.booleans()),
+        "bom": draw(st.booleans()),
+        "unit": draw(st.sampled_from(list(UNITS))),
+    }
+
+
+def render(log, layout) -> tuple[bytes, str]:
+    """The file's bytes and the --columns text."""
+    t, speed, yaw, temp = log
+    d = layout["delimiter"]
+    cells = {"t": [exact_decimal(x * UNITS[layout["unit"]]) for x in t],
+             "speed": [repr(v) for v in speed], "yaw_rate": [repr(v) for v in yaw],
+             "_": [repr(v) for v in temp]}
+    lines = [f"# logger v{i}: {d!r}-separated, # marks a comment" for i in range(layout["leading_comments"])]
+    if layout["header"]:
+        lines.append(d.join(NAMES[c] for c in layout["order"]))
+        columns = ",".join(f"{c}={NAMES[c]}" for c in layout["order"] if c != "_")
+    else:
+        columns = ",".join(layout["order"])
+    for i in range(len(t)):
+        row = d.join(cells[c][i] for c in layout["order"])
+        if layout["inline_comment"] and i % 3 == 1:
+            row += " # wheel slipped?"
+        lines.append(row)
+        if layout["comment_every"] and i % layout["comment_every"] == 0:
+            lines.append("   # a comment between rows")
+        if layout["blank_lines"] and i % 4 == 2:
+            lines.append("")
+    text = ("\r\n" if layout["crlf"] else "\n").join(lines) + "\n"
+    data = ("\ufeff" if layout["bom"] else "").encode() + text.encode()
+    return (gzip.compress(data) if layout["gzip"] else data), columns
+
+
+def reference_track(log):
+    t, speed, yaw, _ = log
+    memory = OdometryLog(np.array([float(x) for x in t]),
+                         {"speed": np.array(speed), "yaw_rate": np.array(yaw)})
+    return dead_reckon_log(memory, ROBOT)
+
+
+@settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(log=logs(), layout=layouts())
+def test_every_spelling_of_a_log_gives_the_identical_track(log, layout):
+    data, columns = render(log, layout)
+    expected = reference_track(log)
+    with tempfile.TemporaryDirectory() as folder:
+        path = Path(folder) / ("log.txt.gz" if layout["gzip"] else "log.txt")
+        path.write_bytes(data)
+        options = LogOptions(columns=columns, time_unit=layout["unit"])
+        for numpy_only in (False, True):
+            with pytest.MonkeyPatch.context() as mp:
+                if numpy_only:
+                    mp.setattr(table, "polars_module", lambda: None)
+                read = load_log(path, ROBOT, options)
+            got = dead_reckon_log(read, ROBOT)
+            assert np.array_equal(read.t, expected.t)
+            assert np.array_equal(got.poses, expected.poses), (layout, numpy_only)
+
+
+# --- the layout, found from the first data lines -----------------------------------------
+
+@pytest.mark.parametrize("text, delimiter, header", [
+    ("t,a,b\n0,1,2\n", ",", ("t", "a", "b")),
+    ("# c\n# d\nt;a;b\n0;1;2\n1;2;3\n", ";", ("t", "a", "b")),
+    ("0\t1\t2\n1\t-2e-3\tnan\n", "\t", None),
+    ("  0   1 2\n1 2\t 3  # note\n", None, None),
+    ('"time","left ticks"\n0,1\n', ",", ("time", "left ticks")),
+    ("0, 1, 2\r\n1, 2, 3\r\n", ",", None),
+    ("t x y\n", None, ("t", "x", "y")),  # a header alone: the table reader says 'no data rows'
+])
+def test_the_layout_is_sniffed(text, delimiter, header):
+    layout = sniff_layout(text, "f")
+    assert (layout.delimiter, layout.header) == (delimiter, header)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("t;v\n0;1,5\n1;2,25\n", "line 2: '1,5' has a decimal comma"),
+    ("0,5\t1,25\n", "line 1: '0,5' has a decimal comma"),
+    ("1,5 2,5\n", "tr ',' '.' for this whitespace-separated one"),
+    ("# only\n\n", "the file is empty"),
+    ("0\n1\n2\n", "line 1: one column only"),
+    ("t x y\n1,2,3\n", "line 1: the header has 1 name(s) but the next line has 3 comma-separated fields"),
+])
+def test_layouts_that_cannot_be_read_are_named(text, message):
+    with pytest.raises(InputError, match=re.escape(message)):
+        sniff_layout(text, "f")
+
+
+def test_a_comma_file_with_one_bad_row_names_that_row_not_the_delimiter(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("t,v,w\n0,1,2\n1,2,3\n2,3;4\n3,4,5\n")
+    with pytest.raises(InputError, match="line 4: expected 3 columns, found 2"):
+        read_csv_log(path, {"t": "t", "speed": "v", "yaw_rate": "w"})
+
+
+# --- --columns in order or as a header map -----------------------------------------------
+
+def test_columns_in_order_skip_and_ignore_the_rest(tmp_path):
+    path = tmp_path / "log.txt"
+    path.write_text("# t temp v w extra\n0 20 1 0 9\n1 21 1 0.5 9\n2 22 1 0.5 9\n")
+    log = read_csv_log(path, parse_columns("t,_,speed,yaw_rate"))
+    assert np.array_equal(log.channels["speed"], [1, 1, 1])
+    assert np.array_equal(log.channels["yaw_rate"], [0, 0.5, 0.5])
+
+
+def test_columns_in_order_replace_a_header(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("stamp,vel,omega\n0,1,0\n1,1,0.5\n")
+    log = read_csv_log(path, ["t", "speed", "yaw_rate"])
+    assert np.array_equal(log.t, [0, 1]) and np.array_equal(log.channels["yaw_rate"], [0, 0.5])
+
+
+def test_a_header_map_on_a_headerless_file_says_to_name_them_in_order(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("# no header\n0,1,0\n1,1,0.5\n")
+    with pytest.raises(InputError, match=r"line 2: --columns maps header names, but the file has no header.*"
+                                         r"--columns t,ticks_left,ticks_right"):
+        read_csv_log(path, {"t": "time", "speed": "v", "yaw_rate": "w"})
+
+
+def test_a_header_of_numbers_is_a_header_when_the_map_names_it(tmp_path):
+    """pandas writes the header 0,1,2 for a frame without column names."""
+    path = tmp_path / "log.csv"
+    path.write_text("0,1,2\n0.0,1.0,0.0\n0.5,1.0,0.25\n")
+    log = read_csv_log(path, {"t": "0", "speed": "1", "yaw_rate": "2"})
+    assert np.array_equal(log.t, [0, 0.5])
+
+
+def test_a_line_of_names_and_numbers_is_not_silently_skipped(tmp_path):
+    path = tmp_path / "log.csv"
+    path.write_text("0,,0\n0.5,1.0,0.25\n1,1,0.5\n")  # the logger had no speed yet
+    with pytest.raises(InputError, match="line 1: this line mixes names and numbers"):
+        read_csv_log(path, ["t", "speed", "yaw_rate"])
+
+
+@pytest.mark.parametrize("text, message", [
+    ("t,speed=v", "mixes the two forms"),
+    ("t,speed,speed", "names speed more than once"),
+    ("speed,yaw_rate", "needs the time column t"),
+    ("t,velocity", "unknown target 'velocity'"),
+    ("t,speed,yaw_rate,_,_", "--columns names 5 columns, the file has 3 (comma-separated)"),
+])
+def test_bad_columns_are_named(tmp_path, text, message):
+    path = tmp_path / "log.csv"
+    path.write_text("0,1,0\n1,1,0.5\n")
+    with pytest.raises(InputError, match=re.escape(message)):
+        read_csv_log(path, parse_columns(text))
+
+
+# --- time ----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("unit, text", [("ns", "1234567891"), ("us", "1234567.891"), ("ms", "1234.567891"),
+                                        ("s", "1.234567891"), (1e-9, "1234567891")])
+def test_time_units_read_the_same_double(tmp_path, unit, text):
+    """Dividing by 10**9 (not multiplying by 1e-9) is correctly rounded: ns integers give the
+    very double that the seconds spelling does."""
+    path = tmp_path / "log.csv"
+    path.write_text(f"0,1,0\n{text},1,0\n")
+    log = read_csv_log(path, ["t", "speed", "yaw_rate"], time_unit=unit)
+    assert log.t[1] == float("1.234567891")
+
+
+def test_truth_files_are_sniffed_like_logs(tmp_path):
+    comma = tmp_path / "gt.csv"
+    comma.write_text("t,x,y\n0,0,0\n0.5,1,0.5\n1,2,1\n")
+    semicolon = tmp_path / "gt2.csv"
+    semicolon.write_text("# mocap export\nt;x;y\n0;0;0 # start\n0.5;1;0.5\n\n1;2;1\n")
+    a, b = read_truth(comma), read_truth(semicolon)
+    assert np.array_equal(a.t, b.t) and np.array_equal(a.xy, b.xy)
