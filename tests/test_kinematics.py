@@ -163,7 +163,8 @@ def test_car_log_channels_scale_and_offset(channel, value, per_step):
     assert np.allclose(steps.inputs["travel"], 1.01 * per_step, rtol=1e-14, atol=0)
     assert np.allclose(steps.inputs["steer"], 0.12, rtol=1e-14)
     expected = car_body_steps(1.01 * per_step, 0.12, 2.7, 0.8)
-    assert np.allclose(steps.dd, expected[0], rtol=1e-14) and np.allclose(steps.dtheta, expected[1], rtol=1e-14)
+    assert np.allclose(steps.dd, expected[0], rtol=1e-14)
+    assert np.allclose(steps.dtheta, expected[1], rtol=1e-14)
 
 
 def test_unicycle_reads_body_velocities_with_gyro_like_corrections():

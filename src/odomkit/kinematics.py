@@ -134,8 +134,10 @@ def car_speed_factor(steer: ArrayLike, wheel_base: float, encoder_offset: float 
 
     >>> float(car_speed_factor(0.0, 2.7, 0.8))
     1.0
-    >>> round(float(car_speed_factor(0.3, 2.0, 0.0, "front")), 12) == round(np.cos(0.3), 12)
+    >>> round(float(car_speed_factor(0.3, 2.0, 0.0, "front")), 12) == round(float(np.cos(0.3)), 12)
     True
+    >>> round(float(car_speed_factor(0.3, 2.0, 0.5)), 12)   # 1/(1 − tan(0.3)·0.5/2)
+    1.083815885307
     """
     c, sn, d, _ = _car_denominator(np.asarray(steer, dtype=float), wheel_base, encoder_offset,
                                    encoder_at)

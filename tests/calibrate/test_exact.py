@@ -9,6 +9,7 @@ import pytest
 
 from odomkit.calibrate.exact import calibrate_exact, jackknife_runs
 from odomkit.calibrate.residuals import (
+    CarCalibrationModel,
     DiffCalibrationModel,
     TricycleCalibrationModel,
     integrate_with_sensitivity,
@@ -25,7 +26,7 @@ from odomkit.integrate import dead_reckon
 from odomkit.kinematics import body_steps, diff_body_steps
 from odomkit.log import OdometryLog
 from odomkit.noise import WheelNoise
-from odomkit.robot import DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.track import dead_reckon_log
 
 NOMINAL = DiffDrive(wheel_base=0.34, m_per_tick_left=1e-4, m_per_tick_right=1e-4)
@@ -152,7 +153,18 @@ def test_tricycle_trajectory_recovers_scale_offset_and_length():
     np.testing.assert_allclose(cal.values, [1.02, 0.03, 0.16], rtol=1e-7)
 
 
-@pytest.mark.parametrize("kind", ["diff", "tricycle"])
+def test_car_trajectory_recovers_scale_offset_and_wheel_base():
+    nominal = Car(2.7, 0.8, "rear", m_per_tick=0.01)
+    truth = Car(2.8, 0.8, "rear", m_per_tick=0.01, steering_offset=0.005, c_scale=1.03)
+    t = np.arange(1201) * 0.05
+    ch = {"ticks": np.r_[0.0, np.full(1200, 10.0)], "steer": 0.3 * np.sin(t / 6.0)}
+    gt = dead_reckon_log(OdometryLog(t, ch, None), truth).poses
+    cal = calibrate_exact([OdometryLog(t, ch, gt)], nominal, "trajectory")
+    assert cal.names == ("c_scale", "steering_offset", "wheel_base")
+    np.testing.assert_allclose(cal.values, [1.03, 0.005, 2.8], rtol=1e-7)
+
+
+@pytest.mark.parametrize("kind", ["diff", "tricycle", "car-rear", "car-front"])
 def test_sensitivities_match_finite_differences(kind):
     rng = np.random.default_rng(3)
     n = 300
@@ -160,10 +172,12 @@ def test_sensitivities_match_finite_differences(kind):
         robot = DiffDrive(0.4, 1e-3, 1e-3, 0.99, 1.01, 1.02)
         ch = {"ticks_left": np.r_[0, rng.uniform(-5, 20, n)], "ticks_right": np.r_[0, rng.uniform(-5, 20, n)]}
     else:
-        robot = Tricycle(0.3, 1e-3, 0.05, 1.01)
+        robot = (Tricycle(0.3, 1e-3, 0.05, 1.01) if kind == "tricycle"
+                 else Car(2.7, 0.8 if kind == "car-rear" else -0.8, kind[4:], 1e-3, 0.05, 1.01))
         ch = {"ticks": np.r_[0, rng.uniform(0, 20, n)], "steer": rng.uniform(-0.6, 0.6, n + 1)}
     log = OdometryLog(np.arange(n + 1.0), ch, np.zeros((n + 1, 3)))
-    model = DiffCalibrationModel(robot, [log]) if kind == "diff" else TricycleCalibrationModel(robot, [log])
+    models = {"diff": DiffCalibrationModel, "tricycle": TricycleCalibrationModel}
+    model = models.get(kind, CarCalibrationModel)(robot, [log])  # type: ignore[arg-type]
     pose0 = np.array([0.3, -0.2, 0.7])
 
     def poses(p):

@@ -223,8 +223,8 @@ def public_style_log(run, path, *, delimiter=" ", unit_per_s=1, compress=False, 
     lines = ["# recorded on the test robot", "# columns: stamp right left gx gy gth"]
     if header:
         lines.append(delimiter.join(["stamp", "right", "left", "gx", "gy", "gth"]))
-    lines += [delimiter.join(repr(v) for v in (t * unit_per_s, r, l, x, y, th))
-              for t, r, l, x, y, th in zip(log.t.tolist(), log.channels["ticks_right"].tolist(),
+    lines += [delimiter.join(repr(v) for v in (t * unit_per_s, right, left, x, y, th))
+              for t, right, left, x, y, th in zip(log.t.tolist(), log.channels["ticks_right"].tolist(),
                                             log.channels["ticks_left"].tolist(), *gt.T.tolist(), strict=True)]
     text = ("\n".join(lines) + "\n").encode()
     path.write_bytes(gzip.compress(text) if compress else text)
@@ -263,7 +263,8 @@ def test_every_command_reads_semicolon_logs_in_ms(run_cli, tmp_path, command, ex
 
 def test_time_scale_is_kept_as_the_old_name_of_time_unit(run_cli, tmp_path):
     path = public_style_log(RUNS[0], tmp_path / "run.csv", delimiter=",", unit_per_s=1000)
-    by_unit, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER, "--time-unit", "ms")
+    by_unit, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER,
+                          "--time-unit", "ms")
     by_scale, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER,
                            "--time-scale", "1e-3")
     by_number, _ = run_json(run_cli, "track", path, "--robot", ROBOT, "--columns", IN_ORDER,

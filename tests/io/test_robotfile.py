@@ -107,7 +107,8 @@ def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
     assert read_robot(again) == (robot, noise)
     uni, _ = read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nyaw_rate_bias = 0.002\n'))
     assert uni == Unicycle(yaw_rate_bias=0.002)
-    for bad, message in (('encoder_at = "middle"\n', "encoder_at must be one of 'rear', 'front', got 'middle'"),
+    for bad, message in (('encoder_at = "middle"\n',
+                          "encoder_at must be one of 'rear', 'front', got 'middle'"),
                          ("", "needs 'wheel_base'")):
         text = '[robot]\ntype = "car"\n' + ("wheel_base = 2.7\n" if bad else "") + bad
         with pytest.raises(InputError, match=message):

@@ -165,3 +165,46 @@ def test_outputs_are_checked_before_the_runs_are_read(files):
     # the runs do not exist: the output problem is reported first, nothing is computed
     with pytest.raises(InputError, match="--out-robot: no such folder"):
         _calibrate([tmp / "missing.csv"], robot_path, out_robot=tmp / "nodir" / "r.toml")
+
+
+def test_calibrate_a_car_log_with_gps_truth_on_its_own_clock(tmp_path, run_cli):
+    """Issue 12 item 3 through the CLI: a car's speed log (t, speed, steer) and a GPS file
+    (t, x, y at 1 Hz, 0.37 s off the log's clock, σ = 3 m, a 40 s gap) recover the true
+    speed scale, steering offset and wheel base within their intervals."""
+    import json
+
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Car
+    from odomkit.track import dead_reckon_log
+
+    rng = np.random.default_rng(5)
+    n, dt = 6000, 0.1
+    t = 1000.0 + dt * np.arange(n)
+    knots = rng.uniform(-0.25, 0.25, n // 100 + 2)
+    steer = np.interp(t - t[0], np.arange(knots.size) * 100 * dt, knots)
+    speed = 8 + 2 * np.sin(t / 37.0)
+    true = Car(2.75, 0.8, "rear", steering_offset=0.01, c_scale=1.02)
+    poses = dead_reckon_log(OdometryLog(t, {"speed": speed, "steer": steer}), true, pose0=(10, 5, 0.3)).poses
+    log = tmp_path / "car.csv"
+    np.savetxt(log, np.column_stack([t, speed, steer]), delimiter=",", header="t,speed,steer",
+               comments="", fmt="%.12g")
+    tg = np.arange(t[0] + 0.37, t[-1], 1.0)
+    tg = tg[(tg < t[0] + 200) | (tg > t[0] + 240)]
+    xy = np.column_stack([np.interp(tg, t, poses[:, 0]), np.interp(tg, t, poses[:, 1])])
+    gps = tmp_path / "gps.csv"
+    np.savetxt(gps, np.column_stack([tg, xy + rng.normal(0, 3, xy.shape)]), delimiter=",",
+               header="t,x,y", comments="", fmt="%.12g")
+    robot = tmp_path / "car.toml"
+    robot.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = 0.8\n', encoding="utf-8")
+    code, out, err = run_cli("calibrate", log, "--robot", robot, "--truth", gps, "--columns",
+                             "t=t,speed=speed,steer=steer", "--out-robot", tmp_path / "new.toml", "--json")
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["source"] == "positions"
+    for name, value in (("c_scale", 1.02), ("steering_offset", 0.01), ("wheel_base", 2.75)):
+        assert abs(result["parameters"][name] - value) < 3 * result["std_errors"][name], name
+    assert read_robot(tmp_path / "new.toml")[0].steering_offset == result["parameters"]["steering_offset"]
+    # --from belongs to logs with their own ground truth
+    code, _, err = run_cli("calibrate", log, "--robot", robot, "--truth", gps, "--columns",
+                           "t=t,speed=speed,steer=steer", "--from", "trajectory")
+    assert code == 2 and "--from does not apply with --truth" in err

@@ -1,5 +1,5 @@
-"""Exact-model calibration: wheel scales, wheel base (or tricycle scale, steering offset,
-wheel-to-axle distance) by nonlinear least squares on the exact kinematics.
+"""Exact-model calibration: wheel scales, wheel base (or a tricycle's or car's scale,
+steering offset and wheel base) by nonlinear least squares on the exact kinematics.
 
 UMBmark (Borenstein–Feng section IV) linearises the square path (``L sin γ ≈ Lγ``) and
 treats turns and straight legs as if they were driven perfectly apart from one error
@@ -56,7 +56,7 @@ from odomkit.errors import InputError, ModelError
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.propagate.plan import NoiseArg
-from odomkit.robot import DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 
 __all__ = ["SCALE_OBSERVABLE_BELOW", "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source"]
 
@@ -72,11 +72,12 @@ class ExactCalibration:
 
     Parameters
     ----------
-    robot : DiffDrive | Tricycle
+    robot : DiffDrive | Tricycle | Car
         The input robot with the fitted corrections in place.
     names : tuple of str
-        Parameter names: ``c_left, c_right, c_wheel_base`` or
-        ``c_scale, steering_offset, wheel_to_axle`` (m for ``wheel_to_axle``, rad for the offset).
+        Parameter names: ``c_left, c_right, c_wheel_base``,
+        ``c_scale, steering_offset, wheel_to_axle`` (m for ``wheel_to_axle``, rad for the offset)
+        or ``c_scale, steering_offset, wheel_base`` (car).
     values, std_errors : ndarray, shape (3,)
         Estimates and standard errors ``sqrt(diag(cov))``.
     cov, corr : ndarray, shape (3, 3)
@@ -86,7 +87,9 @@ class ExactCalibration:
     residual_variance : float
         σ̂² of the weighted residuals (m² unless whitened, then dimensionless).
     n_residuals, n_runs : int
-    source : {"endpoints", "trajectory"}
+    source : {"endpoints", "trajectory", "positions"}
+        ``positions``: :func:`odomkit.calibrate.positions.calibrate_positions` (truth
+        positions on their own clock, start poses fitted).
     scale_fixed : bool
         True when the mean scale was held at its input value (unobservable or asked).
     scale_sensitivity : float
@@ -95,7 +98,7 @@ class ExactCalibration:
         Human-readable remarks (why the scale was fixed, convergence).
     """
 
-    robot: DiffDrive | Tricycle
+    robot: DiffDrive | Tricycle | Car
     names: tuple[str, ...]
     values: NDArray[np.float64]
     std_errors: NDArray[np.float64]
@@ -178,7 +181,7 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
 
 def calibrate_exact(
     runs: Sequence[OdometryLog],
-    robot: DiffDrive | Tricycle,
+    robot: DiffDrive | Tricycle | Car,
     source: Source = "endpoints",
     *,
     heading_weight: float | None = 0.0,
@@ -195,7 +198,7 @@ def calibrate_exact(
         Logs with ``ground_truth`` (N, 3); diff robots need ``ticks_left/right`` (or
         ``dist_*``), tricycles ``ticks`` (or ``dist``/``speed``) and ``steer``. Each run is
         integrated from its first ground-truth pose.
-    robot : DiffDrive | Tricycle
+    robot : DiffDrive | Tricycle | Car
         Nominal parameters; its current corrections are the starting point.
     source : {"endpoints", "trajectory"}
         Compare only each run's final pose, or every row's pose.
@@ -306,7 +309,7 @@ def calibrate_exact(
 
 
 def jackknife_runs(
-    runs: Sequence[OdometryLog], robot: DiffDrive | Tricycle, source: Source = "trajectory",
+    runs: Sequence[OdometryLog], robot: DiffDrive | Tricycle | Car, source: Source = "trajectory",
     **kwargs: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Delete-one-run jackknife standard errors of :func:`calibrate_exact`'s parameters.

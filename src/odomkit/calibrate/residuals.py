@@ -3,9 +3,10 @@ set of runs and their analytic Jacobian with respect to the robot's parameters.
 
 * :func:`integrate_with_sensitivity` dead-reckons body steps and, in the same vectorised
   pass, the derivative of every pose with respect to the parameters;
-* :class:`DiffCalibrationModel` and :class:`TricycleCalibrationModel` map a parameter
-  vector p onto the body steps of each run (and their derivatives) and back onto a robot;
-  :func:`calibration_model` picks the one for a robot;
+* :class:`DiffCalibrationModel`, :class:`TricycleCalibrationModel` and
+  :class:`CarCalibrationModel` map a parameter vector p onto the body steps of each run
+  (and their derivatives) and back onto a robot; :func:`calibration_model` picks the one
+  for a robot;
 * :class:`ResidualProblem` compares the integrated poses with the ground truth (endpoints or whole
   trajectories), weights or whitens the residuals and stacks them, with their Jacobian,
   over all runs for :func:`scipy.optimize.least_squares`; :func:`endpoint_whitening` gives
@@ -29,13 +30,14 @@ from numpy.typing import NDArray
 
 from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
-from odomkit.kinematics import Method, body_steps, step_jacobians
+from odomkit.kinematics import Method, body_steps, car_body_jacobian, car_body_steps, step_jacobians
 from odomkit.log import OdometryLog
-from odomkit.robot import DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.track import initial_pose
 
-__all__ = ["CalibrationModel", "DiffCalibrationModel", "ResidualProblem", "TricycleCalibrationModel",
-           "calibration_model", "endpoint_whitening", "integrate_with_sensitivity"]
+__all__ = ["CalibrationModel", "CarCalibrationModel", "DiffCalibrationModel", "ResidualProblem",
+           "TricycleCalibrationModel", "calibration_model", "endpoint_whitening",
+           "integrate_with_sensitivity"]
 
 
 def integrate_with_sensitivity(
@@ -162,17 +164,54 @@ class TricycleCalibrationModel:
         return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-CalibrationModel: TypeAlias = DiffCalibrationModel | TricycleCalibrationModel
+class CarCalibrationModel:
+    """p = (c_scale, steering_offset, wheel_base) of a Car (its encoder offset and position
+    are geometry, known)."""
+
+    names = ("c_scale", "steering_offset", "wheel_base")
+
+    def __init__(self, robot: Car, runs: Sequence[OdometryLog]):
+        self.robot = robot
+        raw = replace(robot, c_scale=1.0, steering_offset=0.0)
+        steps = [body_steps(raw, log) for log in runs]
+        self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
+        self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_base])
+
+    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
+        s0, a0 = self.raw[i]
+        s, alpha, length = p[0] * s0, a0 + p[1], p[2]
+        r = self.robot
+        # Car model (kinematics.car_body_steps); c_scale enters through s = c·s0, so its
+        # column is s0·∂/∂s; the offset's is ∂/∂α, the wheel base's ∂/∂L.
+        dd, dtheta = car_body_steps(s, alpha, length, r.encoder_offset, r.encoder_at)
+        jac = car_body_jacobian(s, alpha, length, r.encoder_offset, r.encoder_at)
+        ddd = np.stack([s0 * jac[:, 0, 0], jac[:, 0, 1], jac[:, 0, 2]], axis=1)
+        ddt = np.stack([s0 * jac[:, 1, 0], jac[:, 1, 1], jac[:, 1, 2]], axis=1)
+        return dd, dtheta, ddd, ddt
+
+    def make_robot(self, p: NDArray[np.float64]) -> Car:
+        return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
+                       wheel_base=float(p[2]))
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Keep c_scale; fit (steering_offset, wheel_base)."""
+        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+
+
+CalibrationModel: TypeAlias = DiffCalibrationModel | TricycleCalibrationModel | CarCalibrationModel
 """The parameter-to-body-step map of a robot the exact calibration supports."""
 
 
-def calibration_model(robot: DiffDrive | Tricycle, runs: Sequence[OdometryLog]) -> CalibrationModel:
+def calibration_model(robot: DiffDrive | Tricycle | Car, runs: Sequence[OdometryLog]) -> CalibrationModel:
     """The :data:`CalibrationModel` of ``robot`` over ``runs`` (ModelError if unsupported)."""
     if isinstance(robot, DiffDrive):
         return DiffCalibrationModel(robot, runs)
     if isinstance(robot, Tricycle):
         return TricycleCalibrationModel(robot, runs)
-    raise ModelError(f"exact calibration supports DiffDrive and Tricycle robots, got {type(robot).__name__}")
+    if isinstance(robot, Car):
+        return CarCalibrationModel(robot, runs)
+    raise ModelError("exact calibration supports DiffDrive, Tricycle and Car robots, "
+                     f"got {type(robot).__name__}")
 
 
 class ResidualProblem:

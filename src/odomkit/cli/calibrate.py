@@ -4,12 +4,17 @@
 
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
+        [--truth GT ... [TRUTH OPTIONS]]
         [--ros-yaml params.yaml --wheel-radius R [--twist-speed V --controller-period T]]
         [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
         [--known-mean] [--level 0.95] [LOG OPTIONS] [--json]
 
-LOG OPTIONS are those of ``odomkit track`` (:mod:`odomkit.cli.log_options`).
+LOG OPTIONS are those of ``odomkit track`` (:mod:`odomkit.cli.log_options`), TRUTH OPTIONS
+the shared ones (:mod:`odomkit.cli.truth_options`). With ``--truth`` (the i-th for the i-th
+run) the fit compares the odometry with every truth fix on the truth's own clock and fits
+each run's start pose (:func:`odomkit.calibrate.positions.calibrate_positions`):
+position-only, noisy truth such as GPS works.
 """
 
 from __future__ import annotations
@@ -37,6 +42,15 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.truth_options import (
+    MaxGapOption,
+    TruthColumnsOption,
+    TruthFormatOption,
+    TruthListOption,
+    TruthSigmaOption,
+    TruthTimeUnitOption,
+    truth_options,
+)
 from odomkit.errors import InputError
 
 __all__ = ["calibrate_command", "calibrate_noise_command"]
@@ -82,20 +96,31 @@ def calibrate_command(
     joints: JointsOption = None,
     bag_time: BagTimeOption = False,
     truth_topic: TruthTopicOption = None,
+    truth: TruthListOption = None,
+    truth_format: TruthFormatOption = "auto",
+    truth_columns: TruthColumnsOption = None,
+    truth_time_unit: TruthTimeUnitOption = "s",
+    truth_sigma: TruthSigmaOption = 0.0,
+    max_gap: MaxGapOption = 0.5,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Calibrate wheel scales and wheel base (exact least squares or UMBmark) from logs."""
+    """Calibrate wheel scales and wheel base, or a tricycle's or car's speed scale, steering
+    offset and wheel base (exact least squares or UMBmark) from logs with ground truth."""
     from odomkit.workflows.calibration import calibrate_files
+    from odomkit.workflows.truth import truth_options_per_log
 
     options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
+    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    per_run = truth_options_per_log(base, list(truth), len(runs)) if truth else None
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.
         out = calibrate_files(runs, robot, method=method, source=source, side=side,
                               out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
-                              overwrite=force, log_options=options, heading_weight=heading_weight)
+                              overwrite=force, log_options=options, truth=per_run,
+                              heading_weight=heading_weight)
     if json_out:
         print_json(with_warnings(out, warned))
         return

@@ -222,7 +222,7 @@ def write_kitti(path: str | Path, track: Track, overwrite: bool = False) -> tupl
     x, y, theta = track.poses.T
     c, s = np.cos(theta), np.sin(theta)
     zero, one = np.zeros_like(x), np.ones_like(x)
-    rows = np.column_stack((c, -s, zero, x, s, c, zero, y, zero, zero, one, zero))
+    rows = np.column_stack((c, 0.0 - s, zero, x, s, c, zero, y, zero, zero, one, zero))  # 0 - s: no '-0'
     np.savetxt(path, rows, fmt="%.17g", delimiter=" ")
     np.savetxt(times, track.t, fmt="%.17g")
     return path, times

@@ -10,16 +10,19 @@ Which parameters a vehicle has, and their order in the parameter vector β, is
 :data:`PARAMETERS` (keyed by the robot's type name); each vehicle's sensitivity
 ∂(Δd, Δθ)/∂β is looked up the same way (:data:`_SENSITIVITY`):
 
-==========  ==============================================================  ============
-vehicle     β                                                               field
-==========  ==============================================================  ============
-diff        wheel base b [m]; left, right wheel scale ε_L, ε_R [1]          sigma_wheel_base, sigma_scale_left, sigma_scale_right
-tricycle,   wheel base L [m]; measuring-wheel scale ε [1]; steering         sigma_wheel_base, sigma_scale_left,
-car         offset δα [rad]                                                 sigma_steering_offset
-gyro,       speed scale ε [1]; yaw-rate offset δω [rad/s]; yaw-rate         sigma_scale_left, sigma_yaw_rate_offset,
-unicycle    scale ε_ω [1]                                                   sigma_yaw_rate_scale
-compass     speed scale ε [1]; heading offset δh [rad]                      sigma_scale_left, sigma_heading_offset
-==========  ==============================================================  ============
+==========  ===================================  ===========================================
+vehicle     β                                    fields (σ of each, in this order)
+==========  ===================================  ===========================================
+diff        wheel base b [m]; left, right        sigma_wheel_base, sigma_scale_left,
+            wheel scale ε_L, ε_R [1]             sigma_scale_right
+tricycle,   wheel base L [m]; measuring-wheel    sigma_wheel_base, sigma_scale_left,
+car         scale ε [1]; steering offset δα      sigma_steering_offset
+            [rad]
+gyro,       speed scale ε [1]; yaw-rate offset   sigma_scale_left, sigma_yaw_rate_offset,
+unicycle    δω [rad/s]; yaw-rate scale ε_ω [1]   sigma_yaw_rate_scale
+compass     speed scale ε [1]; heading offset    sigma_scale_left, sigma_heading_offset
+            δh [rad]
+==========  ===================================  ===========================================
 
 A heading offset does not change any step (Δθ is a difference of two measured headings);
 it moves every measured heading, θ_k = θ_meas,k + δh, which the direct-heading engine
@@ -133,7 +136,8 @@ class ParameterUncertainty(NoiseModel):
         try:
             return PARAMETERS[robot.type_name]
         except (KeyError, AttributeError):
-            raise ModelError(f"ParameterUncertainty knows no parameters of a {type(robot).__name__}") from None
+            raise ModelError(f"ParameterUncertainty knows no parameters of a "
+                             f"{type(robot).__name__}") from None
 
     def bias_variances(self, robot: Robot) -> NDArray[np.float64]:
         """σ² of each of ``robot``'s parameters (:data:`PARAMETERS`), (p,); a ModelError
@@ -157,7 +161,8 @@ class ParameterUncertainty(NoiseModel):
         try:
             sensitivity = _SENSITIVITY[steps.robot.type_name]
         except KeyError:
-            raise ModelError(f"ParameterUncertainty has no sensitivity for a {type(steps.robot).__name__}") from None
+            raise ModelError(f"ParameterUncertainty has no sensitivity for a "
+                             f"{type(steps.robot).__name__}") from None
         return sensitivity(self, steps, a, b)
 
     def bias_heading(self, robot: Robot) -> NDArray[np.float64]:

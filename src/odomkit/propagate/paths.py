@@ -36,10 +36,9 @@ from numpy.typing import NDArray
 
 from odomkit import validate
 from odomkit.errors import ModelError
-from odomkit.kinematics import BodySteps
+from odomkit.kinematics import BodySteps, steering_body_steps
 from odomkit.noise import CompassNoise, NoiseModel, NoiseSet
 from odomkit.noise.kelly import DEFAULT_COMPASS_PERIOD, compass_sample_count
-from odomkit.kinematics import steering_body_steps
 from odomkit.path import Arc, KellyArc, Segment, Spin, SteerArc, Straight
 from odomkit.robot import ROBOT_TYPES, DiffDrive, Robot
 

@@ -33,10 +33,10 @@ from odomkit.noise.wheel import WheelInputs
 from odomkit.propagate.inputs import any_step_jacobians, step_terms
 from odomkit.propagate.plan import NoiseArg, NoisePlan, plan_noise
 from odomkit.propagate.transition import (
+    bias_sensitivity_chunk,
     check_cov3,
     check_cov_input,
     check_method,
-    bias_sensitivity_chunk,
     check_steps,
     direct_heading_chunk,
     input_terms,
@@ -286,10 +286,10 @@ def _chunks(steps: BodySteps, poses: ArrayLike, noise: NoiseArg, cov0: ArrayLike
         P[2, 2] = plan.var_heading[0]
     var_params = plan.var_params
     S = None if var_params is None else np.zeros((3, var_params.size))
-    if S is not None and plan.bias_heading is not None and plan.bias_heading.any():
+    if S is not None and var_params is not None and plan.bias_heading is not None and plan.bias_heading.any():
         # A heading-sensor offset moves the measured start heading too (θ_0 = θ_meas,0 + δ).
         S[2] = plan.bias_heading
-        yield 0, (P + np.einsum("ip,p,jp->ij", S, var_params, S))[None]
+        yield 0, (P + (S * var_params) @ S.T)[None]
     else:
         yield 0, P[None].copy()
     n = max(int(chunk_size), 1)

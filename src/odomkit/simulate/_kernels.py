@@ -5,8 +5,9 @@ Every partition's body motion is an affine map of two standard normals ``z0, z1`
     Δd = dd0 + a_d·z0 + b_d·z1          Δθ = dθ0 + a_t·z0 + b_t·z1
 
 which covers all incremental models (wheel noise, speed + gyro, classical); see
-:mod:`odomkit.simulate.engine`. The pose is integrated with the exact arc
-(:func:`odomkit.kinematics.step_displacement`, ``method="exact"``)::
+:mod:`odomkit.simulate.engine`. A run's bias draw adds a per-run constant ``shift``
+(2, B) to (Δd, Δθ) of every partition of a segment (:mod:`odomkit.simulate.plan`). The
+pose is integrated with the exact arc (:func:`odomkit.kinematics.step_displacement`, ``method="exact"``)::
 
     x' = x + Δd·sinc(Δθ/2)·cos(θ + Δθ/2),  y' = y + Δd·sinc(Δθ/2)·sin(θ + Δθ/2),  θ' = θ + Δθ
 
@@ -46,15 +47,25 @@ def new_state(pose0: NDArray[np.float64]) -> State:
     return state
 
 
+def _increments(z: NDArray[np.float64], coef: NDArray[np.float64],
+                shift: NDArray[np.float64] | None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(Δd, Δθ) of each partition and run, (P, B): coef's affine map of z, plus ``shift``."""
+    if shift is None:
+        return (coef[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :],
+                coef[3] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :])
+    return (coef[0] + shift[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :],
+            coef[3] + shift[1] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :])
+
+
 def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                  first_partition: int) -> None:
+                  first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
     """Plain numpy reference: advance ``state`` in place over ``z.shape[0]`` partitions.
 
-    ``z`` has shape (P, 2, B); ``coef`` is ``[dd0, a_d, b_d, dθ0, a_t, b_t]``.
+    ``z`` has shape (P, 2, B); ``coef`` is ``[dd0, a_d, b_d, dθ0, a_t, b_t]``; ``shift``
+    (2, B), optional, is added to every partition's (Δd, Δθ) of each run (its bias).
     ``first_partition`` is unused (kept so both kernels share a signature).
     """
-    dd = coef[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :]
-    dth = coef[3] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :]
+    dd, dth = _increments(z, coef, shift)
     theta = np.empty_like(dth)
     theta[0] = state[2]
     np.cumsum(dth[:-1], axis=0, out=theta[1:])
@@ -68,11 +79,10 @@ def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64
 
 
 def advance_classical_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                            first_partition: int) -> None:
+                            first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
     """The classical step map: rotate by α = Δθ, then translate D = Δd along the new
     heading (Chong–Kleeman eq. 1), as :mod:`odomkit.propagate` linearises it."""
-    dd = coef[0] + coef[1] * z[:, 0, :] + coef[2] * z[:, 1, :]
-    dth = coef[3] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :]
+    dd, dth = _increments(z, coef, shift)
     theta_after = state[2] + np.cumsum(dth, axis=0)
     state[0] += (dd * np.cos(theta_after)).sum(axis=0)
     state[1] += (dd * np.sin(theta_after)).sum(axis=0)
@@ -82,7 +92,7 @@ def advance_classical_numpy(state: State, z: NDArray[np.float64], coef: NDArray[
 
 
 def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                          first_partition: int) -> None:
+                          first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
     """Direct heading (compass) sampled every T: one heading error per compass reading,
     not per partition (Kelly section 3.1; ``track``'s model of a compass log).
 
@@ -97,7 +107,9 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     (another segment needs more). ``state[2]`` is the measured heading (the compass error
     is not integrated); between calls ``state[3:5]`` carry the errors of the current
     interval's readings (the kernel state's cos/sin slots, unused by this kernel).
-    ``first_partition`` counts from the start of the segment.
+    ``first_partition`` counts from the start of the segment. ``shift`` (2, B), a run's
+    bias: row 0 is added to every step's distance, row 1 to every reading's error (a
+    heading offset; the start reading's is in the start pose already).
     """
     dd0, sigma_d, theta_start, dth0, sigma_h = coef[:5]
     q, m = int(coef[5]), int(coef[6])
@@ -114,7 +126,10 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
         base = [state[3]]
     else:
         base = [state[3], state[4]]
-    errs = np.concatenate([np.asarray(base), sigma_h * z[:act, 1, :][new]])
+    fresh = sigma_h * z[:act, 1, :][new]
+    if shift is not None:
+        fresh = fresh + shift[1]
+    errs = np.concatenate([np.asarray(base), fresh])
     idx = np.cumsum(new) - (1 if aligned else 0)
     e_lo, e_hi = errs[idx], errs[idx + 1]  # (act, B): the interval's two readings
     w0 = (sub / q)[:, None]
@@ -122,8 +137,8 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     err0 = e_lo + (e_hi - e_lo) * w0
     err1 = e_lo + (e_hi - e_lo) * w1
     heading = theta_start + dth0 * g[:, None] + err0
-    dx, dy = step_displacement(heading, dd0 + sigma_d * z[:act, 0, :], dth0 + (err1 - err0),
-                               "exact")
+    dist = dd0 + sigma_d * z[:act, 0, :] if shift is None else dd0 + shift[0] + sigma_d * z[:act, 0, :]
+    dx, dy = step_displacement(heading, dist, dth0 + (err1 - err0), "exact")
     state[0] += dx.sum(axis=0)
     state[1] += dy.sum(axis=0)
     end = first_partition + act
@@ -134,7 +149,7 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
         state[3], state[4] = e_lo[-1], e_hi[-1]
 
 
-def advance_numba() -> Callable[[State, NDArray[np.float64], NDArray[np.float64], int], None]:
+def advance_numba() -> Callable[..., None]:
     """The compiled kernel of :mod:`odomkit.simulate._numba`, loaded by
     :func:`odomkit.jit.load` (compiled, or read from numba's cache, on first call);
     ModelError without numba."""

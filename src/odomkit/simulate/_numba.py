@@ -46,9 +46,11 @@ def _arc(x: Any, y: Any, th: Any, c: Any, s: Any, r: int, dd: float, dth: float,
 
 @njit
 def _advance(x: Any, y: Any, th: Any, c: Any, s: Any, z: Any, coef: Any,
-             first_partition: int) -> None:
+             first_partition: int, sd: Any, st: Any) -> None:
     n_part, _, n_runs = z.shape
     dd0, ad, bd, dt0, at, bt = coef[0], coef[1], coef[2], coef[3], coef[4], coef[5]
+    # sd, st (B,): each run's bias shift of Δd, Δθ (zeros without bias noise; adding 0.0
+    # leaves every number as it was)
     for p in range(n_part):
         z0 = z[p, 0]
         z1 = z[p, 1]
@@ -58,20 +60,20 @@ def _advance(x: Any, y: Any, th: Any, c: Any, s: Any, z: Any, coef: Any,
                 s[r] = math.sin(th[r])
         u_max = 0.0
         for r in range(n_runs):
-            u_max = max(u_max, abs(0.5 * (dt0 + at * z0[r] + bt * z1[r])))
+            u_max = max(u_max, abs(0.5 * (dt0 + st[r] + at * z0[r] + bt * z1[r])))
         # The full series (not angles.sin_cos_sinc, whose extra branch to the short series
         # would stop the loop from vectorising), else the direct formulas.
         if u_max < _SERIES_BELOW:
             # branch-free, vectorised: every run of this partition takes the series
             for r in range(n_runs):
-                dth = dt0 + at * z0[r] + bt * z1[r]
+                dth = dt0 + st[r] + at * z0[r] + bt * z1[r]
                 su, cu, sinc = sin_cos_sinc_series(0.5 * dth)
-                _arc(x, y, th, c, s, r, dd0 + ad * z0[r] + bd * z1[r], dth, su, cu, sinc)
+                _arc(x, y, th, c, s, r, dd0 + sd[r] + ad * z0[r] + bd * z1[r], dth, su, cu, sinc)
         else:
             # per run the same arithmetic as above where |u| is small, so a run's numbers
             # never depend on the other runs of its block
             for r in range(n_runs):
-                dth = dt0 + at * z0[r] + bt * z1[r]
+                dth = dt0 + st[r] + at * z0[r] + bt * z1[r]
                 u = 0.5 * dth
                 if abs(u) < _SERIES_BELOW:
                     su, cu, sinc = sin_cos_sinc_series(u)
@@ -79,11 +81,16 @@ def _advance(x: Any, y: Any, th: Any, c: Any, s: Any, z: Any, coef: Any,
                     su = math.sin(u)
                     cu = math.cos(u)
                     sinc = su / u
-                _arc(x, y, th, c, s, r, dd0 + ad * z0[r] + bd * z1[r], dth, su, cu, sinc)
+                _arc(x, y, th, c, s, r, dd0 + sd[r] + ad * z0[r] + bd * z1[r], dth, su, cu, sinc)
 
 
 def advance_state(state: NDArray[np.float64], z: NDArray[np.float64],
-                  coef: NDArray[np.float64], first_partition: int) -> None:
+                  coef: NDArray[np.float64], first_partition: int,
+                  shift: NDArray[np.float64] | None = None) -> None:
     """Advance ``state`` (5, B) = x, y, θ, cos θ, sin θ in place over ``z.shape[0]``
-    partitions; ``z`` (P, 2, B) standard normals, ``coef`` as in _kernels."""
-    _advance(state[0], state[1], state[2], state[3], state[4], z, coef, first_partition)
+    partitions; ``z`` (P, 2, B) standard normals, ``coef`` as in _kernels; ``shift``
+    (2, B) each run's bias added to every partition's (Δd, Δθ)."""
+    if shift is None:
+        shift = np.zeros((2, state.shape[1]))
+    _advance(state[0], state[1], state[2], state[3], state[4], z, coef, first_partition,
+             np.ascontiguousarray(shift[0]), np.ascontiguousarray(shift[1]))

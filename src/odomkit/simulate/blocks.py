@@ -2,10 +2,12 @@
 
 Runs are grouped into fixed blocks of :data:`BLOCK_RUNS`; block ``b`` draws from its own
 stream ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of ``SeedSequence(seed).spawn``)
-in a fixed order: 3 normals per run for the initial pose, then, partition after partition
-along the whole path, 2 normals per run. A task is a list of blocks; how blocks are grouped
-into tasks, and tasks onto threads (:mod:`odomkit.simulate.engine`) or Dask workers
-(:mod:`odomkit.simulate.distributed`), therefore never changes a number. Memory stays
+in a fixed order: 3 normals per run for the initial pose, then (with bias noise) p normals
+per run for its bias parameters (one draw per run, :mod:`odomkit.simulate.plan`), then,
+partition after partition along the whole path, 2 normals per run. A task is a list of
+blocks; how blocks are grouped into tasks, and tasks onto threads
+(:mod:`odomkit.simulate.engine`) or Dask workers (:mod:`odomkit.simulate.distributed`),
+therefore never changes a number. Memory stays
 bounded: a block holds at most :data:`PARTITION_CHUNK` partitions of noise.
 
 Both executors import this module; neither imports the other's internals.
@@ -43,10 +45,20 @@ def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
     rng = np.random.Generator(np.random.SFC64(np.random.SeedSequence(seed, spawn_key=(block,))))
     z_pose = rng.standard_normal((n_runs, 3))
     poses = plan.pose0 + z_pose @ plan.factor0.T
+    shifts = None
+    if plan.bias is not None:
+        # One bias draw per run: every partition of segment j moves by bias[j] @ zβ.
+        z_bias = rng.standard_normal((n_runs, plan.bias.shape[-1]))
+        shifts = np.einsum("sip,np->sin", plan.bias, z_bias)  # (S, 2, n_runs)
+        if plan.bias_heading is not None:
+            # A heading offset moves every compass reading, the first (the start) too.
+            offset = z_bias @ plan.bias_heading
+            poses[:, 2] += offset
+            shifts[:, 1, :] = offset
     state = _kernels.new_state(poses)
     n_seg = plan.coefs.shape[0]
     ends = np.empty((n_runs, n_seg, 3)) if want_ends else None
-    advance: Callable[[_kernels.State, NDArray[np.float64], NDArray[np.float64], int], None]
+    advance: Callable[..., None]
     if plan.kind == "compass":
         advance = _kernels.advance_compass_numpy
     elif plan.kind == "classical":
@@ -64,7 +76,10 @@ def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
             rng.standard_normal(out=z)
             # the numba kernel resyncs its heading vector at global partition indices
             first = start if plan.kind == "compass" else j * k + start
-            advance(state, z, coef, first)
+            if shifts is None:
+                advance(state, z, coef, first)
+            else:
+                advance(state, z, coef, first, shifts[j])
         if ends is not None:
             ends[:, j, :] = state[:3].T
     return state[:3].T.copy(), ends

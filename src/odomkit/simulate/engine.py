@@ -27,6 +27,7 @@ from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.path import Segment
 from odomkit.propagate.plan import NoiseArg
+from odomkit.robot import Robot
 from odomkit.simulate import _kernels
 from odomkit.simulate.blocks import make_tasks, run_task
 from odomkit.simulate.distributed import Scheduler
@@ -186,13 +187,15 @@ def simulate_runs(
     progress: Progress | None = None,
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
+    robot: Robot | None = None,
 ) -> MonteCarloRuns:
     """Simulate ``runs`` noisy runs of ``path`` and return their poses.
 
     Parameters
     ----------
     path : sequence of Segment
-        Arc/Straight/Spin (differential drive) or KellyArc (gyro, compass).
+        Arc/Straight/Spin (differential drive), KellyArc (gyro, unicycle, compass) or
+        SteerArc (tricycle, car).
     noise : noise model or tuple of them
         Selects the model, as in :func:`odomkit.propagate.predict.predict`:
         :class:`~odomkit.noise.WheelNoise` (variance k²·|d| per partition and wheel);
@@ -201,7 +204,9 @@ def simulate_runs(
         step per segment); (SpeedNoise, GyroNoise); (SpeedNoise, CompassNoise): a compass
         read every ``compass_period`` T, each reading with its own error of variance
         ``psd_compass/T`` (not integrated), exact arcs between readings; the final θ is
-        the last reading, and the first reading replaces the initial θ variance.
+        the last reading, and the first reading replaces the initial θ variance. A
+        :class:`~odomkit.noise.ParameterUncertainty` joins any of them but the classical:
+        each run draws its bias parameters once (:mod:`odomkit.simulate.plan`).
     wheel_base : float, optional
         Nominal wheel base B [m] of a differential drive (required for those models).
     runs, partitions : int
@@ -233,6 +238,9 @@ def simulate_runs(
         Compass model only: sample period T [s] of the compass (default
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
         whole number of periods.
+    robot : Robot, optional
+        The vehicle (required for a tricycle or car; see
+        :func:`odomkit.propagate.paths.path_model`).
 
     Returns
     -------
@@ -253,7 +261,8 @@ def simulate_runs(
     path = list(path)
     check_scheduler(scheduler)
     check_size(runs, partitions, len(path), segment_ends=segment_ends, max_work=max_work)
-    plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic, compass_period)
+    plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic, compass_period,
+                     robot)
     # A compass path may be cut finer than asked (whole steps per compass reading).
     check_size(runs, plan.partitions, len(path), segment_ends=segment_ends, max_work=max_work)
     seed_used = _resolve_seed(seed)

@@ -2,6 +2,13 @@
 
 Every partition's body motion is an affine map of two standard normals z0, z1
 (see :mod:`odomkit.simulate._kernels`), so all noise models share one kernel.
+
+Bias noise (:class:`~odomkit.noise.ParameterUncertainty`): each run draws its parameter
+errors β ~ N(0, diag σ²) once (p standard normals, :mod:`odomkit.simulate.blocks`), and
+every partition of segment j then moves by K_j β more, K_j = ∂(Δd, Δθ)/∂β of that
+partition (the model's own ``bias_jacobian``, checked against the vehicles' kinematics by
+finite differences in tests/noise): ``Plan.bias`` holds K_j diag(σ). A compass's heading
+offset moves every reading (``Plan.bias_heading`` = ∂θ/∂β · σ).
 """
 
 from __future__ import annotations
@@ -15,10 +22,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from odomkit import validate
 from odomkit.errors import ModelError
-from odomkit.kinematics import BodySteps
+from odomkit.kinematics import BodySteps, steering_body_steps
 from odomkit.noise import NoiseSet
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-from odomkit.propagate.paths import PathModel, compass_samples, path_model
+from odomkit.propagate.paths import PathModel, check_segments, compass_samples, path_model
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive, Robot, SystematicErrors
 
@@ -34,6 +41,9 @@ class Plan:
     ``"classical"`` (rotate, then translate) or ``"compass"`` (7 coefficients, see
     :func:`odomkit.simulate._kernels.advance_compass_numpy`). ``partitions`` is the number
     of kernel steps per segment (a compass segment may use fewer: its ``m``).
+    ``bias[j]`` (2, p) = K_j diag(σ) moves each partition of segment j by ``bias[j] @ zβ``
+    for a run's p bias normals zβ; ``bias_heading`` (p,) moves a compass's every reading
+    by ``bias_heading @ zβ``. Both None without bias noise.
     """
 
     kind: str
@@ -41,6 +51,8 @@ class Plan:
     partitions: int
     pose0: NDArray[np.float64]  # (3,)
     factor0: NDArray[np.float64]  # (3, 3): initial pose = pose0 + factor0 @ z
+    bias: NDArray[np.float64] | None = None  # (S, 2, p)
+    bias_heading: NDArray[np.float64] | None = None  # (p,)
 
 
 def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
@@ -55,7 +67,7 @@ def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
 
 
 def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
-                  compass_period: float | None = None) -> PathModel:
+                  compass_period: float | None = None, robot: Robot | None = None) -> PathModel:
     """The odometry model a noise argument selects, as in ``predict``
     (:func:`odomkit.propagate.paths.path_model`).
 
@@ -63,17 +75,25 @@ def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
     >>> resolve_model(WheelNoise(0.001, 0.001)).family
     'wheel'
     """
-    return path_model(noise, wheel_base, purpose="simulation", compass_period=compass_period)
+    return path_model(noise, wheel_base if robot is None else None, purpose="simulation",
+                      compass_period=compass_period, robot=robot)
 
 
 def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: Robot,
                      scales: tuple[float, float]) -> BodySteps:
     """One partition (1/k) of every segment, as the steps the noise models are asked
     about: a differential drive's commanded wheel travels (nominal wheel base) scaled by
-    the true wheel sizes, or Kelly's speed·Δt and yaw rate·Δt."""
+    the true wheel sizes, Kelly's speed·Δt and yaw rate·Δt, or a steered vehicle's wheel
+    travel and steering angle."""
     dd, dth, dt, d_left, d_right = (np.empty(len(path)) for _ in range(5))
+    travel, steer = np.empty(len(path)), np.empty(len(path))
     for j, seg in enumerate(path):
-        if model.diff:
+        if model.steered:
+            dt[j] = seg.duration / k  # type: ignore[union-attr]
+            travel[j], steer[j] = seg.speed * dt[j], seg.steer  # type: ignore[union-attr]
+            step_d, step_a = steering_body_steps(robot, travel[j], steer[j])  # type: ignore[arg-type]
+            dd[j], dth[j] = float(step_d), float(step_a)
+        elif model.diff:
             left, right = seg.wheel_travel(model.robot.wheel_base)  # type: ignore[union-attr]
             d_left[j], d_right[j] = scales[0] * left / k, scales[1] * right / k
             # Δd = (d_L + d_R)/2, Δθ = (d_R − d_L)/b, Borenstein–Feng (2.2)–(2.4)
@@ -83,21 +103,34 @@ def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: R
         else:
             dt[j] = seg.duration / k  # type: ignore[union-attr]
             dd[j], dth[j] = seg.speed * dt[j], seg.yaw_rate * dt[j]  # type: ignore[union-attr]
-    inputs = {"d_left": d_left, "d_right": d_right} if model.diff else {}
+    if model.diff:
+        inputs = {"d_left": d_left, "d_right": d_right}
+    elif model.steered:
+        inputs = {"travel": travel, "steer": steer}
+    else:
+        inputs = {"yaw_rate": np.divide(dth, dt, out=np.zeros_like(dth), where=dt > 0)}
     return BodySteps(dd, dth, dt, inputs, robot)
 
 
-def _coefs(model: PathModel, path: Sequence[Segment], k: int,
-           systematic: SystematicErrors | None) -> NDArray[np.float64]:
+def _bias_factor(model: PathModel, steps: BodySteps) -> NDArray[np.float64] | None:
+    """K diag(σ) of each step, (S, 2, p), or None without bias noise."""
+    if not model.noise.bias:
+        return None
+    sigma = np.sqrt(model.noise.bias_variances(steps.robot))
+    return np.asarray(model.noise.bias_jacobian(steps, 0, len(steps)) * sigma)
+
+
+def _coefs(model: PathModel, path: Sequence[Segment], k: int, systematic: SystematicErrors | None
+           ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
     """(S, 6) kernel coefficients: the mean body motion of one partition of each segment
     and a factor A (A Aᵀ = Q) of its white noise, as the noise models give them
-    (:meth:`odomkit.noise.NoiseSet.input_factor`)."""
+    (:meth:`odomkit.noise.NoiseSet.input_factor`); and the bias factor (S, 2, p) or None."""
     robot = model.robot
     scales = (1.0, 1.0)
     if model.diff:
         sys_err = systematic or SystematicErrors()
         scales = sys_err.wheel_scales()
-        robot = DiffDrive(model.robot.wheel_base * sys_err.E_b)  # type: ignore[union-attr]
+        robot = DiffDrive(model.robot.effective_wheel_base * sys_err.E_b)  # type: ignore[union-attr]
     elif systematic is not None:
         raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
     steps = _partition_steps(model, path, k, robot, scales)
@@ -106,11 +139,11 @@ def _coefs(model: PathModel, path: Sequence[Segment], k: int,
     coefs[:, 0], coefs[:, 3] = steps.dd, steps.dtheta
     coefs[:, 1], coefs[:, 2] = factor[:, 0, 0], factor[:, 0, 1]
     coefs[:, 4], coefs[:, 5] = factor[:, 1, 0], factor[:, 1, 1]
-    return coefs
+    return coefs, _bias_factor(model, steps)
 
 
 def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: float
-                   ) -> NDArray[np.float64]:
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
     """(S, 7) compass kernel coefficients ``[dd, σ_d, θ_start, dθ, σ_h, q, m]``.
 
     The compass is read every T = ``model.compass_period``; segment j lasts n_j readings
@@ -119,6 +152,7 @@ def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: fl
     between two readings into q_j equal arcs (the same arc: K only splits the speed
     noise). Each step: distance dd + σ_d·z0 (the speed noise of T/q_j), nominal heading
     change dθ; σ_h = √(σ_θθ/T) is the σ of each reading's error (one z1 per reading).
+    Also the bias factor of each kernel step (S, 2, p), or None.
     """
     period = model.compass_period
     assert period is not None
@@ -135,16 +169,17 @@ def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: fl
     coefs[:, 2] = theta0 + np.concatenate([[0.0], np.cumsum(turns)[:-1]])
     coefs[:, 4] = math.sqrt(model.var_heading)
     coefs[:, 5], coefs[:, 6] = q, q * np.asarray(counts, dtype=float)
-    return coefs
+    return coefs, _bias_factor(model, steps)
 
 
 def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None, partitions: int,
               pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
               systematic: SystematicErrors | None = None,
-              compass_period: float | None = None) -> Plan:
+              compass_period: float | None = None, robot: Robot | None = None) -> Plan:
     """Translate path, noise and robot into per-segment kernel coefficients.
 
-    A compass (``compass_period`` T [s], default
+    ``robot`` names the vehicle (:func:`odomkit.propagate.paths.path_model`; required for a
+    tricycle or car). A compass (``compass_period`` T [s], default
     :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`) starts from its first reading:
     the θ row and column of ``cov0`` give way to that reading's error, variance σ_θθ/T,
     independent of the start position (as in ``predict`` and ``track``).
@@ -156,26 +191,36 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
     p0 = validate.pose(pose0)
     k = int(partitions)
     family = NoiseSet.of(noise).family
-    if family in ("wheel", "classical") and (
+    if robot is None and family in ("wheel", "classical") and (
             wheel_base is None or not (math.isfinite(wheel_base) and wheel_base > 0)):
         raise ModelError(f"the {family} model needs a positive wheel_base [m], got {wheel_base!r}")
-    model = resolve_model(noise, wheel_base, compass_period)
-    for j, seg in enumerate(path):
-        if model.diff and not isinstance(seg, Arc | Straight | Spin):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
-                             "expected arc:L,R, straight:D or spin:DTHETA")
-        if not model.diff and not isinstance(seg, KellyArc):
-            raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
-                             "expected arc:V,OMEGA,T or straight:V,T")
+    model = resolve_model(noise, wheel_base, compass_period, robot)
+    if model.diff:
+        for j, seg in enumerate(path):
+            if not isinstance(seg, Arc | Straight | Spin):
+                raise ModelError(f"segment {j + 1} ({seg!r}) is not a diff-drive segment; "
+                                 "expected arc:L,R, straight:D or spin:DTHETA")
+    elif not model.steered:
+        for j, seg in enumerate(path):
+            if not isinstance(seg, KellyArc):
+                raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
+                                 "expected arc:V,OMEGA,T or straight:V,T")
+    else:
+        check_segments(path, model)
     if model.compass_period is not None:
         if systematic is not None:
             raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
-        coefs = _compass_coefs(model, path, k, float(p0[2]))
+        coefs, bias = _compass_coefs(model, path, k, float(p0[2]))
         start = np.zeros((3, 3))
         if cov0 is not None:
             start[:2, :2] = validate.covariance(cov0, "initial covariance", variances=True)[:2, :2]
         start[2, 2] = model.var_heading
-        return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start))
-    coefs = _coefs(model, path, k, systematic)
+        heading = None
+        if bias is not None:
+            heading = model.noise.bias_heading(model.robot) * np.sqrt(
+                model.noise.bias_variances(model.robot))
+        return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start),
+                    bias, heading)
+    coefs, bias = _coefs(model, path, k, systematic)
     kind = "classical" if model.family == "classical" else "increment"
-    return Plan(kind, coefs, k, p0, _cov_factor(cov0))
+    return Plan(kind, coefs, k, p0, _cov_factor(cov0), bias)

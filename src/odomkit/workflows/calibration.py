@@ -16,6 +16,7 @@ from typing import Any
 from odomkit.calibrate.exact import calibrate_exact
 from odomkit.calibrate.export import twist_covariance
 from odomkit.calibrate.noise_fit import fit_wheel_noise_from_runs
+from odomkit.calibrate.positions import calibrate_positions
 from odomkit.calibrate.realdata import (
     SquareRow,
     e_max_syst_of_runs,
@@ -27,9 +28,10 @@ from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
-from odomkit.robot import DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
+from odomkit.workflows.truth import TruthOptions, load_truth
 
 __all__ = ["calibrate_files", "noise_files", "optiodom_square_table"]
 
@@ -49,6 +51,7 @@ def calibrate_files(
     velocity_window: int = 10,
     overwrite: bool = False,
     log_options: LogOptions | None = None,
+    truth: Sequence[TruthOptions] | None = None,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -74,6 +77,11 @@ def calibrate_files(
         ``controller_period`` [s] and averaging ``velocity_window`` updates
         (:func:`odomkit.calibrate.export.twist_covariance`).
     log_options : :class:`odomkit.workflows.logs.LogOptions`.
+    truth : one :class:`odomkit.workflows.truth.TruthOptions` per run (``--truth``), optional
+        Exact only: compare every truth fix, on the truth's own clock, with the odometry
+        and fit each run's start pose with the robot's parameters
+        (:func:`odomkit.calibrate.positions.calibrate_positions`; position-only, noisy truth
+        such as GPS is enough). ``--from`` and ``--heading-weight`` do not apply.
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -81,8 +89,17 @@ def calibrate_files(
     dict with the calibration summary (JSON-ready), ``robot`` (the corrected parameters
     as in the robot file) and ``outputs`` (paths written).
     """
+    truth_paths = [t.path for t in truth or () if t.path is not None]
     check_outputs({"--out-robot": out_robot, "--ros-yaml": ros_yaml}, overwrite=overwrite,
-                  inputs=[robot_path, *run_paths])
+                  inputs=[robot_path, *run_paths, *truth_paths])
+    if truth is not None:
+        if method != "exact":
+            raise InputError("--truth applies to --method exact")
+        stray = (["--from"] if source is not None else []) + [
+            _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
+        if stray:
+            raise InputError(f"{', '.join(stray)} does not apply with --truth: every truth fix is compared "
+                             "as a position, and each run's start pose is fitted")
     if method not in ("exact", "umbmark"):
         raise ModelError(f"--method must be 'exact' or 'umbmark', got {method!r}")
     if method == "umbmark":
@@ -116,6 +133,20 @@ def calibrate_files(
             um = umbmark_from_runs(runs, robot, side)
             summary = um.to_dict()
             new_robot: Any = um.robot
+        elif truth is not None:
+            if not isinstance(robot, DiffDrive | Tricycle | Car):
+                raise InputError("calibration from truth positions fits a diff, tricycle or car robot; "
+                                 f"the robot file describes a {robot.type_name!r} robot",
+                                 source=str(robot_path))
+            truths = []
+            for log, options in zip(runs, truth, strict=True):
+                found = load_truth(options, log)
+                if found is None:
+                    raise InputError("no truth: give --truth or a log with gt_* columns", source=log.source)
+                truths.append(found)
+            cal = calibrate_positions(runs, truths, robot)
+            summary = cal.to_dict()
+            new_robot = cal.robot
         else:
             cal = calibrate_exact(runs, robot, source or "endpoints", **exact_kwargs)  # type: ignore[arg-type]
             summary = cal.to_dict()
@@ -125,7 +156,7 @@ def calibrate_files(
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
     robot_fields = robot_to_dict(new_robot)["robot"]
     check_result("the calibration", {
-        "the parameters": [v for k, v in robot_fields.items() if k != "type"],
+        "the parameters": [v for v in robot_fields.values() if not isinstance(v, str)],
         **{k: summary.get(k) for k in ("E_d", "E_b", "wheel_base", "e_max_syst_before",
                                        "e_max_syst_after")},
     })

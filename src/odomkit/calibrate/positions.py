@@ -1,0 +1,263 @@
+"""Calibration from truth positions on their own clock (GPS-like truth, no heading).
+
+:func:`odomkit.calibrate.exact.calibrate_exact` compares each run against ground truth at
+every log row and starts each run from its first truth pose. A position-only truth with
+metres of noise (GPS) and gaps gives neither: no start heading, a start position off by
+its noise, and rows without truth. Here:
+
+* the odometry is compared at the truth's own times: the dead-reckoned positions are
+  interpolated there (linearly between the two log rows around each fix; the log is
+  the denser clock), so each fix is one residual with its own noise, a gap in the truth
+  is simply no residual, and fixes outside the log's span are left out and counted;
+* each run's start pose (x₀, y₀, θ₀) is fitted with the robot's parameters (three
+  nuisance parameters per run), so neither the start position nor the start heading is
+  taken from a single noisy fix;
+* the residuals are the position differences odometry − truth; their noise is the
+  truth's, independent from fix to fix, so σ̂²(JᵀJ)⁻¹ is an honest covariance (its block
+  of the robot's parameters, the start poses marginalised);
+* the fit grows its horizon: a fit from nominal values over a whole long run falls into
+  local minima (a steering offset bends the whole dead-reckoned track into a spiral that
+  a rotation of the start cannot undo), so the first stage fits the start pose alone
+  (an SE(2) alignment, Umeyama 1991, closed form) over a short prefix of each run, and
+  each later stage refits everything over a prefix twice as long, starting from the
+  previous stage's solution, until the whole run is used.
+
+The parameter-to-body-step maps are :mod:`odomkit.calibrate.residuals`' (diff, tricycle,
+car) and the integration with sensitivities its
+:func:`~odomkit.calibrate.residuals.integrate_with_sensitivity`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Collection, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from odomkit import validate
+from odomkit.calibrate.exact import ExactCalibration
+from odomkit.calibrate.residuals import CalibrationModel, calibration_model, integrate_with_sensitivity
+from odomkit.errors import InputError, ModelError
+from odomkit.evaluate import umeyama_se2
+from odomkit.kinematics import Method
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, DiffDrive, Tricycle
+from odomkit.truth import Truth
+
+__all__ = ["MIN_FIRST_FIXES", "calibrate_positions"]
+
+#: Fewest truth fixes in the first (shortest) stage of the growing horizon.
+MIN_FIRST_FIXES = 30
+
+
+@dataclass(frozen=True)
+class _Run:
+    """The truth fixes of one run inside its log's span: fix j lies between log rows
+    row[j] and row[j] + 1, a fraction w[j] of the way."""
+
+    row: NDArray[np.intp]  # (n,)
+    w: NDArray[np.float64]  # (n,)
+    xy: NDArray[np.float64]  # (n, 2) truth positions [m]
+    t: NDArray[np.float64]  # (n,) fix times [s]
+    outside: int  # fixes outside the log's span
+
+
+def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth]) -> list[_Run]:
+    if len(runs) != len(truths):
+        raise InputError(f"give one truth per run: {len(runs)} run(s), {len(truths)} truth(s)")
+    out = []
+    for log, truth in zip(runs, truths, strict=True):
+        t = np.asarray(log.t, dtype=float)
+        inside = (truth.t >= t[0]) & (truth.t <= t[-1])
+        tau = truth.t[inside]
+        if tau.size < 4:
+            raise InputError(f"only {tau.size} truth fixes lie inside the log's time span "
+                             f"({t[0]:.6g}..{t[-1]:.6g} s; the truth covers {truth.t[0]:.6g}.."
+                             f"{truth.t[-1]:.6g} s): check the clocks (--truth-time-unit)",
+                             source=truth.source)
+        row = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, t.size - 2)
+        span = t[row + 1] - t[row]
+        w = np.divide(tau - t[row], span, out=np.zeros_like(tau), where=span > 0)
+        out.append(_Run(row.astype(np.intp), w, truth.xy[inside], tau, int(np.count_nonzero(~inside))))
+    return out
+
+
+class _Problem:
+    """Position residuals of all runs over their first ``horizon`` fraction, for
+    q = (free robot parameters, then x₀, y₀, θ₀ of each run)."""
+
+    def __init__(self, model: CalibrationModel, runs: list[_Run], logs: Sequence[OdometryLog],
+                 free: NDArray[np.intp], method: Method):
+        self.model, self.runs, self.free, self.method = model, runs, free, method
+        self.p_fixed = model.p0.copy()
+        self.t0 = [float(log.t[0]) for log in logs]
+        self.t1 = [float(log.t[-1]) for log in logs]
+        self.horizon = 1.0
+
+    def split(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        p = self.p_fixed.copy()
+        p[self.free] = q[: self.free.size]
+        return p, q[self.free.size:].reshape(-1, 3)
+
+    def used(self, i: int) -> NDArray[np.bool_]:
+        run = self.runs[i]
+        return run.t <= self.t0[i] + self.horizon * (self.t1[i] - self.t0[i])
+
+    def at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_]) -> NDArray[np.float64]:
+        """Per-row ``values`` (N, ...) interpolated linearly at run i's kept fixes."""
+        run = self.runs[i]
+        row, w = run.row[keep], run.w[keep]
+        w = w.reshape(w.shape + (1,) * (values.ndim - 1))
+        return (1.0 - w) * values[row] + w * values[row + 1]
+
+    def residuals_and_jacobian(self, q: NDArray[np.float64]
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        p, starts = self.split(q)
+        n_free = self.free.size
+        res, jac = [], []
+        for i, run in enumerate(self.runs):
+            dd, dth, ddd, ddt = self.model.steps(p, i)
+            poses, dposes = integrate_with_sensitivity(dd, dth, ddd[:, self.free], ddt[:, self.free],
+                                                       starts[i], self.method)
+            keep = self.used(i)
+            pos = self.at_fixes(poses[:, :2], i, keep)
+            r = pos - run.xy[keep]
+            j = np.zeros((pos.shape[0], 2, q.size))
+            j[:, :, :n_free] = self.at_fixes(dposes[:, :2], i, keep)
+            col = n_free + 3 * i
+            j[:, 0, col] = 1.0
+            j[:, 1, col + 1] = 1.0
+            # a turn of the start by dθ₀ swings every position about the start
+            j[:, 0, col + 2] = -(pos[:, 1] - starts[i][1])
+            j[:, 1, col + 2] = pos[:, 0] - starts[i][0]
+            res.append(r.reshape(-1))
+            jac.append(j.reshape(-1, q.size))
+        return np.concatenate(res), np.concatenate(jac)
+
+    def align_starts(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Each run's start pose by SE(2) alignment of its odometry (parameters ``p``, from
+        the origin) to the truth over the current horizon (Umeyama, closed form)."""
+        starts = []
+        for i, run in enumerate(self.runs):
+            dd, dth = self.model.steps(p, i)[:2]
+            zero = np.zeros((dd.size, 0))
+            poses, _ = integrate_with_sensitivity(dd, dth, zero, zero, np.zeros(3), self.method)
+            keep = self.used(i)
+            phi, shift = umeyama_se2(self.at_fixes(poses[:, :2], i, keep), run.xy[keep])
+            starts.append([shift[0], shift[1], phi])
+        return np.asarray(starts, dtype=float).reshape(-1)
+
+
+def _first_horizon(problem: _Problem, min_fixes: int) -> float:
+    """The shortest power-of-two fraction of every run holding at least ``min_fixes`` fixes."""
+    horizon = 1.0
+    while horizon > 1 / 64:
+        problem.horizon = horizon / 2
+        if any(int(np.count_nonzero(problem.used(i))) < min_fixes for i in range(len(problem.runs))):
+            break
+        horizon /= 2
+    problem.horizon = horizon
+    return horizon
+
+
+def calibrate_positions(
+    runs: Sequence[OdometryLog],
+    truths: Sequence[Truth],
+    robot: DiffDrive | Tricycle | Car,
+    *,
+    fixed: Collection[str] = (),
+    min_first_fixes: int = MIN_FIRST_FIXES,
+    method: Method = "exact",
+) -> ExactCalibration:
+    """Fit a robot's systematic parameters to truth positions on the truth's own clock.
+
+    Parameters
+    ----------
+    runs : sequence of OdometryLog
+        The logs (their own ground truth, if any, is not used).
+    truths : sequence of Truth
+        One per run (:class:`odomkit.truth.Truth`; heading, if any, is not used).
+    robot : DiffDrive | Tricycle | Car
+        Nominal parameters, the starting point: diff (c_left, c_right, c_wheel_base),
+        tricycle (c_scale, steering_offset, wheel_to_axle), car (c_scale,
+        steering_offset, wheel_base).
+    fixed : collection of str
+        Parameter names held at the robot's values.
+    min_first_fixes : int
+        Fewest fixes per run in the first stage of the growing horizon.
+    method : {"exact", "midpoint", "euler"}
+
+    Returns
+    -------
+    ExactCalibration
+        ``source = "positions"``; ``values``, ``std_errors``, ``cov`` of all the robot's
+        parameters (a fixed one has zero variance); ``notes`` list the stages and each
+        run's fitted start pose.
+    """
+    if len(runs) < 1:
+        raise InputError("calibration needs at least one run")
+    if not isinstance(robot, DiffDrive | Tricycle | Car):
+        raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle and Car "
+                         f"robots, got {type(robot).__name__}")
+    min_first_fixes = validate.positive_int(min_first_fixes, "min_first_fixes")
+    model = calibration_model(robot, runs)
+    unknown = sorted(set(fixed) - set(model.names))
+    if unknown:
+        raise ModelError(f"fixed names {', '.join(unknown)}; the parameters are {', '.join(model.names)}")
+    free = np.array([k for k, n in enumerate(model.names) if n not in fixed], dtype=np.intp)
+    with_truth = _runs_with_truth(runs, truths)
+    problem = _Problem(model, with_truth, runs, free, method)
+    notes: list[str] = []
+
+    horizon = _first_horizon(problem, min_first_fixes)
+    q = np.concatenate([model.p0[free], problem.align_starts(model.p0)])
+    while True:
+        n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(with_truth)))
+        if n_res > q.size:
+            sol = least_squares(lambda x: problem.residuals_and_jacobian(x)[0], q,
+                                jac=lambda x: problem.residuals_and_jacobian(x)[1], method="lm",
+                                x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+            if not np.all(np.isfinite(sol.x)):
+                raise ModelError("the calibration diverged to non-finite parameters; check the "
+                                 "truth's clock and the robot file's units")
+            q = sol.x
+            notes.append(f"horizon {horizon:.4g} of each run: {n_res // 2} fixes, residual rms "
+                         f"{float(np.sqrt(np.mean(sol.fun**2))):.4g} m")
+        if horizon >= 1.0:
+            break
+        horizon = min(1.0, 2 * horizon)
+        problem.horizon = horizon
+    res, jac = problem.residuals_and_jacobian(q)
+    dof = res.size - q.size
+    if dof <= 0:
+        raise InputError(f"{res.size} position residuals cannot determine {q.size} parameters "
+                         "(the robot's and each run's start pose): give longer runs or more truth")
+    var_res = float(res @ res) / dof
+    cov_q = var_res * np.linalg.pinv(jac.T @ jac)
+    p, starts = problem.split(q)
+    cov = np.zeros((len(model.names), len(model.names)))
+    cov[np.ix_(free, free)] = cov_q[: free.size, : free.size]
+    std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.outer(std, std)
+    corr[~np.isfinite(corr)] = 0.0
+    np.fill_diagonal(corr, np.where(std > 0, 1.0, 0.0))
+    scale_index = [0, 1, 2] if isinstance(robot, DiffDrive) else [0, 2]
+    if np.any(p[scale_index] <= 0):
+        raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; check the "
+                         "channel signs and the robot file")
+    for log, start, run in zip(runs, starts, with_truth, strict=True):
+        left_out = f"; {run.outside} truth fixes outside the log's span left out" if run.outside else ""
+        notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
+                     f"{start[2]:.4g} rad){left_out}")
+    travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(runs))]
+    spread = [float(np.sqrt(np.mean(np.sum((r.xy - r.xy.mean(axis=0)) ** 2, axis=1)))) for r in with_truth]
+    sensitivity = float(np.mean([s / d if d > 0 else 0.0 for s, d in zip(spread, travelled, strict=True)]))
+    return ExactCalibration(
+        robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov, corr=corr,
+        residual_variance=var_res, n_residuals=int(res.size), n_runs=len(runs), source="positions",
+        scale_fixed="c_scale" in fixed or {"c_left", "c_right"} <= set(fixed),
+        scale_sensitivity=sensitivity, notes=tuple(notes),
+    )

@@ -1,0 +1,87 @@
+"""Calibration from truth positions on their own clock (:mod:`odomkit.calibrate.positions`),
+issue 12 item 3: a car's (and a tricycle's) speed scale, steering offset and wheel base
+from GPS-like truth (3 m noise, 1 Hz on another clock, a gap), recovered within their
+intervals; the intervals honest over many seeds."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.positions import calibrate_positions
+from odomkit.errors import InputError, ModelError
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, Tricycle
+from odomkit.track import dead_reckon_log
+from odomkit.truth import Truth
+
+TRUE_CAR = Car(2.75, 0.8, "rear", steering_offset=0.01, c_scale=1.02)
+NOMINAL_CAR = Car(2.7, 0.8, "rear")
+
+
+def drive(seed, robot, n=6000, dt=0.1, sigma=3.0, speed=8.0, max_steer=0.25):
+    """A log of ``robot`` driving smooth random turns, and its GPS: 1 Hz fixes on a clock
+    0.37 s off the log's, σ = 3 m per axis, none between 200 s and 240 s."""
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(n)
+    knots = rng.uniform(-max_steer, max_steer, n // 100 + 2)
+    steer = np.interp(t, np.arange(knots.size) * 100 * dt, knots)
+    log = OdometryLog(t, {"speed": speed + 0.25 * speed * np.sin(t / 37.0), "steer": steer},
+                      source=f"run{seed}")
+    truth_poses = dead_reckon_log(log, robot, pose0=(100.0, -50.0, 0.7)).poses
+    tg = np.arange(0.37, t[-1], 1.0)
+    tg = tg[(tg < 200) | (tg > 240)]
+    xy = np.column_stack([np.interp(tg, t, truth_poses[:, 0]), np.interp(tg, t, truth_poses[:, 1])])
+    return log, Truth(tg, xy + rng.normal(0, sigma, xy.shape), None, sigma, f"gps{seed}")
+
+
+def test_car_speed_scale_steering_offset_and_wheel_base_from_gps():
+    logs, truths = zip(*[drive(s, TRUE_CAR) for s in (1, 2)])
+    cal = calibrate_positions(logs, truths, NOMINAL_CAR)
+    assert cal.names == ("c_scale", "steering_offset", "wheel_base") and cal.source == "positions"
+    truth = np.array([TRUE_CAR.c_scale, TRUE_CAR.steering_offset, TRUE_CAR.wheel_base])
+    z = (cal.values - truth) / cal.std_errors
+    assert np.all(np.abs(z) < 3), z
+    # and the intervals are tight enough to mean something
+    assert cal.std_errors[0] < 2e-3 and cal.std_errors[1] < 1e-4 and cal.std_errors[2] < 0.01
+    assert np.sqrt(cal.residual_variance) == pytest.approx(3.0, rel=0.1)  # the GPS noise
+    assert cal.robot == Car(cal.values[2], 0.8, "rear", steering_offset=cal.values[1], c_scale=cal.values[0])
+    assert any("start pose fitted" in note for note in cal.notes)
+
+
+def test_the_intervals_are_honest_over_many_runs():
+    """Over 20 independent runs the errors in standard errors are about N(0, 1): their
+    spread lies within [0.6, 1.4] (a 20-sample standard deviation has a relative
+    standard error of about 16 %)."""
+    z = []
+    for seed in range(20):
+        log, truth = drive(100 + seed, TRUE_CAR, n=3000)
+        cal = calibrate_positions([log], [truth], NOMINAL_CAR)
+        z.append((cal.values - [1.02, 0.01, 2.75]) / cal.std_errors)
+    spread = np.std(z, axis=0)
+    assert np.all((spread > 0.6) & (spread < 1.4)), spread
+
+
+def test_a_front_encoder_car_and_a_tricycle_with_a_fixed_wheel_base():
+    front_true = Car(2.7, -0.75, "front", steering_offset=-0.008, c_scale=0.985)
+    log, truth = drive(7, front_true)
+    cal = calibrate_positions([log], [truth], Car(2.7, -0.75, "front"), fixed=("wheel_base",))
+    assert cal.std_errors[2] == 0.0 and cal.values[2] == 2.7
+    z = (cal.values[:2] - [0.985, -0.008]) / cal.std_errors[:2]
+    assert np.all(np.abs(z) < 3), z
+    tri_true = Tricycle(0.7, steering_offset=0.004, c_scale=1.01)
+    log, truth = drive(8, tri_true, speed=1.5, max_steer=0.4, sigma=0.5)
+    cal = calibrate_positions([log], [truth], Tricycle(0.7), fixed=("wheel_to_axle",))
+    z = (cal.values[:2] - [1.01, 0.004]) / cal.std_errors[:2]
+    assert np.all(np.abs(z) < 3), z
+
+
+def test_bad_inputs_are_named():
+    log, truth = drive(3, TRUE_CAR, n=500)
+    with pytest.raises(InputError, match="one truth per run"):
+        calibrate_positions([log, log], [truth], NOMINAL_CAR)
+    late = Truth(truth.t + 1e4, truth.xy, None, 3.0, "late.txt")
+    with pytest.raises(InputError, match="late.txt: only 0 truth fixes lie inside the log's time span"):
+        calibrate_positions([log], [late], NOMINAL_CAR)
+    with pytest.raises(ModelError, match="fixed names wheel_to_axle"):
+        calibrate_positions([log], [truth], NOMINAL_CAR, fixed=("wheel_to_axle",))
