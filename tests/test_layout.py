@@ -53,7 +53,6 @@ PENDING: Mapping[str, str] = {
     "simulate/distributed.py": "issue 9: tested in tests/simulate/test_dask.py",
     "simulate/experiment.py": "issue 9: tested in tests/simulate/test_against_predict.py for now",
     "simulate/plan.py": "issue 9: tested through tests/simulate/test_engine.py for now",
-    "workflows/demo.py": "issue 9: new module; test module after the refactor",
 }
 
 

@@ -23,7 +23,7 @@ from odomkit.noise import (
     TricycleNoise,
     WheelNoise,
 )
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
 from odomkit.track import dead_reckon_log
 from odomkit.truth import Truth
 from odomkit.windows import (
@@ -183,18 +183,23 @@ def _models_and_log(kind):
     if kind == "diff":
         log = _curvy_log(n)
         return log, DiffDrive(0.3), (WheelNoise(0.003, 0.002), ParameterUncertainty(0.002, 0.004, 0.003))
-    if kind == "tricycle":
+    steered = ParameterUncertainty(0.002, 0.01, sigma_steering_offset=0.003)
+    rate = ParameterUncertainty(0, 0.01, sigma_yaw_rate_offset=0.002, sigma_yaw_rate_scale=0.01)
+    if kind in ("tricycle", "car"):
         log = OdometryLog(t, {"dist": np.full(n, 0.01), "steer": 0.3 * np.sin(t / 3)})
-        return log, Tricycle(0.15), (TricycleNoise(0.01, 0.02, 0.001), ParameterUncertainty(0.002, 0.01))
-    if kind == "gyro":
+        robot = Tricycle(0.15) if kind == "tricycle" else Car(0.3, 0.1, "front")
+        return log, robot, (TricycleNoise(0.01, 0.02, 0.001), steered)
+    if kind in ("gyro", "unicycle"):
         log = OdometryLog(t, {"dist": np.full(n, 0.01), "yaw_rate": 0.4 * np.sin(t / 4)})
-        return log, GyroOdometry(), (SpeedNoise(1e-4), GyroNoise(2e-5), ParameterUncertainty(0, 0.01))
+        robot = GyroOdometry() if kind == "gyro" else Unicycle()
+        return log, robot, (SpeedNoise(1e-4), GyroNoise(2e-5), rate)
     heading = np.cumsum(0.02 * np.sin(t / 4)) + rng.normal(0, 1e-3, n)
     log = OdometryLog(t, {"dist": np.full(n, 0.01), "heading": heading})
-    return log, CompassOdometry(), (SpeedNoise(1e-4), CompassNoise(1e-4), ParameterUncertainty(0, 0.01))
+    return log, CompassOdometry(), (SpeedNoise(1e-4), CompassNoise(1e-4),
+                                    ParameterUncertainty(0, 0.01, sigma_heading_offset=0.005))
 
 
-@pytest.mark.parametrize("kind", ["diff", "tricycle", "gyro", "compass"])
+@pytest.mark.parametrize("kind", ["diff", "tricycle", "car", "gyro", "unicycle", "compass"])
 @pytest.mark.parametrize("position_only", [False, True])
 def test_the_basis_adds_up_to_the_engines_covariance(kind, position_only):
     """P(v) = fixed + Σ v_j B_j + S diag(c(v)) Sᵀ equals the engines' run with v (1e-12)."""

@@ -166,3 +166,37 @@ def test_calibrate_noise_plot_is_written_and_never_overwritten(run_cli, tmp_path
     code, _, err = run_cli("calibrate-noise", *runs, "--robot",
                            builtin_data_path("optiodom_diff.toml"), "--plot", out)
     assert code == 2 and "exists already" in err
+
+
+def test_twist_covariance_of_a_car_and_a_unicycle_matches_their_sensors_simulated():
+    """The car's steady motion at (v, ω) and its speed/steering white noise, simulated
+    sensor by sensor through the car's kinematics (W = 10 updates of T = 0.02 s, the
+    published velocity the mean): the sample covariance matches within 5 standard
+    errors. The unicycle's is Kelly's: var v = α_ss·v/(W T), var ω = σ_gg/(W T)."""
+    import math
+
+    from odomkit.calibrate.export import twist_covariance
+    from odomkit.kinematics import car_body_steps, car_speed_factor
+    from odomkit.noise import GyroNoise, SpeedNoise, TricycleNoise
+    from odomkit.robot import Car, Unicycle
+
+    car, noise = Car(2.7, 0.8, c_scale=1.02, steering_offset=0.01), TricycleNoise(0.05, 0.01)
+    v, w, T, W = 5.0, 0.3, 0.02, 10
+    got = twist_covariance(car, noise, v, T, window=W, yaw_rate=w)
+    alpha = math.atan2(w * car.wheel_base, v)
+    wheel = v / float(car_speed_factor(alpha, car.wheel_base, car.encoder_offset))  # measured speed
+    rng = np.random.default_rng(4)
+    n = 40000
+    speed = wheel + noise.sigma_speed * rng.standard_normal((n, W))
+    steer = alpha + noise.sigma_steer * rng.standard_normal((n, W))
+    dd, dth = car_body_steps(speed * T, steer, car.wheel_base, car.encoder_offset)
+    published = np.column_stack([dd.sum(axis=1), dth.sum(axis=1)]) / (W * T)
+    assert np.allclose(published.mean(axis=0), [v, w], rtol=2e-3)
+    emp = np.cov(published.T)
+    want = np.array([[got.var_speed, got.cov_speed_yaw_rate], [got.cov_speed_yaw_rate, got.var_yaw_rate]])
+    se = np.sqrt((np.outer(np.diag(want), np.diag(want)) + want**2) / n)
+    assert np.all(np.abs(emp - want) <= 5 * se), (emp, want)
+    uni = twist_covariance(Unicycle(c_scale=1.1), (SpeedNoise(1e-3), GyroNoise(1e-4)), v, T, window=W,
+                           yaw_rate=w)
+    assert uni.var_speed == pytest.approx(1e-3 * v / (W * T), rel=1e-12)
+    assert uni.var_yaw_rate == pytest.approx(1e-4 / (W * T), rel=1e-12)

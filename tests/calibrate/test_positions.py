@@ -11,7 +11,7 @@ import pytest
 from odomkit.calibrate.positions import calibrate_positions
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
-from odomkit.robot import Car, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.track import dead_reckon_log
 from odomkit.truth import Truth
 
@@ -36,7 +36,7 @@ def drive(seed, robot, n=6000, dt=0.1, sigma=3.0, speed=8.0, max_steer=0.25):
 
 
 def test_car_speed_scale_steering_offset_and_wheel_base_from_gps():
-    logs, truths = zip(*[drive(s, TRUE_CAR) for s in (1, 2)])
+    logs, truths = zip(*[drive(s, TRUE_CAR) for s in (1, 2)], strict=True)
     cal = calibrate_positions(logs, truths, NOMINAL_CAR)
     assert cal.names == ("c_scale", "steering_offset", "wheel_base") and cal.source == "positions"
     truth = np.array([TRUE_CAR.c_scale, TRUE_CAR.steering_offset, TRUE_CAR.wheel_base])
@@ -85,3 +85,21 @@ def test_bad_inputs_are_named():
         calibrate_positions([log], [late], NOMINAL_CAR)
     with pytest.raises(ModelError, match="fixed names wheel_to_axle"):
         calibrate_positions([log], [truth], NOMINAL_CAR, fixed=("wheel_to_axle",))
+
+
+def test_a_differential_drive_from_position_only_truth():
+    """The same fit serves a differential drive: wheel scales and wheel base from 1 cm
+    position fixes at 5 Hz (no heading), its own clock."""
+    rng = np.random.default_rng(9)
+    n, dt = 3000, 0.05
+    t = dt * np.arange(n)
+    turn = 0.02 * np.sin(t / 7.0)
+    true = DiffDrive(0.31, c_left=0.995, c_right=1.004)
+    log = OdometryLog(t, {"dist_left": np.full(n, 0.01) - turn, "dist_right": np.full(n, 0.01) + turn})
+    poses = dead_reckon_log(log, true, pose0=(1.0, 2.0, -0.4)).poses
+    tg = np.arange(0.013, t[-1], 0.2)
+    xy = np.column_stack([np.interp(tg, t, poses[:, 0]), np.interp(tg, t, poses[:, 1])])
+    truth = Truth(tg, xy + rng.normal(0, 0.01, xy.shape), None, 0.01)
+    cal = calibrate_positions([log], [truth], DiffDrive(0.3))
+    z = (cal.values - [0.995, 1.004, 0.31 / 0.3]) / cal.std_errors
+    assert np.all(np.abs(z) < 3), z

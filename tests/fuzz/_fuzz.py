@@ -91,7 +91,8 @@ def floats_text(lo: float, hi: float) -> st.SearchStrategy[str]:
     return st.floats(lo, hi, allow_nan=False, allow_infinity=False).map(repr)
 
 
-def _mostly(good: st.SearchStrategy[str], bad: st.SearchStrategy[str], odds: int = 6) -> st.SearchStrategy[str]:
+def _mostly(good: st.SearchStrategy[str], bad: st.SearchStrategy[str],
+            odds: int = 6) -> st.SearchStrategy[str]:
     """``good`` ``odds`` times out of ``odds + 1``, else ``bad``: most examples should get far
     enough to compute something, so that the success properties are exercised too."""
     # Hypothesis starts from the simplest example (every choice 0): make that one good.
@@ -522,6 +523,8 @@ NOT_COVARIANCE_PARENTS = frozenset({"se", "z"})
 
 #: Keys whose value may be ``null`` on success, and why (the contract, not a failure):
 NULL_KEYS: dict[str, str] = {
+    # track: no covariance propagated (--no-covariance, or a robot file without [noise])
+    "cov": "track: no covariance propagated",
     # odomkit check: a finding without advice or without a measured value
     "advice": "check: a finding that needs no advice",
     "value": "check: a finding with no single measured value",
@@ -536,6 +539,12 @@ NULL_KEYS: dict[str, str] = {
     "xy": "predict: correlation of a zero variance", "xtheta": "predict: correlation of a zero variance",
     "ytheta": "predict: correlation of a zero variance",
 }
+#: Keys of a figure that may be undefined (``null``) when the JSON's ``warnings`` say why:
+#: evaluate's RPE over a distance the truth never travels (or without a truth heading), NEES
+#: and coverage of a track without covariance, drift of a truth that does not move. Children
+#: of these keys (``rpe.1``, ``coverage.0.95``) count too.
+NULL_IF_WARNED = frozenset({"rpe", "nees_position_mean", "nees_position_median", "nees_bounds",
+                            "coverage", "inside_95_fraction", "drift_percent"})
 #: List positions that may be null: an open interval bound (fit-amcl's profile interval has no
 #: upper end when the likelihood never drops far enough), keyed by the list's key.
 NULL_IN_LISTS = frozenset({"interval95", "interval"})
@@ -555,11 +564,13 @@ def _walk(value: object, path: tuple[str, ...]) -> Iterator[tuple[tuple[str, ...
             yield from _walk(item, (*path, f"[{i}]"))
 
 
-def _null_allowed(path: tuple[str, ...]) -> bool:
+def _null_allowed(path: tuple[str, ...], warned: bool) -> bool:
     keys = [p for p in path if not p.startswith("[")]
     if not keys:
         return False
     if path[-1].startswith("[") and any(k.startswith(tuple(NULL_IN_LISTS)) for k in keys[-2:]):
+        return True
+    if warned and any(k in NULL_IF_WARNED for k in keys[-2:]):
         return True
     return not path[-1].startswith("[") and keys[-1] in NULL_KEYS
 
@@ -594,10 +605,12 @@ def check_json(text: str) -> dict[str, Any]:
     except ValueError as exc:
         raise AssertionError(f"stdout is not one JSON object ({exc}): {text[:300]!r}") from None
     assert isinstance(doc, dict), f"JSON is not an object: {text[:200]!r}"
+    warned = bool(doc.get("warnings"))
     for path, value in _walk(doc, ()):
         where = ".".join(path)
         if value is None:
-            assert _null_allowed(path), f"null where a number is expected: {where}"
+            assert _null_allowed(path, warned), (f"null where a number is expected: {where} "
+                                         f"(warnings: {doc.get('warnings')})")
         if isinstance(value, float):
             assert math.isfinite(value), where
         if path and path[-1] in COVARIANCE_KEYS and not (

@@ -146,7 +146,8 @@ def test_fuzz_track(case):
 
 MODELS = {
     "wheel": (["--model", "diff", "--noise", "wheel"],
-              [("--wheel-base", ("0.4", "0.2")), ("--k-left", ("0.001", "0")), ("--k-right", ("0.001", "0.01"))]),
+              [("--wheel-base", ("0.4", "0.2")), ("--k-left", ("0.001", "0")),
+               ("--k-right", ("0.001", "0.01"))]),
     "classical": (["--model", "diff", "--noise", "classical"],
                   [("--wheel-base", ("0.4",)), ("--sigma-distance", ("0.01", "0")),
                    ("--sigma-angle", ("0.01",))]),
@@ -478,7 +479,8 @@ def test_fuzz_check(case):
 def demo_cases(draw) -> Case:
     case = Case(output_flags=("--out",))
     case.add("demo")
-    kind = draw(st.sampled_from(("default", "new", "existing_file", "existing_folder", "under_file", "empty")))
+    kind = draw(st.sampled_from(("default", "new", "existing_file", "existing_folder", "under_file",
+                                 "empty")))
     if kind == "new":
         case.add("--out", "results/demo")
     elif kind == "existing_file":

@@ -122,3 +122,15 @@ def test_closed_engine_refuses_bias_and_steered_vehicles():
     a = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="recursion")
     b = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="transition")
     assert np.allclose(a.cov, b.cov, rtol=1e-9, atol=1e-18)
+
+
+def test_monte_carlo_experiment_gives_a_car_with_bias_its_verdict():
+    """``monte_carlo`` (behind ``odomkit simulate``) predicts bias noise and steered
+    vehicles with the step recursion on the simulated steps and calls them consistent."""
+    from odomkit.simulate import monte_carlo
+
+    noise = (TricycleNoise(0.02, 0.004), ParameterUncertainty(0.03, 0.005, sigma_steering_offset=0.002))
+    r = monte_carlo(STEER_PATH, noise, robot=Car(2.7, 0.8), runs=4000, partitions=40, seed=11)
+    assert r["theory"]["pose"] == pytest.approx(
+        predict(STEER_PATH, noise, robot=Car(2.7, 0.8), engine="recursion", partitions=40).to_dict()["pose"])
+    assert r["linear_model_ok"], r["verdict"]

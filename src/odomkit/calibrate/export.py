@@ -16,8 +16,9 @@ from numpy.typing import NDArray
 
 from odomkit import validate
 from odomkit.errors import ModelError
+from odomkit.kinematics import car_speed_factor
 from odomkit.log import OdometryLog
-from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
 __all__ = ["diff_drive_controller_parameters", "tricycle_controller_parameters", "twist_covariance",
            "TwistCovariance"]
@@ -162,6 +163,14 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
         channels = {"dist": ones * s / robot.c_scale, "steer": ones * (alpha - robot.steering_offset)}
     elif isinstance(robot, GyroOdometry):
         channels = {"speed": ones * speed, "yaw_rate": ones * (yaw_rate / robot.gyro_scale + robot.gyro_bias)}
+    elif isinstance(robot, Unicycle):
+        channels = {"speed": ones * speed / robot.c_scale,
+                    "yaw_rate": ones * (yaw_rate / robot.yaw_rate_scale + robot.yaw_rate_bias)}
+    elif isinstance(robot, Car):
+        # ω = v·tan α / L (the bicycle); the measuring wheel travels d / car_speed_factor(α)
+        alpha = math.atan2(turn * robot.wheel_base, d)
+        s = d / float(car_speed_factor(alpha, robot.wheel_base, robot.encoder_offset, robot.encoder_at))
+        channels = {"dist": ones * s / robot.c_scale, "steer": ones * (alpha - robot.steering_offset)}
     elif isinstance(robot, CompassOdometry):
         channels = {"speed": ones * speed, "heading": yaw_rate * t - robot.heading_offset}
     else:

@@ -59,6 +59,8 @@ DEFAULT_WHITE: dict[str, tuple[str, ...]] = {
     "tricycle": ("TricycleNoise",),
     "gyro": ("SpeedNoise", "GyroNoise"),
     "compass": ("SpeedNoise", "CompassNoise"),
+    "unicycle": ("SpeedNoise", "GyroNoise"),
+    "car": ("TricycleNoise",),
 }
 #: Parameters of those defaults held at zero: with a constant sample period a period
 #: error moves a tricycle exactly as a speed error does (∂/∂T = (v/T)·∂/∂v), so the data

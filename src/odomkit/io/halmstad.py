@@ -37,10 +37,19 @@ def read_khepera(path: str | Path, period: float = 1.0, wrap_bits: int | None = 
     table = read_table(path, 2, integer_columns=(0, 1))
     # Integer counts are differenced (and unwrapped) exactly, in int64 arithmetic.
     left, right = table.counter(0, wrap_bits), table.counter(1, wrap_bits)
-    t = np.arange(table.values.shape[0], dtype=float) * period
+    t = _sample_times(table.values.shape[0], period, path)
     channels = {"ticks_left": counter_increments(left, wrap_bits),
                 "ticks_right": counter_increments(right, wrap_bits)}
     return OdometryLog(t, channels, None, str(path), {"format": "khepera"})
+
+
+def _sample_times(rows: int, period: float, path: str | Path) -> np.ndarray:
+    """``0, T, 2T, ...`` for a log without a time column; refused when the last time is not
+    a finite number (``--period 1e308``), before numpy would warn about the overflow."""
+    if rows > 1 and not np.isfinite(period * float(rows - 1)):
+        raise InputError(f"--period {period:g} s times {rows - 1} steps overflows the time column; "
+                         "give the sample period in seconds", source=str(path))
+    return np.arange(rows, dtype=float) * period
 
 
 def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> OdometryLog:
@@ -51,7 +60,7 @@ def read_snowhite(path: str | Path, period: float = SNOWHITE_PERIOD) -> Odometry
     """
     period = validate.positive(period, "period", unit="s", error=InputError)
     data = read_numeric(path, 5)
-    t = np.arange(data.shape[0], dtype=float) * period
+    t = _sample_times(data.shape[0], period, path)
     channels = {"speed": data[:, 0] / 1000.0, "steer": data[:, 1].copy()}
     truth = np.column_stack((data[:, 2] / 1000.0, data[:, 3] / 1000.0, unwrap_angle(data[:, 4])))
     return OdometryLog(t, channels, truth, str(path), {"format": "snowhite"})

@@ -193,6 +193,8 @@ def kitti_times_path(path: str | Path) -> Path:
     'out/run.times.txt'
     """
     path = Path(path)
+    if path.name in ("", ".", ".."):  # "", "." and "/" have no name to put the times beside
+        raise InputError("--kitti names a folder; give a file path", source=str(path))
     return path.with_name(path.stem + ".times.txt")
 
 

@@ -6,11 +6,13 @@ model                       kind    applies to
 :class:`WheelNoise`         white   diff: per-wheel travel error, variance k²·|d|
 :class:`ClassicalNoise`     white   any: fixed σ per step (Chong–Kleeman eq. 1–3)
 :class:`SpeedNoise`         white   any: distance error, variance α_ss·|Δd|
-:class:`GyroNoise`          white   integrated heading: variance psd_gyro·Δt
+:class:`GyroNoise`          white   integrated heading (gyro, unicycle, ...): variance
+                                    psd_gyro·Δt
 :class:`CompassNoise`       white   compass: measured heading, variance psd_compass/Δt
-:class:`TricycleNoise`      white   tricycle: speed, steering and period errors
-:class:`ParameterUncertainty`  bias  wheel base and wheel scales, constant over a run
-                            (or white)
+:class:`TricycleNoise`      white   tricycle and car: speed, steering and period errors
+:class:`ParameterUncertainty`  bias  every vehicle's parameters, constant over a run
+                            (wheel base, wheel or speed scales, steering offset,
+                            yaw-rate offset and scale, heading offset; or white)
 ==========================  ======  ======================================================
 
 Several independent models combine in a :class:`NoiseSet` (a tuple of models is accepted

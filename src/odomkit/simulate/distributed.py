@@ -39,6 +39,9 @@ def get_client(scheduler: Scheduler) -> tuple[Any, bool]:
                          f"got {scheduler!r}")
     try:
         return Client(scheduler, timeout=CONNECT_TIMEOUT), True
+    except ValueError as exc:  # dask's own parse of the address: '', 'a b', 'host:' ...
+        raise ModelError(f"--scheduler must be a Dask scheduler address host:port (e.g. "
+                         f"tcp://10.0.0.5:8786), got {scheduler!r} ({exc})") from None
     except (OSError, TimeoutError) as exc:
         raise ModelError(f"cannot reach the Dask scheduler at {scheduler!r}: {exc}") from exc
 

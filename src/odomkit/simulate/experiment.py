@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -13,6 +13,7 @@ from odomkit.errors import ModelError
 from odomkit.noise import NoiseSet
 from odomkit.path import Segment
 from odomkit.propagate.plan import NoiseArg
+from odomkit.robot import Robot
 from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.engine import MAX_WORK, Engine, Progress, check_scheduler, check_size, simulate_runs
 from odomkit.simulate.plan import SystematicErrors, resolve_model
@@ -23,16 +24,21 @@ __all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
 
 def _predicted(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
                pose0: ArrayLike, cov0: ArrayLike | None, partitions: int,
-               compass_period: float | None,
+               compass_period: float | None, robot: Robot | None = None,
                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
-    """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`."""
+    """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`: the
+    closed form, or (bias noise, a steered vehicle: no closed form) the step recursion on
+    the same K steps per segment that are simulated."""
     from odomkit.propagate.predict import predict
 
     # The classical model's answer depends on the number of steps: predict the same
     # K steps per segment that are simulated. The consistent models ignore it.
     pieces = partitions if NoiseSet.of(noise).family == "classical" else None
-    out = predict(path, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0, engine="closed",
-                  partitions=pieces, compass_period=compass_period)
+    model = resolve_model(noise, wheel_base, compass_period, robot)
+    engine: Literal["closed", "recursion"] = "recursion" if model.noise.bias or model.steered else "closed"
+    out = predict(path, noise, wheel_base=wheel_base if robot is None else None, pose0=pose0,
+                  cov0=cov0, engine=engine, partitions=partitions if engine == "recursion" else pieces,
+                  compass_period=compass_period, robot=robot)
     return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float), out.to_dict()
 
 
@@ -72,6 +78,7 @@ def monte_carlo(
     progress: Progress | None = None,
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
+    robot: Robot | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` runs of ``path`` and check them against the linear prediction.
 
@@ -79,7 +86,8 @@ def monte_carlo(
 
     theory : (pose, cov), optional
         Predicted final pose (3,) and covariance (3, 3); by default the closed form of
-        :func:`odomkit.propagate.predict.predict` for the same path, noise and start.
+        :func:`odomkit.propagate.predict.predict` for the same path, noise and start
+        (with bias noise or a steered vehicle, its step recursion on the simulated steps).
         The predicted mean is the nominal (noise-free) end pose. A given heading may be
         wrapped: it is moved by whole turns onto the branch of the nominal continuous end
         heading (θ0 plus the segments' turns).
@@ -116,10 +124,10 @@ def monte_carlo(
     cov0 = _cov_matrix(cov0)
     if theory is None:
         pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions,
-                                            compass_period)
+                                            compass_period, robot)
     else:
         pose_p, cov_p = _theory_arrays(theory)
-        pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period)
+        pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period, robot)
         summary = theory_summary(pose_p, cov_p)
     # NaN marks a component the theory leaves undefined; inf, or nothing defined, is overflow.
     if np.isinf(cov_p).any() or not np.isfinite(np.diag(cov_p)).any():
@@ -128,7 +136,8 @@ def monte_carlo(
     mc = simulate_runs(path, noise, wheel_base, runs=runs, partitions=partitions, seed=seed,
                        pose0=pose0, cov0=cov0, systematic=systematic, workers=workers,
                        chunk_runs=chunk_runs, scheduler=scheduler, engine=engine,
-                       progress=progress, compass_period=compass_period, max_work=max_work)
+                       progress=progress, compass_period=compass_period, max_work=max_work,
+                       robot=robot)
     # θ continuous in every statistic (DESIGN): the simulated mean θ stays continuous;
     # only the theory's pose is shown wrapped
     result = compare(mc.final, pose_p, cov_p, alpha)
@@ -140,14 +149,16 @@ def monte_carlo(
 
 
 def _nominal_branch(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
-                    pose0: ArrayLike, theta: float, compass_period: float | None) -> float:
+                    pose0: ArrayLike, theta: float, compass_period: float | None,
+                    robot: Robot | None = None) -> float:
     """``theta`` moved by whole turns onto the branch of the path's nominal, continuous
     end heading θ0 + ΣΔθ: a theory may give its heading wrapped, the runs are continuous."""
     from odomkit.propagate.paths import segment_motion
 
-    model = resolve_model(noise, wheel_base, compass_period)
+    model = resolve_model(noise, wheel_base, compass_period, robot)
     base = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
-    end = float(np.asarray(pose0, dtype=float)[2]) + sum(segment_motion(s, base)[1] for s in path)
+    end = float(np.asarray(pose0, dtype=float)[2]) + sum(segment_motion(s, base, model.robot)[1]
+                                                         for s in path)
     return float(theta + TWO_PI * round((end - theta) / TWO_PI))
 
 

@@ -1,38 +1,140 @@
-"""``odomkit demo``: the main job on built-in data (OptiOdom experiment 230620202042,
-MIT licence): dead reckoning with covariance, calibration, and a closed-form prediction.
+"""``odomkit demo``: the main job on built-in data (six OptiOdom differential-drive
+experiments, MIT licence; :data:`odomkit.data.OPTIODOM_EXPERIMENTS`).
+
+1. Dead-reckon the six UMBmark runs of experiment 230620202042 with the robot file's
+   per-wheel noise (k = 0.001 m^½, a guess) and calibrate the robot from them (UMBmark and
+   the exact endpoint fit), as a user with a square and a tape measure would.
+2. Fit the noise (white, and white + bias: :func:`odomkit.calibrate.fit_noise.fit_noise`,
+   the ``fit-noise`` machinery) to 10 s windows of three experiments (:data:`FIT`) with
+   the calibrated robot.
+3. Score the guessed and the fitted noise on the three other experiments (:data:`HELD_OUT`):
+   windows of 10 s and 30 s restarted from the OptiTrack pose, each window end an
+   independent sample; the fraction inside the predicted 50/90/95/99 % ellipses and the
+   mean position NEES with its 95 % χ² bounds (:mod:`odomkit.evaluate`).
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from odomkit.calibrate.exact import calibrate_exact
-from odomkit.calibrate.realdata import e_max_syst_of_runs, umbmark_from_runs
-from odomkit.data import builtin_data_path
-from odomkit.evaluate import evaluate_track
+from odomkit.calibrate.fit_noise import fit_noise, models_to_fit, noise_parameters
+from odomkit.calibrate.realdata import e_max_syst_of_runs, transfer, umbmark_from_runs
+from odomkit.data import OPTIODOM_EXPERIMENTS, builtin_data_path, builtin_experiment_path
+from odomkit.evaluate import coverage, evaluate_track, nees_summary
 from odomkit.io.files import check_outputs
 from odomkit.io.jsonfile import write_json
-from odomkit.io.optiodom import read_experiment
+from odomkit.io.optiodom import OptiOdomExperiment, read_experiment
 from odomkit.io.robotfile import read_robot, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.io.trackio import write_track_csv, write_tum
+from odomkit.kinematics import body_steps
 from odomkit.path import Spin, Straight
 from odomkit.propagate.predict import predict
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
+from odomkit.truth import truth_at, truth_from_log
+from odomkit.windows import cumulative_travel, parse_window, split_windows, window_covariance_basis
 from odomkit.workflows.predict import add_ros_pose_covariance
 
-__all__ = ["run_demo"]
+if TYPE_CHECKING:
+    from odomkit.noise import NoiseModel
+    from odomkit.windows import WindowBasis
+
+__all__ = ["FIT", "FIT_WINDOW", "HELD_OUT", "SCORE_WINDOWS", "noise_honesty", "run_demo"]
+
+#: The UMBmark experiment the robot is calibrated on (its runs are also fitted).
+SQUARE = "230620202042"
+#: Experiments the noise is fitted on: one square, one circle, one free path ...
+FIT = ("230620202042", "231220200154", "030120210001")
+#: ... and the experiments it is scored on, never seen by the calibration or the fit.
+HELD_OUT = ("231220200045", "231220200150", "030120210006")
+#: Window length of the fit, and of the scoring on held-out data.
+FIT_WINDOW = "10s"
+SCORE_WINDOWS = ("10s", "30s")
+
+
+def _window_bases(experiments: Sequence[OptiOdomExperiment], calibrated: DiffDrive,
+                  models: tuple[NoiseModel, ...], window: str) -> list[WindowBasis]:
+    """Covariance bases of every run's windows, each restarted from the OptiTrack pose.
+
+    The calibration is carried to each experiment in physical terms (metres per tick,
+    effective wheel base), in case its metadata list other nominal values."""
+    spec = parse_window(window)
+    out = []
+    for experiment in experiments:
+        robot = transfer(calibrated, experiment.metadata.robot())  # type: ignore[arg-type]
+        for log in experiment.runs:
+            truth = truth_from_log(log)
+            assert truth is not None  # OptiOdom runs carry OptiTrack poses
+            samples = truth_at(truth, log.t)
+            windows, _ = split_windows(log.t, cumulative_travel(body_steps(robot, log)), spec,
+                                       valid=samples.valid)
+            if windows:
+                out.append(window_covariance_basis(log, robot, models, samples.poses, samples.valid,
+                                                   windows, truth=truth))
+    return out
+
+
+def _score(bases: Sequence[WindowBasis], variances: np.ndarray) -> dict[str, Any]:
+    """Coverage and position NEES of the window ends under the variances ``variances``."""
+    err = np.concatenate([b.error[:, :2] for b in bases])
+    cov = np.concatenate([b.covariance(variances)[:, :2, :2] for b in bases])
+    nees = nees_summary(err, cov)
+    return {"windows": int(err.shape[0]), "coverage": coverage(err, cov),
+            "nees_position_mean": nees["mean"], "nees_bounds": nees["bounds"]}
+
+
+def noise_honesty(calibrated: DiffDrive, noise: tuple[NoiseModel, ...]) -> tuple[dict[str, Any],
+                                                                                  tuple[NoiseModel, ...]]:
+    """Fit the noise on :data:`FIT`, score it and the guess ``noise`` on :data:`HELD_OUT`.
+
+    Returns the summary (``fit``, ``held_out``, ``models``: guessed, white, white+bias,
+    each with its parameters and a score per window length) and the white + bias models.
+    """
+    fit_exps = [read_experiment(builtin_experiment_path(e)) for e in FIT]
+    held_exps = [read_experiment(builtin_experiment_path(e)) for e in HELD_OUT]
+    # The file's white model, plus the default bias model (ParameterUncertainty) at zero:
+    # fitting only the white kind holds the bias at zero, so one basis serves all three.
+    models, held = models_to_fit(calibrated, noise, ("white", "bias"))
+    fit_bases = _window_bases(fit_exps, calibrated, models, FIT_WINDOW)
+    held_bases = {w: _window_bases(held_exps, calibrated, models, w) for w in SCORE_WINDOWS}
+    params = noise_parameters(models, calibrated, ("white",))
+    guess = np.array([models[p.model].variance_parameters()[p.name] for p in params])
+    rows: dict[str, Any] = {"guessed": {
+        "parameters": {p.key: p.to_value(v) for p, v in zip(params, guess, strict=True) if v > 0},
+        **{w: _score(held_bases[w], guess) for w in SCORE_WINDOWS}}}
+    fitted: tuple[NoiseModel, ...] = models
+    for name, kinds in (("white", ("white",)), ("white+bias", ("white", "bias"))):
+        fit = fit_noise(fit_bases, models, calibrated, kinds=kinds, fixed=held)
+        variances = np.array(list(fit.variances.values()))
+        rows[name] = {"parameters": fit.parameters,
+                      "interval95": {k: list(v) for k, v in fit.interval.items()},
+                      "warnings": fit.warnings,
+                      **{w: _score(held_bases[w], variances) for w in SCORE_WINDOWS}}
+        fitted = fit.models
+    summary = {
+        "fit": {"experiments": list(FIT), "kinds": [OPTIODOM_EXPERIMENTS[e][0] for e in FIT],
+                "runs": sum(len(e.runs) for e in fit_exps), "window": FIT_WINDOW,
+                "windows": sum(len(b.windows) for b in fit_bases)},
+        "held_out": {"experiments": list(HELD_OUT), "kinds": [OPTIODOM_EXPERIMENTS[e][0] for e in HELD_OUT],
+                     "runs": sum(len(e.runs) for e in held_exps), "windows": list(SCORE_WINDOWS)},
+        "models": rows,
+    }
+    return summary, fitted
 
 
 def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     """Dead-reckon the six built-in UMBmark runs (0.75 m square, 3 CW + 3 CCW) with the
-    per-wheel noise model, calibrate the robot from them (UMBmark and the exact fit), and
-    predict the error of one square in closed form. Writes into ``out_dir``: a track CSV
-    (with covariance) and a TUM file per run, the calibrated robot file, a ROS 2
+    per-wheel noise model, calibrate the robot from them (UMBmark and the exact fit),
+    predict the error of one square in closed form, fit the noise on three built-in
+    experiments and score it on the three others (:func:`noise_honesty`). Writes into
+    ``out_dir``: a track CSV (with covariance) and a TUM file per run, the calibrated robot
+    file, the robot file with the fitted noise (``fitted_robot.toml``), a ROS 2
     ``diff_drive_controller`` snippet, ``summary.json`` and, with matplotlib, a figure.
     """
     out = Path(out_dir)
@@ -40,14 +142,14 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     robot_file = builtin_data_path("optiodom_diff.toml")
     robot, noise = read_robot(robot_file)
     assert isinstance(robot, DiffDrive)  # the shipped robot file is a differential drive
-    experiment = read_experiment(builtin_data_path("230620202042_metadata.csv").parent)
+    experiment = read_experiment(builtin_experiment_path(SQUARE))
     runs = experiment.runs
     truths = [r.ground_truth for r in runs if r.ground_truth is not None]
     assert len(truths) == len(runs)  # OptiOdom runs carry OptiTrack poses
     stems = [Path(r.source).stem for r in runs]
     targets = [out / f"{s}_track.csv" for s in stems] + [out / f"{s}.tum" for s in stems]
-    targets += [out / n for n in ("calibrated_robot.toml", "diff_drive_controller.yaml",
-                                  "summary.json", "demo_tracks.png")]
+    targets += [out / n for n in ("calibrated_robot.toml", "fitted_robot.toml",
+                                  "diff_drive_controller.yaml", "summary.json", "demo_tracks.png")]
     check_outputs({"--out": out, **{str(p): p for p in targets}}, overwrite=overwrite,
                   folders={"--out"})
     out.mkdir(parents=True, exist_ok=True)
@@ -68,14 +170,15 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     calibrated = exact.robot
     assert isinstance(calibrated, DiffDrive)
     summary["calibration"] = {
+        "experiment": SQUARE,
         "e_max_syst_before": e_max_syst_of_runs(runs, robot),
         "umbmark": {"E_d": um.result.E_d, "E_b": um.result.E_b,
                     "e_max_syst_after": um.e_max_syst_after},
         "exact": {"E_d": exact.E_d, "E_b": exact.E_b, "std_errors": exact.std_errors,
                   "e_max_syst_after": e_max_syst_of_runs(runs, calibrated)},
     }
-    # The same runs with the calibrated robot: with the systematic error gone, is the
-    # per-wheel noise model's 95 % ellipse honest?
+    # Whole-run containment per run (one correlated sample each: see noise_honesty for the
+    # statistic to trust), before and after calibration.
     for stem, run, truth in zip(stems, runs, truths, strict=True):
         track = dead_reckon_log(run, calibrated, "exact", noise=noise[0])
         ev = evaluate_track(track.poses, truth, track.cov)
@@ -83,6 +186,10 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     write_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
     write_ros2_yaml(out / "diff_drive_controller.yaml", calibrated,
                     wheel_radius=experiment.metadata.wheel_diameters[0] / 2, overwrite=True)
+
+    honesty, fitted = noise_honesty(calibrated, noise)
+    summary["noise_honesty"] = honesty
+    write_robot(out / "fitted_robot.toml", calibrated, fitted, overwrite=True)
 
     # One clockwise square as planned: four legs and four right turns on the spot.
     square = [seg for _ in range(4) for seg in (Straight(side), Spin(-np.pi / 2))]
