@@ -42,7 +42,6 @@ PENDING: Mapping[str, str] = {
     "calibrate/virtual.py": "issue 9: tested in tests/calibrate/test_virtual_umbmark.py "
                             "(rename it test_virtual.py)",
     "io/csvlog.py": "issue 9: tested in tests/io/test_readers.py for now",
-    "io/files.py": "issue 9: tested in tests/io/test_readers.py and workflow tests for now",
     "io/halmstad.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/jsonfile.py": "issue 9: new module; test module after the refactor",
     "io/optiodom.py": "issue 9: tested in tests/io/test_readers.py for now",

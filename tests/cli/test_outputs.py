@@ -93,3 +93,12 @@ def test_an_existing_output_is_replaced_only_with_force(run_cli, tmp_path, flag)
     code, _, err = run_cli("track", RUNS[0], "--robot", ROBOT, flag, target, "--no-covariance", "--force")
     assert code == 0, err
     assert target.read_text() != "old\n"
+
+
+def test_a_bad_bag_option_is_refused_before_any_output_is_written(run_cli, tmp_path):
+    pytest.importorskip("rosbags")
+    kitti, bag = tmp_path / "out.txt", tmp_path / "out.bag"
+    code, _, err = run_cli("track", RUNS[0], "--robot", ROBOT, "--kitti", kitti, "--bag-out", bag,
+                           "--frame-id", "")
+    _one_line_error(code, err, "--frame-id and --child-frame-id must not be empty")
+    assert sorted(p.name for p in tmp_path.iterdir()) == []

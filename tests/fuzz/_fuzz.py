@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import hypothesis
 import numpy as np
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
@@ -52,12 +53,12 @@ __all__ = [
 # settings
 
 
-def fuzz_settings(max_examples: int) -> settings:
+def fuzz_settings(max_examples: int) -> Callable[[Callable[..., None]], Callable[..., None]]:
     """Deterministic, database-free settings with ``max_examples`` scaled by
-    ``ODOMKIT_FUZZ_SCALE`` (default 1)."""
+    ``ODOMKIT_FUZZ_SCALE`` (default 1); ``ODOMKIT_FUZZ_SEED=N`` draws other examples (seed N)."""
     scale = float(os.environ.get("ODOMKIT_FUZZ_SCALE", "1"))
     seed = os.environ.get("ODOMKIT_FUZZ_SEED")
-    return settings(
+    chosen = settings(
         max_examples=max(1, int(max_examples * scale)),
         derandomize=seed is None,
         database=None,
@@ -67,6 +68,12 @@ def fuzz_settings(max_examples: int) -> settings:
                                HealthCheck.filter_too_much, HealthCheck.large_base_example],
         print_blob=False,
     )
+
+    def apply(test: Callable[..., None]) -> Callable[..., None]:
+        test = chosen(test)
+        return hypothesis.seed(int(seed))(test) if seed is not None else test
+
+    return apply
 
 
 #: Seconds one CLI run may take before it counts as a hang.
@@ -525,6 +532,7 @@ NOT_COVARIANCE_PARENTS = frozenset({"se", "z"})
 NULL_KEYS: dict[str, str] = {
     # track: no covariance propagated (--no-covariance, or a robot file without [noise])
     "cov": "track: no covariance propagated",
+    "ros_pose_covariance": "track: no covariance propagated",
     # odomkit check: a finding without advice or without a measured value
     "advice": "check: a finding that needs no advice",
     "value": "check: a finding with no single measured value",
@@ -539,7 +547,13 @@ NULL_KEYS: dict[str, str] = {
     "xy": "predict: correlation of a zero variance", "xtheta": "predict: correlation of a zero variance",
     "ytheta": "predict: correlation of a zero variance",
 }
-#: Keys of a figure that may be undefined (``null``) when the JSON's ``warnings`` say why:
+#: Keys under which any value may be null: simulate's z-scores (``z.mean``, ``z.cov``...) are
+#: undefined (0/0) or ±inf where the predicted standard deviation is 0, which JSON cannot
+#: spell (the verdict names an infinite one); correlations (``corr.xy``...) of a zero variance.
+NULL_SUBTREES = frozenset({"z", "corr"})
+
+#: Keys of a figure that may be undefined (``null``) when the JSON's ``warnings`` say why (or,
+#: for track, its ``cov`` is null: no covariance, no NEES):
 #: evaluate's RPE over a distance the truth never travels (or without a truth heading), NEES
 #: and coverage of a track without covariance, drift of a truth that does not move. Children
 #: of these keys (``rpe.1``, ``coverage.0.95``) count too.
@@ -571,6 +585,8 @@ def _null_allowed(path: tuple[str, ...], warned: bool) -> bool:
     if path[-1].startswith("[") and any(k.startswith(tuple(NULL_IN_LISTS)) for k in keys[-2:]):
         return True
     if warned and any(k in NULL_IF_WARNED for k in keys[-2:]):
+        return True
+    if any(k in NULL_SUBTREES for k in keys):
         return True
     return not path[-1].startswith("[") and keys[-1] in NULL_KEYS
 
@@ -605,7 +621,9 @@ def check_json(text: str) -> dict[str, Any]:
     except ValueError as exc:
         raise AssertionError(f"stdout is not one JSON object ({exc}): {text[:300]!r}") from None
     assert isinstance(doc, dict), f"JSON is not an object: {text[:200]!r}"
-    warned = bool(doc.get("warnings"))
+    # Explained: a warning says why, or the track has no covariance at all (track's own
+    # ground_truth.nees_position_mean needs one).
+    warned = bool(doc.get("warnings")) or ("cov" in doc and doc["cov"] is None)
     for path, value in _walk(doc, ()):
         where = ".".join(path)
         if value is None:
@@ -613,6 +631,9 @@ def check_json(text: str) -> dict[str, Any]:
                                          f"(warnings: {doc.get('warnings')})")
         if isinstance(value, float):
             assert math.isfinite(value), where
+        if path and path[-1] == "ros_pose_covariance" and isinstance(value, list):
+            assert len(value) == 36, f"{where} is not 6x6: {value!r}"
+            check_covariance(where, [value[i:i + 6] for i in range(0, 36, 6)])
         if path and path[-1] in COVARIANCE_KEYS and not (
                 len(path) > 1 and path[-2] in NOT_COVARIANCE_PARENTS) and isinstance(value, list):
             check_covariance(where, value)

@@ -44,14 +44,14 @@ def _kitti_times(flag: str, value: str) -> list[str]:
 
 
 @cache
-def _track_csv(covariance: bool = True) -> bytes:
+def _track_csv(covariance: bool = True, rows: int | None = None) -> bytes:
     """Run 1 dead-reckoned by ``odomkit track --out`` (the input of evaluate and fit-amcl)."""
     with tempfile.TemporaryDirectory() as tmp:
         args = ["track", str(fz.RUNS[0]), "--robot", str(fz.DATA / "optiodom_diff.toml"),
                 "--out", "t.csv"] + ([] if covariance else ["--no-covariance"])
         result = fz.run_in(Path(tmp), args)
         assert result.code == 0, result.err
-        return (Path(tmp) / "t.csv").read_bytes()
+        return fz._head(Path(tmp) / "t.csv", None if rows is None else rows + 1)
 
 
 def _log(draw, case: Case, names=None) -> tuple[str, str | None, dict]:
@@ -116,8 +116,10 @@ TRACK_MENU = [
     ("--no-covariance", None),
     ("--engine", one(word(("recursion", "transition")))),
     ("--bag-format", one(word(("ros1", "db3", "mcap")))),
-    ("--frame-id", one(word(("odom", "")))),
-    ("--child-frame-id", one(word(("base_link", "")))),
+    # Not '': an empty frame id is refused only when the bag is written, after the other
+    # outputs (left to H10c; test_regressions.py pins it as a strict xfail).
+    ("--frame-id", one(word(("odom", "map")).filter(bool))),
+    ("--child-frame-id", one(word(("base_link",)).filter(bool))),
 ]
 
 
@@ -423,10 +425,10 @@ def test_fuzz_fit_noise(case):
 def fit_amcl_cases(draw) -> Case:
     case = Case(output_flags=("--yaml-out",))
     if draw(st.booleans()):
-        odom = [case.file("track.csv", draw(fz.mutated_table(_track_csv(), max_changes=2)))]
+        odom = [case.file("track.csv", draw(fz.mutated_table(_track_csv(rows=600), max_changes=2)))]
         case.add("fit-amcl", *odom)
     else:
-        log, columns, robot = _log(draw, case, ["run", "run_short", "diff_csv"])
+        log, columns, robot = _log(draw, case, ["run_short", "diff_csv"])
         odom = [log]
         case.add("fit-amcl", log, "--robot", _robot(draw, case, robot))
         if columns:
@@ -445,7 +447,7 @@ def fit_amcl_cases(draw) -> Case:
     return case
 
 
-@fz.fuzz_settings(20)
+@fz.fuzz_settings(12)
 @given(case=fit_amcl_cases())
 def test_fuzz_fit_amcl(case):
     fz.check_case(case)
@@ -498,7 +500,7 @@ def demo_cases(draw) -> Case:
     return case
 
 
-@fz.fuzz_settings(6)
+@fz.fuzz_settings(4)
 @given(case=demo_cases())
 def test_fuzz_demo(case):
     result = fz.check_case(case)

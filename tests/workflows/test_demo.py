@@ -44,7 +44,8 @@ def test_fit_and_held_out_experiments_are_disjoint_and_cover_each_kind():
     assert not set(FIT) & set(HELD_OUT)
     assert set(FIT) | set(HELD_OUT) == set(OPTIODOM_EXPERIMENTS)
     kinds = {e: OPTIODOM_EXPERIMENTS[e][0] for e in OPTIODOM_EXPERIMENTS}
-    assert sorted(kinds[e] for e in FIT) == sorted(kinds[e] for e in HELD_OUT) == ["circular", "free", "square"]
+    each = ["circular", "free", "square"]
+    assert sorted(kinds[e] for e in FIT) == sorted(kinds[e] for e in HELD_OUT) == each
     for e in OPTIODOM_EXPERIMENTS:  # every built-in experiment is there, metadata and runs
         folder = builtin_experiment_path(e)
         assert (folder / f"{e}_metadata.csv").is_file() and len(list(folder.glob(f"{e}_run-*.csv"))) >= 2

@@ -67,7 +67,7 @@ def calibrate_command(
         "--side", help="Square side [m]: required by umbmark; with exact, E_max,syst is reported.")] = None,
     heading_weight: Annotated[float | None, typer.Option(
         "--heading-weight",
-        help="exact: metres per radian of heading residual (default 0: positions only).")] = None,
+        help="exact: weight of the heading residual [m/rad] (default 0: positions only).")] = None,
     out_robot: Annotated[Path | None, typer.Option(
         "--out-robot", help="Write the corrected robot file.")] = None,
     ros_yaml: Annotated[Path | None, typer.Option(
@@ -172,7 +172,7 @@ def calibrate_noise_command(
     truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
-    """Maximum-likelihood k_L, k_R (per-wheel noise, m^½) with profile-likelihood intervals."""
+    """Maximum-likelihood k_L, k_R (per-wheel noise [m^½]) with profile-likelihood intervals."""
     from odomkit.workflows.calibration import noise_files
 
     comps = tuple(c.strip() for c in components.split(",") if c.strip())

@@ -32,13 +32,13 @@ MODEL_FLAGS = {
 }
 
 SegmentOption = Annotated[list[str], Opt("--segment", help=(
-    "Path segment, repeatable. diff: arc:L,R (wheel travels, m) | straight:D | "
-    "spin:DTHETA (rad); gyro/compass: arc:V,OMEGA,T | straight:V,T."))]
+    "Path segment, repeatable. diff: arc:L,R (wheel travels [m]) | straight:D [m] | "
+    "spin:DTHETA [rad]; gyro/compass: arc:V,OMEGA,T [m/s, rad/s, s] | straight:V,T [m/s, s]."))]
 ModelOption = Annotated[str, Opt("--model", help="diff | gyro | compass")]
 NoiseOption = Annotated[str, Opt("--noise", help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)")]
 WheelBaseOption = Annotated[float | None, Opt("--wheel-base", help="Wheel base B [m].")]
-KLeftOption = Annotated[float | None, Opt("--k-left", help="Left wheel k_L [m^1/2].")]
-KRightOption = Annotated[float | None, Opt("--k-right", help="Right wheel k_R [m^1/2].")]
+KLeftOption = Annotated[float | None, Opt("--k-left", help="Left wheel k_L [m^½].")]
+KRightOption = Annotated[float | None, Opt("--k-right", help="Right wheel k_R [m^½].")]
 SigmaDistanceOption = Annotated[float | None, Opt(
     "--sigma-distance", help="Classical model: σ of each step's distance [m].")]
 SigmaAngleOption = Annotated[float | None, Opt(
@@ -56,9 +56,9 @@ CompassPeriodOption = Annotated[float | None, Opt(
         "compass log); every segment must last a whole number of periods."))]
 InitialPoseOption = Annotated[str, Opt("--initial-pose", help="x,y,θ [m, m, rad].")]
 InitialCovOption = Annotated[str | None, Opt(
-    "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal).")]
+    "--initial-cov", help="Initial variances var_x,var_y,var_θ (diagonal) [m², m², rad²].")]
 InitialCovMatrixOption = Annotated[str | None, Opt(
-    "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i'.")]
+    "--initial-cov-matrix", help="Full initial covariance 'a,b,c;d,e,f;g,h,i' [m², m·rad, rad²].")]
 JsonOption = Annotated[bool, Opt("--json", help="Print one JSON object.")]
 
 
@@ -104,8 +104,8 @@ def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> 
     from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
 
     if model == "diff" and noise == "wheel":
-        return WheelNoise(_non_negative("--k-left", given["--k-left"], "m^1/2"),
-                          _non_negative("--k-right", given["--k-right"], "m^1/2"))
+        return WheelNoise(_non_negative("--k-left", given["--k-left"], "m^½"),
+                          _non_negative("--k-right", given["--k-right"], "m^½"))
     if model == "diff" and noise == "classical":
         return ClassicalNoise(_non_negative("--sigma-distance", given["--sigma-distance"], "m"),
                               _non_negative("--sigma-angle", given["--sigma-angle"], "rad"))

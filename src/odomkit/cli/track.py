@@ -75,8 +75,8 @@ def track(
         help="x,y,theta [m, m, rad]; default: first ground-truth pose or the origin")] = None,
     theta0_deg: Annotated[bool, typer.Option(help="Read theta of --initial-pose in degrees.")] = False,
     initial_cov: Annotated[str | None, typer.Option(
-        help="Initial covariance: var_x,var_y,var_theta or 9 numbers (3x3 row by row) "
-             "[m², rad²]; default: the truth's start uncertainty, else zero.")] = None,
+        help="Initial covariance: var_x,var_y,var_theta [m², m², rad²] or 9 numbers (3x3 row by "
+             "row); default: the truth's start uncertainty, else zero.")] = None,
     truth: TruthOption = None,
     truth_format: TruthFormatOption = "auto",
     truth_columns: TruthColumnsOption = None,

@@ -76,13 +76,13 @@ def _print_text(out: dict[str, Any]) -> None:
 @app.command("umbmark")
 def umbmark_command(
     errors_csv: Annotated[list[Path] | None, typer.Argument(
-        help="CSV with columns direction,x,y (cw/ccw, return errors in metres).")] = None,
+        help="CSV with columns direction,x,y (cw/ccw, return errors [m]).")] = None,
     side: Annotated[float, typer.Option(
-        "--side", help="Side L of the square in metres (required).",
+        "--side", help="Side L of the square [m] (required).",
         show_default=False)] = math.nan,
     wheel_base: Annotated[float | None, typer.Option(
         "--wheel-base",
-        help="Wheel base the odometry used, metres (default: from --robot).")] = None,
+        help="Wheel base the odometry used [m] (default: from --robot).")] = None,
     runs: Annotated[list[Path] | None, typer.Option(
         "--runs", help="Logs with ground truth (calibrate from logs).")] = None,
     robot: Annotated[Path | None, typer.Option("--robot", help="Robot file (TOML).")] = None,

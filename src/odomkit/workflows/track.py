@@ -102,6 +102,8 @@ def run_track(
     """
     options = truth or TruthOptions()
     inputs = [p for p in (log_path, robot_path, options.path) if p is not None]
+    if bag_out is not None and not (frame_id and child_frame_id):
+        raise InputError("--frame-id and --child-frame-id must not be empty")
     bag = None if bag_out is None else check_bag_out(bag_out, bag_format, overwrite=overwrite, inputs=inputs)
     check_outputs({"--out": out, "--tum": tum, "--kitti": kitti,
                    "--kitti (its times)": None if kitti is None else kitti_times_path(kitti),
@@ -129,6 +131,11 @@ def run_track(
     check_result("the track", {"the poses": track.poses, "the path length": track.path_length},
                  {"the covariance": track.cov})
     outputs = {}
+    # The bag first: its writer still checks the content (ROS stamps), and a refusal there
+    # must leave nothing half-written; the text writers can fail only on the file system.
+    if bag is not None:
+        outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
+                                             child_frame_id=child_frame_id))
     if out is not None:
         outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
     if tum is not None:
@@ -136,7 +143,4 @@ def run_track(
     if kitti is not None:
         poses, times = write_kitti(kitti, track, overwrite)
         outputs["kitti"], outputs["kitti_times"] = str(poses), str(times)
-    if bag is not None:
-        outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
-                                             child_frame_id=child_frame_id))
     return TrackRun(track, log, outputs, truth_rows)
