@@ -63,7 +63,7 @@ def runs_of(folders):
 
 
 def bases(runs, robot, models, window):
-    """(kind, WindowBasis) of every run with at least one window."""
+    """(kind, WindowBasis) of every run with at least one window (its name in ``source``)."""
     spec = parse_window(window)
     out = []
     for kind, log in runs:
@@ -72,13 +72,14 @@ def bases(runs, robot, models, window):
         travel = cumulative_travel(body_steps(robot, log))
         windows, _ = split_windows(log.t, travel, spec, valid=samples.valid)
         if windows:
-            out.append((kind, window_covariance_basis(log, robot, models, samples.poses, samples.valid,
-                                                      windows, truth=truth)))
+            basis = window_covariance_basis(log, robot, models, samples.poses, samples.valid, windows,
+                                            truth=truth)
+            out.append((kind, basis, Path(log.source).stem))
     return out
 
 
 def score(kind_bases, v, kinds=None):
-    sel = [b for k, b in kind_bases if kinds is None or k in kinds]
+    sel = [b for k, b, _ in kind_bases if kinds is None or k in kinds]
     err = np.concatenate([b.error[:, :2] for b in sel])
     cov = np.concatenate([b.covariance(v)[:, :2, :2] for b in sel])
     n = nees_summary(err, cov)
@@ -104,8 +105,8 @@ def meets(s10, s30):
 
 def cell(s):
     c = s["coverage"]
-    return (" / ".join(f"{c[k]:.2f}" for k in LEVELS) + f" | {s['nees']:.2f} ({s['bounds'][0]:.2f}–"
-            f"{s['bounds'][1]:.2f})")
+    return (f"{s['n']} | " + " / ".join(f"{c[k]:.2f}" for k in LEVELS) + f" | {s['nees']:.2f} "
+            f"({s['bounds'][0]:.2f}–{s['bounds'][1]:.2f})")
 
 
 def values(parameters):
@@ -115,9 +116,9 @@ def values(parameters):
 def table(title, variants, fit_runs, held_runs, robot, breakdown=True):
     """Fit every variant in every fit window, score it held out; print a Markdown table."""
     print(f"\n{title}\n")
-    print("| model | fitted on | fitted values | held out 10 s: 50 / 90 / 95 / 99 % \\| NEES (bounds) "
-          "| held out 30 s: 50 / 90 / 95 / 99 % \\| NEES (bounds) | targets |")
-    print("|---|---|---|---|---|---|")
+    print("| model | fitted on | fitted values | 10 s ends | 10 s: inside 50 / 90 / 95 / 99 % "
+          "| NEES (bounds) | 30 s ends | 30 s: inside 50 / 90 / 95 / 99 % | NEES (bounds) | targets met |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     found, warned = {}, []
     for name, models, kinds, fixed, fit_windows in variants:
         held = {w: bases(held_runs, robot, models, w) for w in WINDOWS}
@@ -128,9 +129,10 @@ def table(title, variants, fit_runs, held_runs, robot, breakdown=True):
                 shown, notes, seconds = values({p.key: p.to_value(x) for p, x in zip(params, v, strict=True)
                                                 if x > 0}), [], 0.0
             else:
-                fb = [b for _, b in bases(fit_runs, robot, models, fw)]
+                fb = bases(fit_runs, robot, models, fw)
                 started = time.perf_counter()
-                fit = fit_noise(fb, models, robot, kinds=kinds, fixed=fixed)
+                fit = fit_noise([b for _, b, _ in fb], models, robot, kinds=kinds, fixed=fixed,
+                                log_names=[n for _, _, n in fb])
                 seconds = time.perf_counter() - started
                 v = np.array(list(fit.variances.values()))
                 shown, notes = values(fit.parameters), fit.warnings
@@ -150,7 +152,7 @@ def table(title, variants, fit_runs, held_runs, robot, breakdown=True):
         print("|---|---|---|---|---|---|---|---|---|---|")
         for (name, fw), (_, held, v) in found.items():
             for w in WINDOWS:
-                for kind in sorted({k for k, _ in held[w]}):
+                for kind in sorted({k for k, _, _ in held[w]}):
                     t = score(held[w], v, {kind})
                     c = " / ".join(f"{t['coverage'][k]:.2f}" for k in LEVELS)
                     print(f"| {name}, {fw} | {w} | {kind} | {t['n']} | {c} | {t['nees']:.2f} | "
