@@ -123,3 +123,17 @@ def test_start_pose_from_truth_with_and_without_heading():
     assert start_pose(noisy, 1.0, reverse=True)[0][2] == pytest.approx(np.arctan2(-1, 2) + np.pi)
     with pytest.raises(InputError, match="outside the truth"):
         start_pose(truth, 5.0)
+
+
+def test_a_gap_is_never_shorter_than_twice_the_truth_spacing():
+    """1 Hz GPS with the default 0.5 s max gap: rows between fixes are kept (they are not
+    in a gap), a real 10 s outage still is one."""
+    import numpy as np
+
+    from odomkit.truth import Truth, truth_at
+
+    t = np.concatenate([np.arange(0.0, 20.0), np.arange(30.0, 40.0)])
+    tr = Truth(t, np.column_stack([t, 0 * t]), None)
+    s = truth_at(tr, [0.5, 10.25, 25.0, 35.5], max_gap=0.5)
+    assert s.valid.tolist() == [True, True, False, True]
+    assert s.in_gaps == 1 and s.poses[1, 0] == 10.25

@@ -107,7 +107,9 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
     x, y and the continuous (unwrapped) θ are interpolated linearly between the two fixes
     around each time. A time that falls between two fixes more than ``max_gap`` seconds
     apart is left out (a truth system that lost the robot for a while says nothing about
-    where it was); a time equal to a fix is always kept.
+    where it was); a time equal to a fix is always kept. A gap is never shorter than twice
+    the truth's median fix spacing: for 1 Hz GPS the default 0.5 s would otherwise put every
+    row in a "gap" and report that the truth does not overlap the log at all.
 
     Parameters
     ----------
@@ -115,7 +117,8 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
     times : array_like, shape (n,)
         Times to sample [s], in any order.
     max_gap : float or None
-        Longest gap between fixes to interpolate across [s]; None for no limit.
+        Longest gap between fixes to interpolate across [s] (at least twice the median
+        fix spacing); None for no limit.
 
     Returns
     -------
@@ -138,7 +141,8 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
     on_fix = np.isin(t, truth.t)
     gap = np.zeros(t.size, dtype=bool)
     if max_gap is not None and len(truth) > 1:
-        gap = inside & ~on_fix & (truth.t[i + 1] - truth.t[i] > max_gap)
+        longest = max(max_gap, 2.0 * float(np.median(np.diff(truth.t))))
+        gap = inside & ~on_fix & (truth.t[i + 1] - truth.t[i] > longest)
     valid = inside & ~gap
     poses = np.full((t.size, 3), np.nan)
     if valid.any():

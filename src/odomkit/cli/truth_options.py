@@ -35,8 +35,8 @@ TruthTimeUnitOption = Annotated[str, typer.Option(
 TruthSigmaOption = Annotated[float, typer.Option(
     "--truth-sigma", help="Standard deviation of the truth positions per axis [m].")]
 MaxGapOption = Annotated[float, typer.Option(
-    "--max-gap", help="Rows inside a truth gap longer than this [s] are left out and counted "
-                      "(0: no limit).")]
+    "--max-gap", help="Rows inside a truth gap longer than this [s] (and than twice the "
+                      "truth's median spacing) are left out and counted (0: no limit).")]
 
 
 def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float,
