@@ -126,9 +126,9 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
 
     Examples
     --------
-    >>> tr = Truth(np.array([0.0, 1.0, 3.0]), np.array([[0.0, 0], [1, 0], [3, 0]]),
-    ...            np.array([0.0, 0.5, 1.0]))
-    >>> s = truth_at(tr, [0.5, 2.0, 4.0], max_gap=1.5)
+    >>> tr = Truth(np.array([0.0, 1.0, 2.0, 6.0]), np.array([[0.0, 0], [1, 0], [2, 0], [6, 0]]),
+    ...            np.array([0.0, 0.5, 1.0, 1.5]))
+    >>> s = truth_at(tr, [0.5, 4.0, 7.0], max_gap=1.5)
     >>> s.poses[0].tolist(), s.valid.tolist(), s.outside, s.in_gaps
     ([0.5, 0.0, 0.25], [True, False, False], 1, 1)
     """

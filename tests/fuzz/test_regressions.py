@@ -96,3 +96,36 @@ def test_fit_noise_scheduler_that_is_no_address_is_one_line(run_cli, tmp_path, a
     code, _, err = run_cli("fit-noise", "--robot", ROBOT, "--log", RUN, "--out", out, "--scheduler", address)
     assert "--scheduler" in _one_line_error(code, err)
     assert not out.exists()
+
+
+# --- every output is checked before any is written ------------------------------------------
+
+def test_an_empty_frame_id_is_refused_before_anything_is_written(run_cli, tmp_path):
+    pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+    kitti, bag = tmp_path / "t.txt", tmp_path / "t.bag"
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--frame-id", "", "--kitti", kitti,
+                           "--bag-out", bag)
+    _one_line_error(code, err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == []
+
+
+# --- found by the fuzz suite in files helper H10c owns (workflows/*): pinned as strict xfails, -----
+# --- so that the fix turns them into failures that ask for the marker to go ----------------------
+
+_H10C = "workflows/track.py (helper H10c): "
+
+
+@pytest.mark.xfail(strict=True, reason=_H10C + "the ground_truth figures of track's summary are not "
+                   "checked: truth of 1e199 m gives ate_rmse null with exit 0")
+def test_track_ground_truth_figures_are_numbers_or_one_line(run_cli, tmp_path):
+    log = tmp_path / "big.csv"
+    log.write_text("t,gt_x,gt_y,gt_theta,R,L\n0,0,0,0,0,0\n1,1e199,0,0,10,10\n2,2e199,0,0,10,10\n")
+    code, out, err = run_cli("track", log, "--robot", ROBOT, "--json", "--columns",
+                             "t=t,ticks_left=L,ticks_right=R,gt_x=gt_x,gt_y=gt_y,gt_theta=gt_theta")
+    if code == 2:
+        _one_line_error(code, err)
+        return
+    import json
+
+    truth = json.loads(out)["ground_truth"]
+    assert truth["ate_rmse"] is not None and truth["nees_position_mean"] is not None, truth

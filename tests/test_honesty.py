@@ -1,0 +1,100 @@
+"""The README's "How honest is the covariance?" table for the OptiOdom differential robot
+stays true: the protocol of ``benchmarks/honesty.py`` run again on the real data, each
+coverage within three binomial standard errors of the README's figure and each NEES mean
+within three standard errors of its sample. The targets of issue 11 (held out, 95 % in
+[0.88, 0.99] and 50 % in [0.40, 0.80] at 10 s AND 30 s with one fitted model) are NOT met
+by this model family; the test asserts what the README says instead, including which
+window lengths miss them, so a change that meets them (or loses the 10 s result) fails here
+and the README must be updated with it.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.fit_noise import fit_noise, noise_parameters
+from odomkit.evaluate import nees
+from odomkit.io.robotfile import read_robot
+from odomkit.noise import ParameterUncertainty, WheelNoise
+
+pytestmark = pytest.mark.slow
+
+REPO = Path(__file__).resolve().parents[1]
+LEVELS = ("0.5", "0.9", "0.95", "0.99")
+
+#: The README's differential table: (fit) -> {window: (coverage 50/90/95/99, NEES mean, targets met)}
+README = {
+    "guess": {"10s": ((0.04, 0.13, 0.18, 0.26), 67.3, False), "30s": ((0.09, 0.41, 0.48, 0.67), 10.7, False)},
+    "white+bias 10s": {"10s": ((0.75, 0.96, 0.97, 0.99), 1.75, True),
+                       "30s": ((0.97, 1.00, 1.00, 1.00), 0.27, False)},
+    "white 30s": {"10s": ((0.41, 0.76, 0.83, 0.90), 6.22, False),
+                  "30s": ((0.89, 0.95, 0.98, 0.98), 0.91, False)},
+}
+
+
+def _benchmark():
+    spec = importlib.util.spec_from_file_location("honesty_benchmark", REPO / "benchmarks" / "honesty.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+@pytest.fixture(scope="module")
+def measured(data_dir):
+    """{fit: {window: score}} on the held-out half, as ``benchmarks/honesty.py`` computes it."""
+    bench = _benchmark()
+    root = data_dir / "optiodom"
+    if not (root / "diff").is_dir():
+        pytest.skip("OptiOdom data not found")
+    fit_folders, held_folders = bench.split(root, "diff")
+    fit_runs, held_runs = bench.runs_of(fit_folders), bench.runs_of(held_folders)
+    nominal, guess = read_robot(REPO / "src/odomkit/data/optiodom_diff.toml")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        robot = bench.calibrate(fit_runs, nominal)
+        models = (WheelNoise(0.0, 0.0), ParameterUncertainty())
+        held = {w: bench.bases(held_runs, robot, models, w) for w in ("10s", "30s")}
+        guess_models = (*guess, ParameterUncertainty())
+        params = noise_parameters(guess_models, robot, ())
+        variances = {"guess": np.array([guess_models[p.model].variance_parameters()[p.name] for p in params])}
+        fits = (("white+bias 10s", ("white", "bias"), "10s"), ("white 30s", ("white",), "30s"))
+        for name, kinds, window in fits:
+            fitted = bench.bases(fit_runs, robot, models, window)
+            fit = fit_noise([b for _, b, _ in fitted], models, robot, kinds=kinds)
+            variances[name] = np.array(list(fit.variances.values()))
+    out = {}
+    for name, v in variances.items():
+        out[name] = {}
+        for w, bases in held.items():
+            score = bench.score(bases, v)
+            err = np.concatenate([b.error[:, :2] for _, b, _ in bases])
+            cov = np.concatenate([b.covariance(v)[:, :2, :2] for _, b, _ in bases])
+            score["nees_se"] = float(np.std(nees(err, cov)) / np.sqrt(err.shape[0]))
+            score["meets"] = bench.meets(score)
+            out[name][w] = score
+    return out
+
+
+@pytest.mark.parametrize("window", ["10s", "30s"])
+@pytest.mark.parametrize("fit", list(README))
+def test_readme_table_within_sampling_error(measured, fit, window):
+    got = measured[fit][window]
+    claimed, claimed_nees, claimed_meets = README[fit][window]
+    n = got["n"]
+    assert n == {"10s": 467, "30s": 145}[window]  # window ends of the held-out half
+    for level, p in zip(LEVELS, claimed, strict=True):
+        se = np.sqrt(max(p * (1 - p), 1.0 / n) / n)
+        assert abs(got["coverage"][level] - p) <= 3 * se + 0.005, (level, got["coverage"][level], p)
+    assert abs(got["nees"] - claimed_nees) <= 3 * got["nees_se"] + 0.005 * claimed_nees
+    assert got["meets"] is claimed_meets
+
+
+def test_no_single_fitted_model_meets_the_targets_at_both_lengths(measured):
+    for fit in ("white+bias 10s", "white 30s"):
+        assert not (measured[fit]["10s"]["meets"] and measured[fit]["30s"]["meets"])
