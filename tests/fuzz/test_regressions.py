@@ -98,6 +98,30 @@ def test_fit_noise_scheduler_that_is_no_address_is_one_line(run_cli, tmp_path, a
     assert not out.exists()
 
 
+# --- odomkit check's warnings are one line each, like every command's ------------------------
+
+def test_check_reports_its_warnings_as_one_line_each(tmp_path, capsys):
+    import json
+
+    import numpy as np
+
+    from odomkit.cli import main
+
+    rows = np.loadtxt(RUN, delimiter=",")[::4, :4]
+    truth = tmp_path / "truth.csv"
+    np.savetxt(truth, np.vstack([rows[:3], rows[2:]]), delimiter=",", fmt="%.10g", header="t,x,y,theta",
+               comments="")
+    with warnings.catch_warnings(record=True) as escaped:
+        warnings.simplefilter("always")
+        code = main(["check", str(RUN), "--robot", str(ROBOT), "--truth", str(truth), "--json"])
+    out, err = capsys.readouterr()
+    assert code in (0, 1)
+    assert [str(w.message) for w in escaped if issubclass(w.category, UserWarning)] == []
+    assert err.strip().splitlines() == [f"odomkit: warning: {truth}: 1 truth rows repeat an earlier time "
+                                        "and were dropped (the first fix at each time is kept)"]
+    assert json.loads(out)["warnings"] == [err.strip().removeprefix("odomkit: warning: ")]
+
+
 # --- every output is checked before any is written ------------------------------------------
 
 def test_an_empty_frame_id_is_refused_before_anything_is_written(run_cli, tmp_path):
@@ -109,14 +133,8 @@ def test_an_empty_frame_id_is_refused_before_anything_is_written(run_cli, tmp_pa
     assert sorted(p.name for p in tmp_path.iterdir()) == []
 
 
-# --- found by the fuzz suite in files helper H10c owns (workflows/*): pinned as strict xfails, -----
-# --- so that the fix turns them into failures that ask for the marker to go ----------------------
+# --- found by the fuzz suite in workflows/*, calibrate/* and cli/__init__.py (fixed since) -------
 
-_H10C = "workflows/track.py (helper H10c): "
-
-
-@pytest.mark.xfail(strict=True, reason=_H10C + "the ground_truth figures of track's summary are not "
-                   "checked: truth of 1e199 m gives ate_rmse null with exit 0")
 def test_track_ground_truth_figures_are_numbers_or_one_line(run_cli, tmp_path):
     log = tmp_path / "big.csv"
     log.write_text("t,gt_x,gt_y,gt_theta,R,L\n0,0,0,0,0,0\n1,1e199,0,0,10,10\n2,2e199,0,0,10,10\n")
@@ -129,3 +147,69 @@ def test_track_ground_truth_figures_are_numbers_or_one_line(run_cli, tmp_path):
 
     truth = json.loads(out)["ground_truth"]
     assert truth["ate_rmse"] is not None and truth["nees_position_mean"] is not None, truth
+
+
+def test_bare_odomkit_is_help_on_stdout_or_one_line(run_cli):
+    code, out, err = run_cli()
+    if code == 2:
+        _one_line_error(code, err)
+    else:
+        assert code == 0 and "Commands:" in out and not err.strip(), (code, err)
+
+
+def test_predict_classical_with_a_denormal_wheel_base_is_one_line(run_cli):
+    code, out, err = run_cli("predict", "--model", "diff", "--noise", "classical", "--wheel-base", "1e-320",
+                             "--sigma-distance", "0.01", "--sigma-angle", "0.01", "--segment", "arc:0.0,1.0",
+                             "--json")
+    assert code in (0, 2), err
+    if code == 2:
+        _one_line_error(code, err)
+
+
+def test_fit_noise_with_huge_truth_is_one_line(run_cli, tmp_path):
+    import numpy as np
+
+    rows = np.loadtxt(RUN, delimiter=",")
+    rows[:, 1] *= 1e200
+    log = tmp_path / "big_run-01.csv"
+    np.savetxt(log, rows, delimiter=",", fmt="%.17g")
+    code, _, err = run_cli("fit-noise", "--robot", ROBOT, "--log", log, "--out", tmp_path / "f.toml",
+                           "--json")
+    assert code in (0, 2), err
+    if code == 2:
+        _one_line_error(code, err)
+
+
+def test_simulate_standard_errors_are_numbers_or_one_line(run_cli):
+    import json
+
+    code, out, err = run_cli("simulate", "--model", "gyro", "--speed-noise", "1e-4", "--gyro-noise", "1e200",
+                             "--segment", "straight:0.0,1", "--runs", "64", "--partitions", "8", "--workers",
+                             "1", "--json")
+    if code == 2:
+        _one_line_error(code, err)
+        return
+    assert code == 0, err
+    se = json.loads(out)["simulation"]["se"]
+    assert all(v is not None for row in se["cov"] for v in row) and None not in se["mean"], se
+
+
+def test_check_with_huge_times_is_one_line(run_cli, tmp_path):
+    inputs = RUN.parents[3] / "tests" / "golden" / "inputs"
+    rows = (inputs / "tricycle_speed.csv").read_text().splitlines()
+    log = tmp_path / "big.csv"
+    log.write_text("\n".join([rows[0]] + [",".join([repr(float(r.split(",")[0]) * 1e200), *r.split(",")[1:]])
+                                          for r in rows[1:]]) + "\n")
+    code, _, err = run_cli("check", log, "--robot", inputs / "tricycle.toml", "--columns",
+                           "t=t,speed=speed,steer=steer", "--json")
+    assert code in (0, 1, 2), err
+    if code == 2:
+        _one_line_error(code, err)
+
+
+def test_fit_noise_never_writes_over_its_robot_file(run_cli, tmp_path):
+    robot = tmp_path / "robot.toml"
+    robot.write_bytes(ROBOT.read_bytes())
+    code, _, err = run_cli("fit-noise", "--robot", robot, "--log", RUN, "--out", robot, "--force")
+    assert robot.read_bytes() == ROBOT.read_bytes()
+    assert "would replace an input" in _one_line_error(code, err)

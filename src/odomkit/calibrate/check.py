@@ -496,6 +496,12 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | None = Non
     if A.shape[0] < 6:
         return [Finding("identifiable", "fail", "the log is shorter than a few seconds",
                         "record a longer log")]
+    if not np.isfinite(A).all():
+        # Times of 1e200 s overflow the sensitivities; LAPACK's SVD would fail on them (and
+        # print its own complaints), so this is a finding, not a least-squares fit.
+        return [Finding("identifiable", "fail", "the sensitivities to the calibration parameters "
+                        "overflow (not finite): the times or the motion are far out of range",
+                        "check the log's time unit and its columns")]
     found = []
     norms = np.linalg.norm(A, axis=0)
     for i, name in enumerate(names):

@@ -235,7 +235,9 @@ class _Problem:
         v = base.copy()
         v[idx] = np.maximum(start, 0.0)
         val = self.lik(v, information=idx.size > 0)
-        if idx.size == 0:
+        if idx.size == 0 or val.gradient is None:
+            # No gradient: the window covariances are not positive definite at this start
+            # (log L = -inf, e.g. a starting variance that overflowed); the caller decides.
             return v, val.loglik
         s = self.scale[idx]
         for _ in range(_MAX_STEPS):
@@ -400,6 +402,13 @@ def fit_noise(
             best = cand
     assert best is not None
     v_hat, ll_hat = best
+    if not np.isfinite(ll_hat):
+        # Errors against the truth of 1e195 m square to inf: the starting variances overflow
+        # and no start gives positive definite window covariances.
+        raise ModelError("the noise fit: the window covariances are not positive definite at any "
+                         "starting variance (errors against the truth up to "
+                         f"{float(np.max(np.abs(lik.error))):.3g}); check the units of the log and "
+                         "the truth")
     crit = float(chi2.ppf(level, 1))
     intervals = {int(j): _profile_interval(prob, v_hat, ll_hat, int(j), crit) for j in free}
     warnings: list[str] = []

@@ -37,9 +37,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OdomkitError as exc:
         return _error(str(exc), argv)
     except usage_error as exc:
-        if type(exc).__name__ == "NoArgsIsHelpError":  # bare ``odomkit``: the help is the answer
-            exc.show()
-            return _exit(exc.exit_code, argv)
+        if type(exc).__name__ == "NoArgsIsHelpError":
+            # A bare ``odomkit`` asks for the help: give it as ``--help`` does (stdout, exit 0),
+            # not as an error (click shows it on stderr with exit 2).
+            if exc.ctx is not None:
+                print(exc.ctx.get_help())
+            return _exit(0, argv)
         return _error(_usage_message(exc, args), argv)
     except click_exception as exc:
         return _error(" ".join(exc.format_message().split()), argv, exc.exit_code)

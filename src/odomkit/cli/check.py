@@ -29,6 +29,8 @@ from odomkit.cli.log_options import (
     TruthTopicOption,
     WrapBitsOption,
     log_options,
+    reported_warnings,
+    with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.truth_options import (
@@ -77,7 +79,11 @@ def check_command(
     options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
     topts = truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
-    out = check_file(log, robot, topts, log_options=options, spin=spin)
+    # Reading the log and the truth may warn (repeated truth times, cumulative-looking
+    # counters): one "odomkit: warning:" line each, and in the JSON, as every command does.
+    with reported_warnings() as warned:
+        out = check_file(log, robot, topts, log_options=options, spin=spin)
+    out = with_warnings(out, warned)
     if json_out:
         print_json(out)
     else:

@@ -168,7 +168,8 @@ def fit_noise_files(
         when it names none: :func:`odomkit.calibrate.fit_noise.models_to_fit`).
     logs : log files.
     truths : one :class:`TruthOptions` per log (path None: the log's own ``gt_*`` columns).
-    out : the robot file to write (refused if it exists, unless ``overwrite``).
+    out : the robot file to write (refused if it exists, unless ``overwrite``, and always if
+        it is one of the inputs).
     window : ``"30s"``, ``"5m"`` (:func:`odomkit.windows.parse_window`); None: each log is
         one window.
     kinds : which models' variances are fitted ("white", "bias").
@@ -183,7 +184,7 @@ def fit_noise_files(
     bound is ``inf`` (JSON null) where the data do not bound the parameter.
     """
     from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
-    from odomkit.io.files import refuse_overwrite
+    from odomkit.io.files import check_outputs
     from odomkit.io.robotfile import read_robot, write_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions
@@ -195,7 +196,9 @@ def fit_noise_files(
     if len(truths) != len(logs):
         raise InputError(f"give one --truth per --log: {len(logs)} log(s), {len(truths)} truth(s)")
     spec = parse_window(window) if window is not None else None
-    refuse_overwrite(out, overwrite=overwrite)
+    # Checked against the inputs too: ``--out ROBOT --force`` must not replace the robot file.
+    check_outputs({"--out": out}, overwrite=overwrite,
+                  inputs=[robot_path, *logs, *(t.path for t in truths if t.path is not None)])
     robot, file_models = read_robot(robot_path)
     models, default_fixed = models_to_fit(robot, file_models, kinds)
     options = log_options if log_options is not None else LogOptions()

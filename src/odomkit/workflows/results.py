@@ -5,8 +5,8 @@ traceback or a NaN printed as ``null`` (issue 10).
 Extreme but finite inputs (a wheel base of 1e-300 m, a noise of 1e200 m^½) make the
 arithmetic overflow or underflow. Inside :func:`numeric_guard` numpy computes on quietly
 (``inf``/``nan`` instead of RuntimeWarnings printed before an error), and the failures
-that cannot compute on (a Python float overflowing, an SVD that does not converge on
-``inf``) become one :class:`~odomkit.errors.ModelError`; :func:`check_result` then names
+that cannot compute on (a Python float overflowing, ``math.cos(inf)``, an SVD that does not
+converge on ``inf``) become one :class:`~odomkit.errors.ModelError`; :func:`check_result` then names
 the first number that is not finite.
 """
 
@@ -53,6 +53,13 @@ check the units and the size of the inputs (robot file, log, flags)
         except (FloatingPointError, np.linalg.LinAlgError) as exc:
             raise ModelError(f"{what}: the numerics failed ({exc}), a number is out of range; "
                              f"{_ADVICE}") from None
+        except ValueError as exc:
+            # ``math.cos(inf)``, ``math.sqrt(-1.0)``: the math module raises ValueError where
+            # numpy would return nan. Only that message: other ValueErrors are real bugs.
+            if str(exc) != "math domain error":
+                raise
+            raise ModelError(f"{what}: the numerics failed (math domain error), a number is out of "
+                             f"range; {_ADVICE}") from None
 
 
 def check_result(what: str, values: Mapping[str, ArrayLike | None],

@@ -64,7 +64,9 @@ def run_simulate(
         )
     theory, simulation = result["theory"], result["simulation"]
     check_result("the simulation", {"the predicted pose": theory["pose"],
-                                    "the simulated mean": simulation["mean"]},
+                                    "the simulated mean": simulation["mean"],
+                                    # se.cov squares the variances: overflows before the cov does.
+                                    **{f"se.{k}": simulation["se"][k] for k in ("mean", "std", "cov")}},
                  {"the predicted covariance": theory["cov"],
                   "the simulated covariance": simulation["cov"]})
     result["theory"] = add_ros_pose_covariance(result["theory"])

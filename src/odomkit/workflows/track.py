@@ -56,8 +56,20 @@ class TrackRun:
         }
         if self.log.ground_truth is not None:
             with numeric_guard("the comparison with ground truth"):
-                out["ground_truth"] = evaluate_track(self.track.poses, self.log.ground_truth,
-                                                     self.track.cov).to_dict()
+                truth = evaluate_track(self.track.poses, self.log.ground_truth, self.track.cov)
+            # Errors of 1e199 m overflow the RMSE's squares to inf (JSON null): one line instead.
+            # drift_per_distance is nan by definition when the truth does not move, and the NEES
+            # None when no row has a regular covariance; neither is checked then.
+            check_result("the comparison with ground truth", {
+                "final_position_error": truth.final_position_error,
+                "max_position_error": truth.max_position_error,
+                "final_heading_error": truth.final_heading_error,
+                "ate_rmse": truth.ate_rmse,
+                "true_path_length": truth.true_path_length,
+                "drift_per_distance": truth.drift_per_distance if truth.true_path_length > 0 else None,
+                "nees_position_mean": truth.nees_position_mean,
+                "inside_95_fraction": truth.inside_95_fraction})
+            out["ground_truth"] = truth.to_dict()
         if self.truth is not None:
             inside = np.isfinite(self.truth[:, 0])
             err = np.hypot(*(self.track.poses[inside, :2] - self.truth[inside, :2]).T)
