@@ -287,3 +287,13 @@ def test_identical_errors_are_refused_with_a_message():
     A, Bc = wheel_noise_basis(*forward_and_back(), B)
     with pytest.raises(InputError, match="spread"):
         fit_wheel_noise(np.tile([0.01, 0.02, 0.003], (5, 1)), A, Bc)
+
+
+def test_degenerate_information_is_named_not_printed_as_nan():
+    """A NaN correlation (degenerate information) used to print 'correlate at nan'."""
+    from odomkit.calibrate import noise_fit
+
+    notes = noise_fit._warnings(float("nan"), np.array([True, True]), [(0.0, 1.0), (0.0, 1.0)],
+                                0.01, 0.95)
+    text = " ".join(notes)
+    assert "nan" not in text and "degenerate" in text

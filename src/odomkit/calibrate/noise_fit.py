@@ -441,10 +441,14 @@ def _warnings(rho: float, identified: NDArray[np.bool_], ci: list[tuple[float, f
             notes.append(f"the runs carry no information on {name} (that wheel's noise does not "
                          "reach the fitted components: does the wheel move?); its value 0 means unknown")
     if all(identified) and not abs(rho) < CONFOUNDED_CORRELATION:
-        notes.append(f"the runs cannot tell k_left from k_right: their estimates correlate at "
-                     f"{rho:.4f}, so only a combination is measured and each interval alone means "
-                     "little; drive a path where the two wheels' errors show differently (e.g. "
-                     "arcs turning both ways, no spin between out and back)")
+        # rho is NaN where the information matrix is degenerate: no correlation can be
+        # computed, which is the same verdict said without a number.
+        how = (f"their estimates correlate at {rho:.4f}" if np.isfinite(rho)
+               else "their information matrix is degenerate")
+        notes.append(f"the runs cannot tell k_left from k_right: {how}, so only a combination is "
+                     "measured and each interval alone means little; drive a path where the two "
+                     "wheels' errors show differently (e.g. arcs turning both ways, no spin "
+                     "between out and back)")
     for name, (_, hi) in zip(names, ci, strict=True):
         if not np.isfinite(hi):
             notes.append(f"the data do not bound {name} from above at the {100 * level:g} % level "
