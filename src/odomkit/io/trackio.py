@@ -16,8 +16,8 @@ from odomkit.io.files import refuse_overwrite
 from odomkit.io.table import polars_module
 from odomkit.track import Track
 
-__all__ = ["kitti_times_path", "read_track_csv", "TRACK_COLUMNS", "track_table", "TrackFile", "TRUTH_COLUMNS",
-           "write_kitti", "write_track_csv", "write_tum"]
+__all__ = ["kitti_times_path", "read_pose_file", "read_track_csv", "TRACK_COLUMNS", "track_table",
+           "TrackFile", "TRUTH_COLUMNS", "write_kitti", "write_track_csv", "write_tum"]
 
 TRACK_COLUMNS = ("t", "x", "y", "theta", "cov_xx", "cov_xy", "cov_xtheta", "cov_yy",
                  "cov_ytheta", "cov_thetatheta")
@@ -158,6 +158,30 @@ def read_track_csv(path: str | Path) -> TrackFile:
     if np.any(np.diff(core[:, 0]) < 0):
         raise InputError("track times decrease; expected a track in time order", source=str(path))
     return TrackFile(core[:, 0].copy(), core[:, 1:4].copy(), cov, truth, str(path))
+
+
+def read_pose_file(path: str | Path, what: str = "track") -> TrackFile:
+    """A track CSV (``odomkit track --out``, found by its header ``t,x,y,theta``), else any
+    pose file the truth reader takes (TUM, KITTI rows with time, headerless
+    ``t,x,y,theta``), which must then have a heading; the latter has no covariance.
+
+    ``what`` names the file in the error message (e.g. ``"track"``, ``"odometry"``).
+    """
+    from odomkit.io.truth import read_truth
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError("no such file", source=str(path))
+    with path.open("rb") as fh:
+        head = fh.read(4096).decode("utf-8", errors="replace")
+    first = next((line for line in head.splitlines() if line.strip() and not line.startswith("#")), "")
+    if {"t", "x", "y", "theta"} <= {f.strip() for f in first.split(",")}:
+        return read_track_csv(path)
+    poses = read_truth(path)
+    if poses.theta is None:
+        raise InputError(f"the {what} has no heading column; expected a track CSV (odomkit track --out), "
+                         "a TUM file or t,x,y,theta", source=str(path))
+    return TrackFile(poses.t, np.column_stack((poses.xy, poses.theta)), None, None, str(path))
 
 
 def _is_float(text: str) -> bool:

@@ -209,21 +209,9 @@ def evaluate_tracks(
 def _read_estimate(path: Path) -> TrackFile:
     """A track CSV (``odomkit track --out``, found by its header), else any pose file that
     truth can be (TUM, KITTI rows with time, headerless ``t,x,y,theta``) without covariance."""
-    from odomkit.io.trackio import TrackFile, read_track_csv
-    from odomkit.io.truth import read_truth
+    from odomkit.io.trackio import read_pose_file
 
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
-    with path.open("rb") as fh:
-        head = fh.read(4096).decode("utf-8", errors="replace")
-    first = next((line for line in head.splitlines() if line.strip() and not line.startswith("#")), "")
-    if {"t", "x", "y", "theta"} <= {f.strip() for f in first.split(",")}:
-        return read_track_csv(path)
-    poses = read_truth(path)
-    if poses.theta is None:
-        raise InputError("the track has no heading column; expected a track CSV (odomkit track --out), "
-                         "a TUM file or t,x,y,theta", source=str(path))
-    return TrackFile(poses.t, np.column_stack((poses.xy, poses.theta)), None, None, str(path))
+    return read_pose_file(path, "track")
 
 
 def _load(opts: TruthOptions, log: OdometryLog | None) -> Truth:

@@ -49,29 +49,17 @@ class OdometryPoses:
 def _track_poses(path: Path) -> OdometryPoses:
     """A track CSV (found by its header ``t,x,y,theta``) or any pose file the truth reader
     takes (TUM, headerless ``t,x,y,theta``), which must have a heading."""
-    from odomkit.io.trackio import read_track_csv
-    from odomkit.io.truth import read_truth
+    from odomkit.io.trackio import read_pose_file
     from odomkit.truth import Truth
 
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
-    with path.open("rb") as fh:
-        head = fh.read(4096).decode("utf-8", errors="replace")
-    first = next((line for line in head.splitlines() if line.strip() and not line.startswith("#")), "")
-    if {"t", "x", "y", "theta"} <= {f.strip() for f in first.split(",")}:
-        track = read_track_csv(path)
-        own = None
-        if track.truth is not None:
-            ok = np.all(np.isfinite(track.truth), axis=1)
-            if ok.sum() >= 2:
-                own = Truth(track.t[ok], track.truth[ok, :2].copy(), track.truth[ok, 2].copy(),
-                            source=str(path))
-        return OdometryPoses(track.t, track.poses, own, str(path))
-    poses = read_truth(path)
-    if poses.theta is None:
-        raise InputError("the odometry has no heading column; expected a track CSV (odomkit track --out), "
-                         "a TUM file or t,x,y,theta", source=str(path))
-    return OdometryPoses(poses.t, np.column_stack((poses.xy, poses.theta)), None, str(path))
+    track = read_pose_file(path, "odometry")
+    own = None
+    if track.truth is not None:
+        ok = np.all(np.isfinite(track.truth), axis=1)
+        if ok.sum() >= 2:
+            own = Truth(track.t[ok], track.truth[ok, :2].copy(), track.truth[ok, 2].copy(),
+                        source=str(path))
+    return OdometryPoses(track.t, track.poses, own, str(path))
 
 
 # The log options a bag's Odometry topic uses without a robot file.
