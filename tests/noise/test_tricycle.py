@@ -75,3 +75,28 @@ def test_tricycle_noise_needs_travel_and_steering():
         TricycleNoise(0.01, 0.02).input_cov(steps, 0, 3)
     with pytest.raises(ModelError, match="TricycleNoise applies to a Tricycle or Car robot"):
         TricycleNoise(0.01, 0.02).check_robot(steps.robot)
+
+
+@pytest.mark.parametrize("engine", ["recursion", "transition"])
+def test_noise_does_not_grow_while_the_vehicle_stands_still(engine):
+    """Issue 11: a tricycle that stands (encoder travel exactly 0) gathers no covariance,
+    however long it stands; it grows again as soon as it moves."""
+    from odomkit.integrate import dead_reckon
+    from odomkit.propagate.recursion import track_covariance
+
+    n = 300
+    travel = np.full(n, 0.01)
+    travel[100:250] = 0.0  # 15 s standing at 10 Hz
+    steer = np.full(n, 0.2)
+    robot = Tricycle(0.5)
+    dd, dth = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
+    steps = BodySteps(dd, dth, np.full(n, 0.1), {"travel": travel, "steer": steer}, robot)
+    poses = dead_reckon(dd, dth)
+    cov = track_covariance(steps, poses, TricycleNoise(0.05, 0.01, 0.001), np.zeros((3, 3)),
+                           engine=engine)
+    np.testing.assert_allclose(cov[250], cov[100], rtol=1e-12, atol=1e-18)
+    assert cov[101, 0, 0] == cov[100, 0, 0]
+    assert np.trace(cov[260]) > np.trace(cov[250]) * 1.01
+    # The Monte Carlo factor agrees: no draw moves a standing step.
+    factor = TricycleNoise(0.05, 0.01, 0.001).input_factor(steps, 0, n)
+    assert not np.any(factor[100:250]) and np.all(np.abs(factor[:100, 0, 0]) > 0)
