@@ -83,6 +83,8 @@ def parse_window(text: str) -> WindowSpec:
     """A window length from text: ``30s``, ``2min``, ``1h`` (time) or ``5m`` (metres of
     odometry travel).
 
+    Examples
+    --------
     >>> parse_window("30s"), parse_window("2.5 min"), parse_window("5m")
     (WindowSpec(length=30.0, unit='s'), WindowSpec(length=150.0, unit='s'), WindowSpec(length=5.0, unit='m'))
     """
@@ -435,6 +437,38 @@ class WindowBasis:
     bias_names: tuple[tuple[int, str], ...]
     turning: NDArray[np.float64]
     dropped: int
+
+    def select(self, keep: ArrayLike) -> WindowBasis:
+        """The windows where ``keep`` (bool, shape (W,)) is true, as a basis of their own."""
+        idx = np.flatnonzero(np.asarray(keep, dtype=bool))
+        return WindowBasis([self.windows[i] for i in idx], self.error[idx], self.fixed[idx],
+                           self.white[idx], self.sens[idx], self.bias_weights, self.white_names,
+                           self.bias_names, self.turning[idx], self.dropped)
+
+    @staticmethod
+    def merge(bases: list[WindowBasis]) -> WindowBasis:
+        """One log's bases of several window lengths as one basis (windows in order given).
+
+        The windows share the log's bias draw, as they should; windows of different lengths
+        overlap in time, so their white errors are correlated and a fit on the merged basis
+        is a *composite* likelihood (each length's windows are independent among
+        themselves, not across lengths): its estimates are consistent but its intervals
+        are too narrow by up to the square root of the number of lengths.
+        """
+        if not bases:
+            raise ModelError("no window bases to merge")
+        first = bases[0]
+        for b in bases[1:]:
+            if b.white_names != first.white_names or b.bias_names != first.bias_names:
+                raise ModelError("window bases to merge must come from the same noise models")
+        return WindowBasis([w for b in bases for w in b.windows],
+                           np.concatenate([b.error for b in bases]),
+                           np.concatenate([b.fixed for b in bases]),
+                           np.concatenate([b.white for b in bases]),
+                           np.concatenate([b.sens for b in bases]), first.bias_weights,
+                           first.white_names, first.bias_names,
+                           np.concatenate([b.turning for b in bases]),
+                           sum(b.dropped for b in bases))
 
     def covariance(self, variances: ArrayLike) -> NDArray[np.float64]:
         """Each window end's covariance (W, 3, 3) at variance parameters ``variances``

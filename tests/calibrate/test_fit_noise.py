@@ -7,6 +7,8 @@ reported intervals); the likelihood itself is checked in test_window_likelihood.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from scipy.optimize import minimize_scalar
@@ -33,7 +35,7 @@ from odomkit.noise import (
 )
 from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
 from odomkit.truth import Truth
-from odomkit.windows import WindowSpec, split_windows, window_covariance_basis
+from odomkit.windows import WindowBasis, WindowSpec, split_windows, window_covariance_basis
 
 TRUE = {"k_left": 0.002, "k_right": 0.003, "sigma_wheel_base": 0.003, "sigma_scale_left": 0.004,
         "sigma_scale_right": 0.002}
@@ -272,3 +274,72 @@ def test_other_vehicles_fit_their_default_models_back(robot, channels, true):
         lo, hi = fit.interval[key]
         assert lo <= value <= hi, (key, value, lo, hi)
         assert fit.parameters[key] == pytest.approx(value, rel=0.2)
+
+
+def _contaminate(bases, share, seed):
+    """Add a gross error (≈ 40 times the largest window's position σ) to a share of each
+    log's window ends: a bump, a slip, a truth glitch. Returns the bases and the count."""
+    rng = np.random.default_rng(seed)
+    out, hit = [], 0
+    for b in bases:
+        err = b.error.copy()
+        sigma = np.sqrt(np.max(b.covariance(np.array([TRUE["k_left"] ** 2, TRUE["k_right"] ** 2]))[:, 0, 0]))
+        bad = rng.random(len(err)) < share
+        err[bad, :2] += rng.choice([-1.0, 1.0], size=(bad.sum(), 2)) * 40 * sigma
+        hit += int(bad.sum())
+        out.append(replace(b, error=err))
+    return out, hit
+
+
+def test_trimming_fits_the_bulk_when_a_few_windows_are_gross_outliers():
+    """A trimmed fit leaves the outliers out, counts them, and recovers the true k; the
+    plain Gaussian fit is inflated by them far beyond its own interval."""
+    bases, models = synthetic_bases(3, n_logs=8, n=4000, bias=False)
+    dirty, hit = _contaminate(bases, 0.08, 3)
+    assert hit >= 5
+    plain = fit_noise(dirty, models, ROBOT)
+    robust = fit_noise(dirty, models, ROBOT, trim=0.999)
+    for key in ("k_left", "k_right"):
+        lo, hi = robust.interval[key]
+        assert lo <= TRUE[key] <= hi, (key, robust.interval[key])
+        assert plain.interval[key][0] > TRUE[key], (key, plain.interval[key])
+    # Every injected outlier is left out; a clean window rarely (0.1 % of them, plus a few
+    # near the edge).
+    assert hit <= robust.trimmed <= hit + 5
+    assert robust.to_dict()["windows_trimmed"] == robust.trimmed
+    assert any("left out of it (heavy tails" in w for w in robust.warnings)
+    # The trimmed windows are still scored in the in-sample coverage (they fall outside).
+    assert robust.coverage_in_sample["0.99"] <= 1 - hit / robust.windows + 0.01
+
+
+def test_trimming_clean_gaussian_windows_changes_almost_nothing():
+    bases, models = synthetic_bases(5, n_logs=8, n=4000, bias=False)
+    plain = fit_noise(bases, models, ROBOT)
+    robust = fit_noise(bases, models, ROBOT, trim=0.999)
+    assert robust.trimmed <= 3
+    for key in ("k_left", "k_right"):
+        lo, hi = plain.interval[key]
+        # Within a tenth of the interval's width of the untrimmed estimate.
+        assert abs(robust.parameters[key] - plain.parameters[key]) <= 0.1 * (hi - lo)
+
+
+def test_trim_outside_its_range_is_refused():
+    bases, models = synthetic_bases(5, n_logs=2, bias=False)
+    with pytest.raises(ModelError, match="trim must be in"):
+        fit_noise(bases, models, ROBOT, trim=1.0)
+
+
+def test_merged_window_lengths_add_their_likelihoods_without_bias():
+    """White-only: the likelihood of one log's merged 10 s and 30 s windows is the sum of
+    the two lengths' likelihoods (the composite likelihood a multi-length fit maximises)."""
+    short, _ = synthetic_bases(8, n_logs=1, bias=False, window=10.0)
+    long_, _ = synthetic_bases(8, n_logs=1, bias=False, window=30.0)
+    merged = WindowBasis.merge([short[0], long_[0]])
+    v = np.array([TRUE["k_left"] ** 2, TRUE["k_right"] ** 2])
+    together = WindowLikelihood([merged])(v, gradient=False).loglik
+    apart = (WindowLikelihood([short[0]])(v, gradient=False).loglik
+             + WindowLikelihood([long_[0]])(v, gradient=False).loglik)
+    assert together == pytest.approx(apart, rel=1e-12)
+    assert len(merged.windows) == len(short[0].windows) + len(long_[0].windows)
+    same = merged.select(np.ones(len(merged.windows), bool))
+    np.testing.assert_array_equal(same.covariance(v), merged.covariance(v))

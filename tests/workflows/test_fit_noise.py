@@ -143,6 +143,7 @@ def test_it_never_overwrites_without_force(run_cli, tmp_path):
 @pytest.mark.parametrize(("args", "message"), [
     (["--kinds", "colour"], "--kinds"),
     (["--window", "ten"], "--window"),
+    (["--trim", "0.3"], "--trim"),
     (["--truth", "a.csv", "--truth", "b.csv"], "one --truth per"),
 ])
 def test_bad_flags_are_one_line_exit_2(run_cli, tmp_path, args, message):
@@ -174,3 +175,34 @@ def test_a_dask_cluster_gives_the_same_fit(tmp_path):
         result.pop("seconds")
         result.pop("outputs")
     assert local == remote
+
+
+def test_several_window_lengths_fit_one_model_to_all_of_them(run_cli, tmp_path):
+    """--window 10s --window 30s: every log's windows of both lengths in one fit, i.e. the
+    union of the two single-length fits' windows (trimming off, so the counts are exact)."""
+    short, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--trim", "1", name="s.toml")
+    long_, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "30s", "--trim", "1", name="l.toml")
+    both, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--window", "30s", "--trim", "1",
+                   name="b.toml")
+    assert both["windows"] == short["windows"] + long_["windows"]
+    assert both["window"] == "10 s,30 s"
+    # Its log-likelihood at its own optimum is at least that of either fit's parameters on
+    # the union, so it lies between: not above the sum of the separate optima.
+    assert both["log_likelihood"] <= short["log_likelihood"] + long_["log_likelihood"] + 1e-6
+
+
+def test_trim_is_reported_and_1_keeps_every_window(run_cli, tmp_path):
+    kept, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--trim", "1", name="k.toml")
+    trimmed, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", name="t.toml")
+    assert kept["windows_trimmed"] == 0 and kept["trim"] is None
+    assert trimmed["trim"] == 0.999
+    assert trimmed["windows"] + trimmed["windows_trimmed"] == kept["windows"]
+
+
+def test_the_cli_trim_default_is_the_library_one():
+    import inspect
+
+    from odomkit.calibrate.fit_noise import DEFAULT_TRIM
+    from odomkit.cli.fit_noise import fit_noise_command
+
+    assert inspect.signature(fit_noise_command).parameters["trim"].default == DEFAULT_TRIM

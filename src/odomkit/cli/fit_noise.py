@@ -3,8 +3,9 @@
 ::
 
     odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
-        [--window 30s|5m] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
-        [--cross-validate] [--truth-sigma S] [--workers N | --scheduler ADDR] [--force] [--json]
+        [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
+        [--trim 0.999] [--cross-validate] [--truth-sigma S] [--workers N | --scheduler ADDR]
+        [--force] [--json]
 """
 
 from __future__ import annotations
@@ -50,9 +51,10 @@ def fit_noise_command(
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML); its [noise] names the models.")],
     log: Annotated[list[Path], typer.Option("--log", help="A log with ground truth; repeat it.")],
     out: Annotated[Path, typer.Option("--out", help="Write the robot file with the fitted [noise] here.")],
-    window: Annotated[str | None, typer.Option(
+    window: Annotated[list[str] | None, typer.Option(
         "--window", help="Windows that restart from truth: 30s (time) or 5m (odometry travel); "
-                         "default one window per log.")] = None,
+                         "repeat it to fit one model to several lengths (--window 10s --window "
+                         "30s); default one window per log.")] = None,
     kinds: Annotated[str, typer.Option(
         "--kinds", help="Which variances to fit: white, bias or white,bias.")] = "white",
     fix: Annotated[str | None, typer.Option(
@@ -62,6 +64,9 @@ def fit_noise_command(
     cross_validate: Annotated[bool, typer.Option(
         "--cross-validate", help="Also report leave-one-log-out coverage.")] = False,
     level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
+    trim: Annotated[float, typer.Option(
+        "--trim", help="Fit the bulk: window ends outside this probability's ellipse of the fit "
+                       "are left out of it and counted (heavy tails); 1 keeps every window.")] = 0.999,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
     workers: Annotated[int | None, typer.Option(
         "--workers", help="Processes reading the logs (default: one per core for large inputs).")] = None,
@@ -95,6 +100,8 @@ def fit_noise_command(
 
     if not 0 < level < 1:
         raise InputError(f"--level must be in (0, 1), got {level}")
+    if not 0.5 < trim <= 1:
+        raise InputError(f"--trim must be a probability in (0.5, 1], got {trim}")
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
     options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
@@ -106,6 +113,7 @@ def fit_noise_command(
         result = fit_noise_files(robot, log, per_log, out, window=window, kinds=parse_kinds(kinds),
                                  fixed=fixed, log_options=options, min_travel=min_travel,
                                  method=method, level=level, cross_validate=cross_validate,
+                                 trim=None if trim >= 1 else trim,
                                  workers=workers, scheduler=scheduler, overwrite=force)
     result = with_warnings(result, warned)
     if json_out:
@@ -117,7 +125,9 @@ def fit_noise_command(
 def print_fit(out: dict[str, Any]) -> None:
     """The short text report of ``odomkit fit-noise``."""
     key = next(k for k in out if k.startswith("interval"))
-    print(f"fitted {len(out['parameters'])} parameter(s) on {out['windows']} window(s) of "
+    trimmed = (f" ({out['windows_trimmed']} more left out: outside the {100 * out['trim']:g} % "
+               "ellipse)" if out.get("windows_trimmed") else "")
+    print(f"fitted {len(out['parameters'])} parameter(s) on {out['windows']} window(s){trimmed} of "
           f"{out['logs']} log(s); log-likelihood {out['log_likelihood']:.6g}")
     for name, value in out["parameters"].items():
         lo, hi = out[key][name]

@@ -22,7 +22,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from odomkit.calibrate.exact import calibrate_exact
-from odomkit.calibrate.fit_noise import fit_noise, models_to_fit, noise_parameters
+from odomkit.calibrate.fit_noise import DEFAULT_TRIM, fit_noise, models_to_fit, noise_parameters
 from odomkit.calibrate.realdata import e_max_syst_of_runs, transfer, umbmark_from_runs
 from odomkit.data import OPTIODOM_EXPERIMENTS, builtin_data_path, builtin_experiment_path
 from odomkit.evaluate import coverage, evaluate_track, nees_summary
@@ -110,7 +110,7 @@ def noise_honesty(calibrated: DiffDrive, noise: tuple[NoiseModel, ...]) -> tuple
         **{w: _score(held_bases[w], guess) for w in SCORE_WINDOWS}}}
     fitted: tuple[NoiseModel, ...] = models
     for name, kinds in (("white", ("white",)), ("white+bias", ("white", "bias"))):
-        fit = fit_noise(fit_bases, models, calibrated, kinds=kinds, fixed=held)
+        fit = fit_noise(fit_bases, models, calibrated, kinds=kinds, fixed=held, trim=DEFAULT_TRIM)
         variances = np.array(list(fit.variances.values()))
         rows[name] = {"parameters": fit.parameters,
                       "interval95": {k: list(v) for k, v in fit.interval.items()},

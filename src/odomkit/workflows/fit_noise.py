@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
+from odomkit.calibrate.fit_noise import DEFAULT_TRIM
 from odomkit.errors import InputError
 
 if TYPE_CHECKING:
@@ -54,7 +55,7 @@ class LogTask:
     log_options: LogOptions
     robot: Robot
     models: tuple[NoiseModel, ...]
-    spec: WindowSpec | None
+    specs: tuple[WindowSpec | None, ...]
     min_travel: float
     method: str
 
@@ -76,7 +77,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
 
     from odomkit.kinematics import body_steps
     from odomkit.truth import truth_at
-    from odomkit.windows import cumulative_travel, split_windows, window_covariance_basis
+    from odomkit.windows import WindowBasis, cumulative_travel, split_windows, window_covariance_basis
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -89,26 +90,32 @@ def prepare_log(task: LogTask) -> PreparedLog:
     samples = truth_at(truth, log.t, task.truth.max_gap)
     steps = body_steps(task.robot, log)
     travel = cumulative_travel(steps)
-    windows, skipped = split_windows(log.t, travel, task.spec, task.min_travel, valid=samples.valid)
-    if not windows:
-        rows = np.flatnonzero(samples.valid)
-        span = float(log.t[rows[-1]] - log.t[rows[0]]) if rows.size else 0.0
-        moved = float(travel[rows[-1]] - travel[rows[0]]) if rows.size else 0.0
-        if rows.size < 2:
-            reason = "the truth does not overlap the log in time (check --truth-time-unit)"
-        elif skipped:
-            reason = (f"no motion: every window travels less than {task.min_travel:g} m "
-                      f"(--min-travel)")
-        elif task.spec is not None and task.spec.unit == "s":
-            reason = f"the window ({task.spec}) is longer than the log's {span:.3g} s with truth"
-        elif task.spec is not None:
-            reason = f"the window ({task.spec}) is longer than the log's {moved:.3g} m of travel"
-        else:
-            reason = "no window: the log has fewer than two rows with truth"
-        return PreparedLog(name, None, len(log), skipped, reason)
-    basis = window_covariance_basis(log, task.robot, task.models, samples.poses, samples.valid,
-                                    windows, truth=truth, method=task.method)
-    return PreparedLog(name, basis, len(log), skipped, None)
+    # One basis per window length, merged: the log's windows of every length share its bias.
+    parts, skipped, spec = [], 0, task.specs[0]
+    for each in task.specs:
+        windows, left = split_windows(log.t, travel, each, task.min_travel, valid=samples.valid)
+        skipped += left
+        if windows:
+            parts.append(window_covariance_basis(log, task.robot, task.models, samples.poses,
+                                                 samples.valid, windows, truth=truth,
+                                                 method=task.method))
+    if parts:
+        return PreparedLog(name, WindowBasis.merge(parts), len(log), skipped, None)
+    rows = np.flatnonzero(samples.valid)
+    span = float(log.t[rows[-1]] - log.t[rows[0]]) if rows.size else 0.0
+    moved = float(travel[rows[-1]] - travel[rows[0]]) if rows.size else 0.0
+    if rows.size < 2:
+        reason = "the truth does not overlap the log in time (check --truth-time-unit)"
+    elif skipped:
+        reason = (f"no motion: every window travels less than {task.min_travel:g} m "
+                  f"(--min-travel)")
+    elif spec is not None and spec.unit == "s":
+        reason = f"the window ({spec}) is longer than the log's {span:.3g} s with truth"
+    elif spec is not None:
+        reason = f"the window ({spec}) is longer than the log's {moved:.3g} m of travel"
+    else:
+        reason = "no window: the log has fewer than two rows with truth"
+    return PreparedLog(name, None, len(log), skipped, reason)
 
 
 T = TypeVar("T")
@@ -148,7 +155,7 @@ def fit_noise_files(
     truths: Sequence[TruthOptions],
     out: str | Path,
     *,
-    window: str | None = None,
+    window: str | Sequence[str] | None = None,
     kinds: Sequence[str] = ("white",),
     fixed: Sequence[str] = (),
     log_options: LogOptions | None = None,
@@ -156,6 +163,7 @@ def fit_noise_files(
     method: str = "exact",
     level: float = 0.95,
     cross_validate: bool = False,
+    trim: float | None = DEFAULT_TRIM,
     workers: int | None = None,
     scheduler: str | None = None,
     overwrite: bool = False,
@@ -170,13 +178,17 @@ def fit_noise_files(
     truths : one :class:`TruthOptions` per log (path None: the log's own ``gt_*`` columns).
     out : the robot file to write (refused if it exists, unless ``overwrite``, and always if
         it is one of the inputs).
-    window : ``"30s"``, ``"5m"`` (:func:`odomkit.windows.parse_window`); None: each log is
-        one window.
+    window : ``"30s"``, ``"5m"`` (:func:`odomkit.windows.parse_window`), or several
+        (``["10s", "30s"]``: one model fitted to windows of every length together, so that
+        it holds at each; a composite likelihood, see
+        :meth:`odomkit.windows.WindowBasis.merge`); None: each log is one window.
     kinds : which models' variances are fitted ("white", "bias").
     fixed : parameter names held at the robot file's value.
     workers : processes for reading logs and computing bases; None: one per core when
         the logs are large (:data:`PARALLEL_ROWS`), else this process.
     scheduler : a Dask scheduler address: run those tasks on its cluster instead.
+    trim : fit the bulk: window ends outside this probability's ellipse of the fit are left
+        out and counted (:func:`odomkit.calibrate.fit_noise.fit_noise`); None: keep all.
 
     Returns
     -------
@@ -195,14 +207,17 @@ def fit_noise_files(
         raise InputError("fit-noise needs at least one --log")
     if len(truths) != len(logs):
         raise InputError(f"give one --truth per --log: {len(logs)} log(s), {len(truths)} truth(s)")
-    spec = parse_window(window) if window is not None else None
+    texts = [window] if isinstance(window, str) or window is None else list(window)
+    specs = tuple(None if w is None else parse_window(w) for w in texts) or (None,)
+    if trim is not None and not 0.5 < trim < 1:
+        raise InputError(f"--trim must be a probability in (0.5, 1) (or none), got {trim}")
     # Checked against the inputs too: ``--out ROBOT --force`` must not replace the robot file.
     check_outputs({"--out": out}, overwrite=overwrite,
                   inputs=[robot_path, *logs, *(t.path for t in truths if t.path is not None)])
     robot, file_models = read_robot(robot_path)
     models, default_fixed = models_to_fit(robot, file_models, kinds)
     options = log_options if log_options is not None else LogOptions()
-    tasks = [LogTask(Path(p), t, options, robot, models, spec, min_travel, method)
+    tasks = [LogTask(Path(p), t, options, robot, models, specs, min_travel, method)
              for p, t in zip(logs, truths, strict=True)]
     if workers is None:
         big = sum(_rows(Path(p)) for p in logs) >= PARALLEL_ROWS
@@ -225,7 +240,8 @@ def fit_noise_files(
                      "position-only truth")
     with numeric_guard("the noise fit"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
-                        level=level, log_names=[p.name for p in used], cross_validate=cross_validate)
+                        level=level, log_names=[p.name for p in used], cross_validate=cross_validate,
+                        trim=trim)
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
                                    "variances": list(fit.variances.values()),
@@ -235,7 +251,7 @@ def fit_noise_files(
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)
     result.update({
-        "window": None if spec is None else str(spec),
+        "window": None if specs == (None,) else ",".join(str(x) for x in specs),
         "windows_skipped": sum(p.skipped for p in prepared),
         "windows_dropped": dropped,
         "logs_left_out": [p.name for p in left_out],
