@@ -308,7 +308,8 @@ def test_bad_parameters_are_rejected():
 
 def test_registry_knows_every_model_with_its_robot_file_keys():
     assert set(NOISE_MODELS) == {"WheelNoise", "ClassicalNoise", "SpeedNoise", "GyroNoise",
-                                 "CompassNoise", "TricycleNoise", "ParameterUncertainty"}
+                                 "CompassNoise", "TricycleNoise", "ParameterUncertainty",
+                                 "LateralSlipNoise"}
     assert all(issubclass(cls, NoiseModel) for cls in NOISE_MODELS.values())
     assert noise_fields(TricycleNoise) == (frozenset({"sigma_speed", "sigma_steer"}),
                                            frozenset({"sigma_dt"}))

@@ -54,6 +54,9 @@ def _contribution(model: NoiseModel, steps: BodySteps) -> np.ndarray:
     heading = model.heading_variances(steps)
     if heading is not None:
         parts.append(heading)
+    lateral = model.lateral_variances(steps, 0, M)
+    if lateral is not None:
+        parts.append(lateral)
     parts.append(model.bias_variances(steps.robot))
     return np.concatenate(parts)
 

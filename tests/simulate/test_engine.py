@@ -273,7 +273,11 @@ def test_memory_stays_bounded():
 
 @pytest.mark.parametrize("workers", [1, 2])
 def test_progress_reports_every_run_once(workers):
-    done: list[int] = []
+    from odomkit.progress import RecordingProgress
+
+    seen = RecordingProgress()
     simulate_runs([Straight(1.0)], WheelNoise(0.001, 0.001), 0.4, runs=1000, partitions=5,
-                  workers=workers, progress=done.append)
-    assert sum(done) == 1000 and len(done) == 4  # four blocks of ≤ 256 runs
+                  workers=workers, progress=seen)
+    (stage,) = seen.stages
+    assert stage.total == stage.done == 1000 and stage.closed
+    assert stage.advances == 4  # four blocks of ≤ 256 runs

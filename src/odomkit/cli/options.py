@@ -17,7 +17,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MODEL_FLAGS", "CompassPeriodOption", "GyroNoiseOption", "HeadingNoiseOption",
-    "InitialCovMatrixOption", "InitialCovOption",
+    "InitialCovMatrixOption", "InitialCovOption", "LateralNoiseOption",
     "InitialPoseOption", "JsonOption", "KLeftOption", "KRightOption", "ModelOption", "noise_from_flags",
     "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "SegmentOption",
     "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption", "WheelBaseOption"
@@ -26,9 +26,10 @@ __all__ = [
 Opt = typer.Option
 
 MODEL_FLAGS = {
-    "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle"},
-    "gyro": {"--speed-noise", "--gyro-noise"},
-    "compass": {"--speed-noise", "--heading-noise", "--compass-period"},
+    "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle",
+             "--lateral-noise"},
+    "gyro": {"--speed-noise", "--gyro-noise", "--lateral-noise"},
+    "compass": {"--speed-noise", "--heading-noise", "--compass-period", "--lateral-noise"},
 }
 
 SegmentOption = Annotated[list[str], Opt("--segment", help=(
@@ -49,6 +50,9 @@ GyroNoiseOption = Annotated[float | None, Opt(
     "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s].")]
 HeadingNoiseOption = Annotated[float | None, Opt(
     "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s].")]
+LateralNoiseOption = Annotated[float | None, Opt(
+    "--lateral-noise", help=("Any model: lateral slip α_lat [m²/m], the variance of the "
+                             "sideways displacement per metre travelled."))]
 CompassPeriodOption = Annotated[float | None, Opt(
     "--compass-period", help=(
         "Compass model: sample period T of the compass [s] (default 0.1). Each reading has "
@@ -101,6 +105,17 @@ def _positive_or_none(flag: str, value: float | None, unit: str) -> float | None
 
 def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> NoiseArg:
     """The noise model(s) the flags describe (see :func:`odomkit.propagate.predict.predict`)."""
+    from odomkit.noise import LateralSlipNoise
+
+    base = _base_noise(model, noise, given)
+    if given.get("--lateral-noise") is None:
+        return base
+    slip = LateralSlipNoise(_non_negative("--lateral-noise", given["--lateral-noise"], "m^2/m"))
+    return (*(base if isinstance(base, tuple) else (base,)), slip)
+
+
+def _base_noise(model: str, noise: str, given: dict[str, float | None]) -> NoiseArg:
+    """The noise of the model's own flags (without a lateral slip)."""
     from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
 
     if model == "diff" and noise == "wheel":

@@ -10,6 +10,8 @@ model                       kind    applies to
                                     psd_gyro·Δt
 :class:`CompassNoise`       white   compass: measured heading, variance psd_compass/Δt
 :class:`TricycleNoise`      white   tricycle and car: speed, steering and period errors
+:class:`LateralSlipNoise`   white   any: sideways slip across the track, variance
+                                    α_lat·|Δd| (position only)
 :class:`ParameterUncertainty`  bias  every vehicle's parameters, constant over a run
                             (wheel base, wheel or speed scales, steering offset,
                             yaw-rate offset and scale, heading offset; or white)
@@ -22,6 +24,7 @@ wherever a noise argument is).
 from odomkit.noise.base import NOISE_MODELS, NoiseKind, NoiseModel, NoiseSet, noise_fields, register
 from odomkit.noise.kelly import CompassNoise, GyroNoise, SpeedNoise
 from odomkit.noise.parameters import ParameterUncertainty
+from odomkit.noise.slip import LateralSlipNoise
 from odomkit.noise.tricycle import TricycleNoise
 from odomkit.noise.wheel import ClassicalNoise, WheelNoise
 
@@ -38,5 +41,6 @@ __all__ = [
     "GyroNoise",
     "CompassNoise",
     "TricycleNoise",
+    "LateralSlipNoise",
     "ParameterUncertainty",
 ]

@@ -16,7 +16,10 @@ which class they hold:
 4. for direct-heading odometry (a compass measures θ instead of integrating it): the
    variance of each heading sample (:meth:`NoiseModel.heading_variances`), and how a
    bias parameter moves every measured heading (:meth:`NoiseModel.bias_heading`, (p,):
-   a heading offset, θ_k = θ_meas,k + δ for every k).
+   a heading offset, θ_k = θ_meas,k + δ for every k);
+5. for white noise that moves the position alone (a sideways slip): the variance of each
+   step's displacement across the track (:meth:`NoiseModel.lateral_variances`, (n,)),
+   which the engines add apart from the recursion (:mod:`odomkit.propagate.lateral`).
 
 A new noise model is one frozen dataclass subclassing :class:`NoiseModel` in one module,
 decorated with :func:`register`; the robot-file reader (:mod:`odomkit.io.robotfile`) finds
@@ -104,6 +107,8 @@ def variance_power(name: str) -> int:
     the variance parameter is its square), 1 when it is already a variance or a variance
     density (``var_*``, ``psd_*``, ``alpha_*``); ModelError for a name that says neither.
 
+    Examples
+    --------
     >>> variance_power("k_left"), variance_power("psd_gyro")
     (2, 1)
     """
@@ -127,8 +132,8 @@ def steps_input(steps: BodySteps, key: str, owner: object) -> NDArray[np.float64
 class NoiseModel(ABC):
     """One source of odometry noise (see the module docstring for the protocol).
 
-    Class attributes
-    ----------------
+    Attributes
+    ----------
     robot_types : tuple of str
         Robot-file types (``"diff"``, ``"tricycle"``, ...) the model applies to; empty
         means any robot. For a path prediction the first one is the vehicle.
@@ -140,12 +145,17 @@ class NoiseModel(ABC):
         track's method; such a model combines with no other.
     toml_table : str
         Where its keys live in a robot file: ``"noise"`` or ``"noise.parameters"``.
+    position_only : bool
+        The model's noise moves the position alone (:meth:`lateral_variances`), with no
+        raw input to (Δd, Δθ): it is defined for every step map, so it may join a model
+        with a step map of its own, and it never stops the per-wheel fast path.
     """
 
     robot_types: ClassVar[tuple[str, ...]] = ()
     family: ClassVar[str | None] = None
     step_map: ClassVar[str | None] = None
     toml_table: ClassVar[str] = "noise"
+    position_only: ClassVar[bool] = False
 
     @property
     def kind(self) -> NoiseKind:
@@ -184,6 +194,13 @@ class NoiseModel(ABC):
         [rad²]; None for a model that does not measure heading."""
         return None
 
+    def lateral_variances(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64] | None:
+        """Variance of the sideways displacement of steps a … b−1 [m²], (b − a,): white
+        noise along each step's unit normal u_k = (−sin θ̄_k, cos θ̄_k), θ̄_k the chord
+        direction of the step map (:func:`odomkit.propagate.lateral.lateral_headings`),
+        independent of everything else. None for a model without one."""
+        return None
+
     # --- bias part ----------------------------------------------------------------
     def bias_variances(self, robot: Robot) -> NDArray[np.float64]:
         """Variances of the constant-per-run parameters, shape (p,); (0,) when none."""
@@ -209,6 +226,8 @@ class NoiseModel(ABC):
         model with unit variance in it alone passes :meth:`check_robot` (a tricycle has
         no right wheel scale).
 
+        Examples
+        --------
         >>> from odomkit.noise import WheelNoise
         >>> WheelNoise(0.01, 0.02).variance_parameters()
         {'k_left': 0.0001, 'k_right': 0.0004}
@@ -235,6 +254,8 @@ class NoiseModel(ABC):
         """A copy of the model with the given variance parameters (see
         :meth:`variance_parameters`; fields not named keep their value).
 
+        Examples
+        --------
         >>> from odomkit.noise import WheelNoise
         >>> WheelNoise(0.01, 0.02).from_variances({"k_left": 0.0009})
         WheelNoise(k_left=0.03, k_right=0.02)
@@ -308,7 +329,8 @@ class NoiseSet:
                 raise ModelError(f"{type(model).__name__} given twice")
             seen.add(type(model))
         own = [m for m in self.models if m.step_map is not None]
-        if own and len(self.models) > 1:
+        # Position-only noise (a sideways slip) is defined for every step map.
+        if own and sum(not m.position_only for m in self.models) > 1:
             raise ModelError(f"{type(own[0]).__name__} has its own step map and cannot be combined")
 
     @classmethod
@@ -363,9 +385,14 @@ class NoiseSet:
         for model in self.models:
             model.check_robot(robot)
 
+    @property
+    def body_white(self) -> tuple[NoiseModel, ...]:
+        """The white models with raw inputs to (Δd, Δθ) (not the position-only ones)."""
+        return tuple(m for m in self.white if not m.position_only)
+
     def input_cov(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """Summed white covariance of (Δd, Δθ) of steps a … b−1, (b − a, 2, 2)."""
-        white = self.white
+        white = self.body_white
         if len(white) == 1:
             return white[0].input_cov(steps, a, b)
         q = np.zeros((b - a, 2, 2))
@@ -401,6 +428,17 @@ class NoiseSet:
             if var is not None:
                 return var
         return None
+
+    def lateral_variances(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64] | None:
+        """Summed sideways-displacement variance of steps a … b−1 [m²], (b − a,); None
+        when no model has one (the engines then add nothing, so their numbers stay as
+        they were)."""
+        total = None
+        for model in self.models:
+            var = model.lateral_variances(steps, a, b)
+            if var is not None:
+                total = var if total is None else total + var
+        return total
 
     def bias_variances(self, robot: Robot) -> NDArray[np.float64]:
         """Stacked bias-parameter variances (p,)."""

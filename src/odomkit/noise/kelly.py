@@ -152,6 +152,8 @@ class CompassNoise(NoiseModel):
     def sample_variance(self, period: float) -> float:
         """Variance of one compass reading taken every ``period`` [s]: psd/T [rad²].
 
+        Examples
+        --------
         >>> CompassNoise(1e-5).sample_variance(0.1)
         0.0001
         """
@@ -163,6 +165,8 @@ def compass_sample_count(duration: float, period: float, segment: int | None = N
     it is a whole number (to 1e-9 relative), so that every segment starts and ends on a
     compass sample.
 
+    Examples
+    --------
     >>> compass_sample_count(2.5, 0.1)
     25
     """

@@ -134,6 +134,8 @@ class WheelInputs:
     """Per-wheel noise of a whole log in the form a compiled engine consumes: the wheel
     travels d_left, d_right (M,) [m] and :func:`wheel_cov_coefficients` (5,).
 
+    Examples
+    --------
     >>> w = WheelInputs(np.array([1.0]), np.array([1.0]),
     ...                 wheel_cov_coefficients(0.5, WheelNoise(0.1, 0.1)))
     >>> np.array_equal(w.cov_input(0, 1), wheel_input_cov([1.0], [1.0], 0.5, WheelNoise(0.1, 0.1)))
@@ -157,6 +159,8 @@ def wheel_cov_coefficients(wheel_base: float, noise: WheelNoise) -> NDArray[np.f
     """(k_L², k_R², J00², J01·J11, J11²), J = ∂(Δd, Δθ)/∂(d_L, d_R): the constants of
     :func:`wheel_input_cov`, shared with the numba kernel so both give the same bits.
 
+    Examples
+    --------
     >>> wheel_cov_coefficients(0.5, WheelNoise(0.1, 0.2)).round(6).tolist()
     [0.01, 0.04, 0.25, 1.0, 4.0]
     """

@@ -62,8 +62,8 @@ from odomkit.jit import njit
 
 __all__ = [
     "CHUNK", "LANES", "METHOD_CLASSICAL", "METHOD_EULER", "METHOD_EXACT", "METHOD_MIDPOINT", "QMODE_ARRAY",
-    "QMODE_WHEEL", "STATE_SIZE", "WORK", "heading_tolerance", "recurrence_kernel", "recursion_kernel",
-    "recursion_kernel_parallel"
+    "QMODE_WHEEL", "STATE_SIZE", "WORK", "heading_tolerance", "lateral_kernel", "recurrence_kernel",
+    "recursion_kernel", "recursion_kernel_parallel"
 ]
 
 # Method codes shared with recursion.py.
@@ -568,3 +568,27 @@ def recursion_kernel_parallel(
             state[0], state[1], state[2], state[3] = cb, sb, thb, 1.0
     state[4] += anchors
     recurrence_kernel(terms, cov_start, out)
+
+
+@njit
+def lateral_kernel(theta: np.ndarray, dtheta: np.ndarray, var: np.ndarray, weight: float,
+                   sums: np.ndarray, out: np.ndarray) -> None:
+    """Add the running sums of a lateral slip to the x–y blocks of ``out`` (n, 3, 3), in
+    place, in one pass (:func:`odomkit.propagate.lateral.lateral_sums`, the numpy
+    reference, forms the same sums): step k moves across its chord θ_k + weight·Δθ_k
+    with variance var[k]. ``sums`` (3,) = (xx, xy, yy) before the first step, updated.
+    """
+    xx, xy, yy = sums[0], sums[1], sums[2]
+    for k in range(theta.shape[0]):
+        h = theta[k] + weight * dtheta[k]
+        c = math.cos(h)
+        s = math.sin(h)
+        v = var[k]
+        xx = xx + v * s * s
+        xy = xy + -(v * s * c)
+        yy = yy + v * c * c
+        out[k, 0, 0] += xx
+        out[k, 0, 1] += xy
+        out[k, 1, 0] += xy
+        out[k, 1, 1] += yy
+    sums[0], sums[1], sums[2] = xx, xy, yy

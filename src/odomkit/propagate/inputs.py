@@ -49,6 +49,8 @@ def classical_step_jacobians(
     ``G = [[cos(θ+α), −D sin(θ+α)], [sin(θ+α), D cos(θ+α)], [0, 1]]`` (eq. 3). Unlike
     the arc, the whole rotation acts before the translation, so ∂x/∂α equals ∂x/∂θ.
 
+    Examples
+    --------
     >>> F, G = classical_step_jacobians([0.0], [1.0], [0.0])
     >>> G[0].tolist()
     [[1.0, -0.0], [0.0, 1.0], [0.0, 1.0]]

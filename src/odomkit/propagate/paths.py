@@ -16,9 +16,10 @@ noise                              family      vehicle         segments
 =================================  ==========  ==============  ==========================
 
 Any family but the classical takes a :class:`~odomkit.noise.ParameterUncertainty` (the
-vehicle's bias) too. The vehicle is the family's first unless a ``robot`` is given (a
-unicycle, a steered vehicle, or a robot with its own geometry); a set of models that names
-no family (bias alone, steering noise) needs the robot.
+vehicle's bias) too, and every family a :class:`~odomkit.noise.LateralSlipNoise`. The
+vehicle is the family's first unless a ``robot`` is given (a unicycle, a steered vehicle,
+or a robot with its own geometry); a set of models that names no family (bias alone,
+steering noise, a lateral slip alone) needs the robot.
 
 A compass path also needs the compass's sample period T (``compass_period``, default
 :data:`odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`): its steps are the compass samples,
@@ -54,16 +55,19 @@ __all__ = [
 ]
 
 # family -> (the models it may hold, the vehicles it describes: the first by default);
-# SpeedNoise and ParameterUncertainty are optional.
+# SpeedNoise, ParameterUncertainty and LateralSlipNoise (every family) are optional.
 _FAMILIES: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
-    "wheel": (frozenset({"WheelNoise", "ParameterUncertainty"}), ("diff",)),
-    "classical": (frozenset({"ClassicalNoise"}), ("diff",)),
-    "gyro": (frozenset({"GyroNoise", "SpeedNoise", "ParameterUncertainty"}), ("gyro", "unicycle")),
-    "compass": (frozenset({"CompassNoise", "SpeedNoise", "ParameterUncertainty"}), ("compass",)),
-    "steering": (frozenset({"TricycleNoise", "SpeedNoise", "ParameterUncertainty"}), ("tricycle", "car")),
+    "wheel": (frozenset({"WheelNoise", "ParameterUncertainty", "LateralSlipNoise"}), ("diff",)),
+    "classical": (frozenset({"ClassicalNoise", "LateralSlipNoise"}), ("diff",)),
+    "gyro": (frozenset({"GyroNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
+             ("gyro", "unicycle")),
+    "compass": (frozenset({"CompassNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
+                ("compass",)),
+    "steering": (frozenset({"TricycleNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
+                 ("tricycle", "car")),
 }
 _EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise), "
-             "with or without a ParameterUncertainty; or a robot and its noise")
+             "with or without a ParameterUncertainty and a LateralSlipNoise; or a robot and its noise")
 # The segments each vehicle drives.
 _SEGMENTS: dict[str, tuple[type, ...]] = {
     "diff": (Arc, Straight, Spin), "gyro": (KellyArc,), "unicycle": (KellyArc,),
@@ -146,6 +150,8 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
     robot : Robot, optional
         The vehicle (default: the family's, see the module docstring).
 
+    Examples
+    --------
     >>> from odomkit.noise import WheelNoise
     >>> path_model(WheelNoise(0.001, 0.001), 0.4).family
     'wheel'
@@ -209,6 +215,8 @@ def compass_samples(segments: Sequence[Segment], period: float) -> list[int]:
     """Compass samples (steps) of each KellyArc segment: duration/period, which must be a
     whole number (:func:`odomkit.noise.kelly.compass_sample_count`).
 
+    Examples
+    --------
     >>> compass_samples([KellyArc(1.0, 0.0, 2.0), KellyArc(1.0, 0.5, 0.5)], 0.1)
     [20, 5]
     """

@@ -50,7 +50,7 @@ class NoisePlan:
         offset: 1); None otherwise.
     wheel : WheelInputs or None
         Set when a model can have its Q_k formed inside the compiled recursion and is the
-        only white source.
+        only white source of (Δd, Δθ) (a lateral slip beside it is added apart).
     """
 
     method: str
@@ -69,6 +69,11 @@ class NoisePlan:
     def var_dd(self, a: int, b: int) -> NDArray[np.float64]:
         """Variance of Δd of steps a … b−1 [m²] (direct heading)."""
         return self.cov_input(a, b)[:, 0, 0]
+
+    def var_lateral(self, a: int, b: int) -> NDArray[np.float64] | None:
+        """Variance of the sideways slip of steps a … b−1 [m²], (b − a,), or None
+        without a position-only model (:mod:`odomkit.propagate.lateral`)."""
+        return self.noise.lateral_variances(self.steps, a, b)
 
     def param_jacobian(self, a: int, b: int) -> NDArray[np.float64]:
         """K = ∂(Δd, Δθ)/∂β of steps a … b−1, (b − a, 2, p)."""
@@ -105,7 +110,9 @@ def plan_noise(steps: BodySteps, noise: NoiseArg, method: str = "exact") -> Nois
             var_heading = np.zeros(np.asarray(steps.dd).size + 1)
     var_params = models.bias_variances(robot) if models.bias else None
     bias_heading = models.bias_heading(robot) if direct and models.bias else None
-    white = models.white
+    # A position-only model (lateral slip) is added apart from the recursion, so it
+    # keeps the compiled per-wheel fast path.
+    white = models.body_white
     wheel = white[0].compiled_inputs(steps) if len(white) == 1 and not direct else None
     return NoisePlan(models.step_map(method), direct, models, steps, var_heading, var_params,
                      wheel, bias_heading)

@@ -17,7 +17,10 @@ noise                              segments     closed form
 Bias noise (:class:`~odomkit.noise.ParameterUncertainty`, a constant error over the run)
 joins any family but the classical and is predicted by the ``recursion`` and
 ``transition`` engines (the same bias path as ``odomkit track``); the closed forms are
-white noise only. A ``robot`` names the vehicle (a unicycle, a tricycle or car with its
+white noise only. A :class:`~odomkit.noise.LateralSlipNoise` (sideways slip) joins every
+family and every engine: its sum adds to the position block, in the closed forms as its
+integral over each arc (the exact sum over a compass's samples, or over the classical
+model's pieces). A ``robot`` names the vehicle (a unicycle, a tricycle or car with its
 geometry, a robot whose bias sensitivities need its parameters).
 
 Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` and
@@ -49,14 +52,16 @@ from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import step_displacement
-from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, LateralSlipNoise, SpeedNoise, WheelNoise
 from odomkit.path import Segment
 from odomkit.propagate.closed import classical_step, wheel_arc_cov
 from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
+from odomkit.propagate.lateral import lateral_segment_cov
 from odomkit.propagate.paths import (
     PathModel,
     check_partitions,
     check_segments,
+    compass_samples,
     path_model,
     path_steps,
     segment_motion,
@@ -145,6 +150,8 @@ def check_covariance(cov: ArrayLike, name: str = "initial covariance") -> NDArra
 
     Raises :class:`~odomkit.errors.ModelError` naming ``name`` otherwise.
 
+    Examples
+    --------
     >>> check_covariance(np.diag([1.0, 1.0, 0.1])).shape
     (3, 3)
     """
@@ -254,7 +261,7 @@ def _compass_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float
         assert plan.var_heading is not None
         cov_end = propagate_direct_heading(poses[:-1, 2], steps.dd, steps.dtheta,
                                            plan.var_dd(0, len(steps)), plan.var_heading,
-                                           c0[:2, :2])[-1]
+                                           c0[:2, :2], var_lateral=plan.var_lateral(0, len(steps)))[-1]
     cov_end = np.asarray(cov_end, dtype=float)
     return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
 
@@ -360,20 +367,25 @@ def predict(
 
     if engine != "closed":
         n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)
-        poses, dd, dth, cov_in = discretise_path(segs, model.noise, wheel_base, n, p0)
+        poses, dd, dth, cov_in = discretise_path(segs, model.noise, wheel_base, n, p0, model.robot)
         method = model.noise.step_map("exact")
+        steps = path_steps(segs, model, n)
+        var_lateral = model.noise.lateral_variances(steps, 0, len(steps))
         if engine == "recursion":
             from odomkit.propagate.recursion import propagate_recursion
 
-            covs = propagate_recursion(poses[:-1, 2], dd, dth, cov_in, c0, method=method)
+            covs = propagate_recursion(poses[:-1, 2], dd, dth, cov_in, c0, method=method,
+                                       var_lateral=var_lateral)
         else:
             from odomkit.propagate.transition import propagate_transition
 
-            covs = propagate_transition(poses, dd, dth, cov_in, c0, method=method)
+            covs = propagate_transition(poses, dd, dth, cov_in, c0, method=method,
+                                        var_lateral=var_lateral)
         cov_end = np.asarray(covs[-1], dtype=float)
         return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
 
     pose, cov = p0.copy(), c0
+    slip = (model.noise.get(LateralSlipNoise) or LateralSlipNoise(0.0)).alpha_lateral
     if model.family == "classical":
         classical = model.noise.require(ClassicalNoise)
         pieces = 1 if partitions is None else check_partitions(partitions)
@@ -381,11 +393,23 @@ def predict(
             d, a = segment_motion(seg, b)
             for _ in range(pieces):
                 pose, cov = classical_step(pose, cov, d / pieces, a / pieces, classical)  # type: ignore[arg-type]
+                if slip:  # one straight piece along its new heading θ + α
+                    cov = cov.copy()
+                    cov[:2, :2] += lateral_segment_cov(slip, d / pieces, float(pose[2]), 0.0)
         return Prediction(pose, cov, model.family, engine)
     closed_form = _CLOSED_FORMS[model.family]
-    for seg in segs:
+    samples = (compass_samples(segs, model.compass_period) if model.compass_period is not None
+               else [None] * len(segs))
+    for seg, count in zip(segs, samples, strict=True):
         cov = closed_form(pose, cov, seg, model)
         d, a = segment_motion(seg, b)
+        if slip:
+            # The slip's running sum adds to the position block whatever the other noise
+            # does (odomkit.propagate.lateral): the integral over the arc, or the exact
+            # sum over a compass's samples (the steps its engines take).
+            cov = cov.copy()
+            cov[:2, :2] += lateral_segment_cov(slip, d, float(pose[2]), a, count)
         dx, dy = step_displacement(pose[2], d, a, "exact")
         pose = pose + np.array([float(dx), float(dy), a])
     return Prediction(pose, cov, model.family, engine)
+

@@ -11,7 +11,9 @@ steps, θ_{k+1} = θ_k + Δθ_k, as on a track from :func:`odomkit.integrate.dea
 then turns a heading vector instead of calling cos/sin at every step. Any other headings
 are detected step by step and get a real cos/sin (about 30 ns a step); the results are
 the same to rounding either way. Per-wheel noise alone (:class:`odomkit.noise.WheelNoise`)
-has its input covariance formed inside the kernel. :func:`track_covariance` has the kernel
+has its input covariance formed inside the kernel. A position-only noise (lateral slip)
+adds its running sum to the rows apart from the kernel (:mod:`odomkit.propagate.lateral`
+shows that this is exact). :func:`track_covariance` has the kernel
 write straight into the output, with streaming stores when it is large
 (``benchmarks/propagation.py`` compares it with copying the same bytes).
 
@@ -30,12 +32,15 @@ from odomkit import jit
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps
 from odomkit.noise.wheel import WheelInputs
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.propagate.inputs import any_step_jacobians, step_terms
+from odomkit.propagate.lateral import accumulate_lateral
 from odomkit.propagate.plan import NoiseArg, NoisePlan, plan_noise
 from odomkit.propagate.transition import (
     bias_sensitivity_chunk,
     check_cov3,
     check_cov_input,
+    check_lateral,
     check_method,
     check_steps,
     direct_heading_chunk,
@@ -71,6 +76,8 @@ def new_heading_state() -> NDArray[np.float64]:
     ``[cos, sin, heading sum, valid, anchor count]``, initially invalid. The anchor count
     (real cos/sin of a heading taken) shows whether the fast path ran:
 
+    Examples
+    --------
     >>> state = new_heading_state()
     >>> q = np.zeros((1000, 2, 2))
     >>> _ = recursion_chunk(np.zeros(1000), np.ones(1000), np.zeros(1000), q, np.eye(3),
@@ -148,6 +155,7 @@ def propagate_recursion(
     out: NDArray[np.float64] | None = None,
     chunk_size: int = DEFAULT_CHUNK,
     parallel: bool = False,
+    var_lateral: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Covariance of every pose by the step recursion, Chong–Kleeman eq. (2).
 
@@ -173,6 +181,10 @@ def propagate_recursion(
         idle cores (0.15 s against 0.2 s for 10^7 steps on 2 cores), many times slower
         when other processes keep the cores busy (each chunk then waits for a
         scheduler slice), hence not the default.
+    var_lateral : array_like, shape (M,), optional
+        Variance of each step's sideways slip [m²] (:class:`odomkit.noise.LateralSlipNoise`):
+        its running sum is added to the x–y block of every row
+        (:mod:`odomkit.propagate.lateral`).
 
     Returns
     -------
@@ -198,16 +210,22 @@ def propagate_recursion(
     elif out.shape != (dd_.size + 1, 3, 3):
         raise ModelError(f"out must have shape ({dd_.size + 1}, 3, 3), got {out.shape}")
     out[0] = check_cov3(cov0)
+    lateral = check_lateral(var_lateral, dd_.size)
     n = max(int(chunk_size), 1)
     state = new_heading_state()
     direct, stream = _writes_in_place(out)
+    P, sums = out[0], np.zeros(3)
     for a in range(0, dd_.size, n):
         b = min(a + n, dd_.size)
-        chunk = recursion_chunk(th_[a:b], dd_[a:b], dth_[a:b], q[a:b], out[a], method, parallel,
+        chunk = recursion_chunk(th_[a:b], dd_[a:b], dth_[a:b], q[a:b], P, method, parallel,
                                 start=a, state=state, out=out[a + 1:b + 1] if direct else None,
                                 stream=stream)
         if not direct:
             out[a + 1:b + 1] = chunk
+        P = out[b]
+        if lateral is not None:
+            P = P.copy()  # the recursion goes on without the slip; its sum is carried apart
+            accumulate_lateral(th_[a:b], dth_[a:b], lateral[a:b], method, sums, out[a + 1:b + 1])
     return out
 
 
@@ -295,6 +313,7 @@ def _chunks(steps: BodySteps, poses: ArrayLike, noise: NoiseArg, cov0: ArrayLike
     n = max(int(chunk_size), 1)
     state = new_heading_state()
     stream = out is not None and out.shape[0] >= _STREAM_ROWS
+    sums = np.zeros(3)
     for a in range(0, dd.size, n):
         b = min(a + n, dd.size)
         theta = poses[a:b, 2]
@@ -305,6 +324,11 @@ def _chunks(steps: BodySteps, poses: ArrayLike, noise: NoiseArg, cov0: ArrayLike
             rows[...] = white
             white = rows
         P = white[-1].copy()
+        var_lateral = plan.var_lateral(a, b)
+        if var_lateral is not None:
+            # Position-only noise passes every engine's step unchanged, so its running
+            # sum adds to the rows and is carried apart (odomkit.propagate.lateral).
+            accumulate_lateral(theta, dtheta[a:b], var_lateral, plan.method, sums, white)
         if S is not None and var_params is not None:
             sens = _bias_chunk(plan, theta, dd[a:b], dtheta[a:b], a, b, S)
             S = sens[-1]
@@ -325,6 +349,7 @@ def track_covariance(
     out: NDArray[np.float64] | None = None,
     chunk_size: int = DEFAULT_CHUNK,
     parallel: bool = False,
+    progress: Progress = NO_PROGRESS,
 ) -> NDArray[np.float64]:
     """Covariance of every pose of a dead-reckoned log.
 
@@ -355,6 +380,9 @@ def track_covariance(
         Steps per chunk; results do not depend on it.
     parallel : bool
         Recursion engine only: see :func:`propagate_recursion`.
+    progress : Progress
+        One stage, ``"covariance"`` of M steps, advanced chunk by chunk
+        (:mod:`odomkit.progress`); never changes a number.
 
     Returns
     -------
@@ -382,8 +410,11 @@ def track_covariance(
         raise ModelError(f"out must have shape ({m + 1}, 3, 3), got {out.shape}")
     # The kernel writes straight into ``out`` when it can (no chunk is copied).
     direct, _ = _writes_in_place(out)
-    for row, chunk in _chunks(steps, poses, noise, cov0, method, engine, chunk_size, parallel,
-                              out if direct else None):
-        if not direct or row == 0:
-            out[row:row + chunk.shape[0]] = chunk
+    with stage(progress, m, "covariance"):
+        for row, chunk in _chunks(steps, poses, noise, cov0, method, engine, chunk_size, parallel,
+                                  out if direct else None):
+            if not direct or row == 0:
+                out[row:row + chunk.shape[0]] = chunk
+            if row:  # row 0 is the start pose; every later chunk is that many steps
+                progress.advance(chunk.shape[0])
     return out

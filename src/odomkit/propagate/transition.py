@@ -34,9 +34,11 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.propagate.inputs import ENGINE_METHODS, step_terms
+from odomkit.propagate.lateral import accumulate_lateral
 
 __all__ = [
-    "DEFAULT_CHUNK", "bias_sensitivity_chunk", "check_cov3", "check_cov_input", "check_method", "check_steps",
+    "DEFAULT_CHUNK", "bias_sensitivity_chunk", "check_cov3", "check_cov_input", "check_lateral",
+    "check_method", "check_steps",
     "direct_heading_chunk",
     "input_terms", "iter_transition", "parameter_sensitivity", "propagate_direct_heading",
     "propagate_transition", "sensitivity_chunk", "sensitivity_terms", "transition_chunk", "transition_matrix"
@@ -184,12 +186,15 @@ def iter_transition(
     cov0: ArrayLike,
     method: str = "exact",
     chunk_size: int = DEFAULT_CHUNK,
+    var_lateral: ArrayLike | None = None,
 ) -> Iterator[tuple[int, NDArray[np.float64]]]:
     """Yield ``(row, cov)`` chunks of :func:`propagate_transition`: cov (n, 3, 3) holds
     rows row … row+n−1 (row 0, the initial covariance, comes first, alone)."""
     check_method(method)
     dd_, dth_ = check_steps(dd, dtheta)
     q = check_cov_input(cov_input, dd_.size)
+    lateral = check_lateral(var_lateral, dd_.size)
+    sums = np.zeros(3)
     poses_ = np.asarray(poses, dtype=float)
     if poses_.shape != (dd_.size + 1, 3):
         raise ModelError(f"poses must have shape ({dd_.size + 1}, 3), got {poses_.shape}")
@@ -202,7 +207,9 @@ def iter_transition(
         xl = poses_[a:b + 1, 0] - poses_[a, 0]
         yl = poses_[a:b + 1, 1] - poses_[a, 1]
         out = transition_chunk(xl, yl, input_terms(terms, q[a:b]), P)
-        P = out[-1]
+        P = out[-1].copy()
+        if lateral is not None:  # carried apart: Φ leaves a position-only term unchanged
+            accumulate_lateral(poses_[a:b, 2], dth_[a:b], lateral[a:b], method, sums, out)
         yield a + 1, out
 
 
@@ -216,6 +223,7 @@ def propagate_transition(
     *,
     out: NDArray[np.float64] | None = None,
     chunk_size: int = DEFAULT_CHUNK,
+    var_lateral: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Covariance of every pose by Kelly's general solution (eq. 11), vectorised.
 
@@ -236,6 +244,9 @@ def propagate_transition(
         Written in place and returned (saves the allocation for long logs).
     chunk_size : int
         Steps per chunk (memory about 30·8·chunk_size bytes).
+    var_lateral : array_like, shape (M,), optional
+        Variance of each step's sideways slip [m²]; its running sum is added to the x–y
+        block of every row (:mod:`odomkit.propagate.lateral`).
 
     Returns
     -------
@@ -257,7 +268,8 @@ def propagate_transition(
         out = np.empty((dd.size + 1, 3, 3))
     elif out.shape != (dd.size + 1, 3, 3):
         raise ModelError(f"out must have shape ({dd.size + 1}, 3, 3), got {out.shape}")
-    for row, chunk in iter_transition(poses, dd, dtheta, cov_input, cov0, method, chunk_size):
+    for row, chunk in iter_transition(poses, dd, dtheta, cov_input, cov0, method, chunk_size,
+                                      var_lateral):
         out[row:row + chunk.shape[0]] = chunk
     return out
 
@@ -296,6 +308,8 @@ def bias_sensitivity_chunk(
     offset, θ_k = θ_meas,k + δ); each step's position then moves by ∂Δp/∂θ = (−Δy, Δx)
     times it, plus ∂Δp/∂Δd times K's Δd row (a distance scale).
 
+    Examples
+    --------
     >>> from odomkit.propagate.inputs import step_terms
     >>> terms = step_terms(np.zeros(10), np.full(10, 0.1), np.zeros(10), "exact")
     >>> S = bias_sensitivity_chunk(terms, np.zeros((10, 2, 1)), np.array([[0.0], [0.0], [1.0]]), True)
@@ -387,7 +401,7 @@ def direct_heading_chunk(
 def propagate_direct_heading(
     theta: ArrayLike, dd: ArrayLike, dtheta: ArrayLike, var_dd: ArrayLike,
     var_heading: ArrayLike, cov_xy0: ArrayLike, method: str = "exact",
-    *, chunk_size: int = DEFAULT_CHUNK,
+    *, chunk_size: int = DEFAULT_CHUNK, var_lateral: ArrayLike | None = None,
 ) -> NDArray[np.float64]:
     """Covariance of direct-heading (compass) odometry, Kelly section 3.1, eq. (10).
 
@@ -414,6 +428,9 @@ def propagate_direct_heading(
         Initial position covariance [m²]; the initial heading is the compass's, with
         variance var_heading[0] and no correlation to the position.
     method : {"exact", "midpoint", "euler"}
+    var_lateral : array_like, shape (M,), optional
+        Variance of each step's sideways slip [m²], added as its running sum to the
+        position block (:mod:`odomkit.propagate.lateral`).
 
     Returns
     -------
@@ -438,10 +455,27 @@ def propagate_direct_heading(
     out[0] = 0.0
     out[0, :2, :2] = np.asarray(cov_xy0, dtype=float).reshape(2, 2)
     out[0, 2, 2] = var_h[0]
+    lateral = check_lateral(var_lateral, dd_.size)
     n = max(int(chunk_size), 1)
+    P, sums = out[0], np.zeros(3)
     for a in range(0, dd_.size, n):
         b = min(a + n, dd_.size)
         out[a + 1:b + 1] = direct_heading_chunk(
             th_[a:b], dd_[a:b], dth_[a:b], var_dd_[a:b], var_h[a:b + 1],
-            out[a, :2, :2], out[a, :2, 2], method)
+            P[:2, :2], P[:2, 2], method)
+        P = out[b]
+        if lateral is not None:
+            P = P.copy()  # the slip's running sum is carried apart
+            accumulate_lateral(th_[a:b], dth_[a:b], lateral[a:b], method, sums, out[a + 1:b + 1])
     return out
+
+
+def check_lateral(var_lateral: ArrayLike | None, m: int) -> NDArray[np.float64] | None:
+    """``var_lateral`` (the sideways-slip variance of each step [m²]) as a float array
+    (m,); None if None; ModelError for another shape."""
+    if var_lateral is None:
+        return None
+    var = np.asarray(var_lateral, dtype=float)
+    if var.shape != (m,):
+        raise ModelError(f"var_lateral must have shape ({m},), got {var.shape}")
+    return var

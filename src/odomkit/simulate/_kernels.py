@@ -11,6 +11,10 @@ pose is integrated with the exact arc (:func:`odomkit.kinematics.step_displaceme
 
     x' = x + Δd·sinc(Δθ/2)·cos(θ + Δθ/2),  y' = y + Δd·sinc(Δθ/2)·sin(θ + Δθ/2),  θ' = θ + Δθ
 
+A lateral slip (``lateral`` = its σ for the segment's partitions, z of three rows) moves
+each partition by ε = σ·z2 across the run's own chord: x −= ε·sin θ̄, y += ε·cos θ̄ with
+θ̄ the chord direction of the step map (θ + Δθ/2 here, θ + α for the classical map).
+
 The numba kernel (:mod:`odomkit.simulate._numba`) avoids two of three transcendental
 calls per step by turning a unit heading vector with series sin/cos of the half angle;
 rounding would slowly denormalise the vector, so it is recomputed from the separately
@@ -57,13 +61,27 @@ def _increments(z: NDArray[np.float64], coef: NDArray[np.float64],
             coef[3] + shift[1] + coef[4] * z[:, 0, :] + coef[5] * z[:, 1, :])
 
 
+def _slip(z: NDArray[np.float64], lateral: float | None, chord: NDArray[np.float64],
+          dx: NDArray[np.float64], dy: NDArray[np.float64]) -> None:
+    """Add each partition's sideways slip ε = σ·z2 along the normal of its chord
+    direction ``chord`` (P, B) to the displacements dx, dy (P, B), in place."""
+    if lateral is None:
+        return
+    eps = lateral * z[: chord.shape[0], 2, :]
+    dx -= eps * np.sin(chord)
+    dy += eps * np.cos(chord)
+
+
 def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                  first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
+                  first_partition: int, shift: NDArray[np.float64] | None = None,
+                  lateral: float | None = None) -> None:
     """Plain numpy reference: advance ``state`` in place over ``z.shape[0]`` partitions.
 
-    ``z`` has shape (P, 2, B); ``coef`` is ``[dd0, a_d, b_d, dθ0, a_t, b_t]``; ``shift``
-    (2, B), optional, is added to every partition's (Δd, Δθ) of each run (its bias).
-    ``first_partition`` is unused (kept so both kernels share a signature).
+    ``z`` has shape (P, 2, B), or (P, 3, B) with a lateral slip; ``coef`` is
+    ``[dd0, a_d, b_d, dθ0, a_t, b_t]``; ``shift`` (2, B), optional, is added to every
+    partition's (Δd, Δθ) of each run (its bias); ``lateral`` is the σ [m] of each
+    partition's sideways slip (times z[:, 2]). ``first_partition`` is unused (kept so
+    both kernels share a signature).
     """
     dd, dth = _increments(z, coef, shift)
     theta = np.empty_like(dth)
@@ -71,6 +89,7 @@ def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64
     np.cumsum(dth[:-1], axis=0, out=theta[1:])
     theta[1:] += state[2]
     dx, dy = step_displacement(theta, dd, dth, "exact")
+    _slip(z, lateral, theta + 0.5 * dth, dx, dy)
     state[0] += dx.sum(axis=0)
     state[1] += dy.sum(axis=0)
     state[2] = theta[-1] + dth[-1]
@@ -79,20 +98,25 @@ def advance_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64
 
 
 def advance_classical_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                            first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
+                            first_partition: int, shift: NDArray[np.float64] | None = None,
+                            lateral: float | None = None) -> None:
     """The classical step map: rotate by α = Δθ, then translate D = Δd along the new
-    heading (Chong–Kleeman eq. 1), as :mod:`odomkit.propagate` linearises it."""
+    heading (Chong–Kleeman eq. 1), as :mod:`odomkit.propagate` linearises it; a lateral
+    slip moves across that new heading."""
     dd, dth = _increments(z, coef, shift)
     theta_after = state[2] + np.cumsum(dth, axis=0)
-    state[0] += (dd * np.cos(theta_after)).sum(axis=0)
-    state[1] += (dd * np.sin(theta_after)).sum(axis=0)
+    dx, dy = dd * np.cos(theta_after), dd * np.sin(theta_after)
+    _slip(z, lateral, theta_after, dx, dy)
+    state[0] += dx.sum(axis=0)
+    state[1] += dy.sum(axis=0)
     state[2] = theta_after[-1]
     state[3] = np.cos(state[2])
     state[4] = np.sin(state[2])
 
 
 def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np.float64],
-                          first_partition: int, shift: NDArray[np.float64] | None = None) -> None:
+                          first_partition: int, shift: NDArray[np.float64] | None = None,
+                          lateral: float | None = None) -> None:
     """Direct heading (compass) sampled every T: one heading error per compass reading,
     not per partition (Kelly section 3.1; ``track``'s model of a compass log).
 
@@ -109,7 +133,8 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     interval's readings (the kernel state's cos/sin slots, unused by this kernel).
     ``first_partition`` counts from the start of the segment. ``shift`` (2, B), a run's
     bias: row 0 is added to every step's distance, row 1 to every reading's error (a
-    heading offset; the start reading's is in the start pose already).
+    heading offset; the start reading's is in the start pose already). ``lateral``, the σ
+    of each step's sideways slip (times z2), moves it across its chord.
     """
     dd0, sigma_d, theta_start, dth0, sigma_h = coef[:5]
     q, m = int(coef[5]), int(coef[6])
@@ -138,7 +163,9 @@ def advance_compass_numpy(state: State, z: NDArray[np.float64], coef: NDArray[np
     err1 = e_lo + (e_hi - e_lo) * w1
     heading = theta_start + dth0 * g[:, None] + err0
     dist = dd0 + sigma_d * z[:act, 0, :] if shift is None else dd0 + shift[0] + sigma_d * z[:act, 0, :]
-    dx, dy = step_displacement(heading, dist, dth0 + (err1 - err0), "exact")
+    turn = dth0 + (err1 - err0)
+    dx, dy = step_displacement(heading, dist, turn, "exact")
+    _slip(z, lateral, heading + 0.5 * turn, dx, dy)
     state[0] += dx.sum(axis=0)
     state[1] += dy.sum(axis=0)
     end = first_partition + act

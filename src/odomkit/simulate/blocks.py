@@ -4,7 +4,8 @@ Runs are grouped into fixed blocks of :data:`BLOCK_RUNS`; block ``b`` draws from
 stream ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of ``SeedSequence(seed).spawn``)
 in a fixed order: 3 normals per run for the initial pose, then (with bias noise) p normals
 per run for its bias parameters (one draw per run, :mod:`odomkit.simulate.plan`), then,
-partition after partition along the whole path, 2 normals per run. A task is a list of
+partition after partition along the whole path, 2 normals per run (3 with a lateral slip:
+the third moves the partition across its chord). A task is a list of
 blocks; how blocks are grouped into tasks, and tasks onto threads
 (:mod:`odomkit.simulate.engine`) or Dask workers (:mod:`odomkit.simulate.distributed`),
 therefore never changes a number. Memory stays
@@ -67,19 +68,24 @@ def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
         advance = _kernels.advance_numba()
     else:
         advance = _kernels.advance_numpy
-    buf = np.empty((min(partition_chunk, plan.partitions), 2, n_runs))
+    # One row of normals per partition and run for each of (Δd, Δθ), and a third for the
+    # lateral slip: drawn partition after partition, so the chunking changes no number,
+    # and without a slip the stream is the one it always was.
+    rows = 2 if plan.lateral is None else 3
+    buf = np.empty((min(partition_chunk, plan.partitions), rows, n_runs))
     k = plan.partitions
     for j in range(n_seg):
         coef = plan.coefs[j]
+        slip = None if plan.lateral is None else float(plan.lateral[j])
         for start in range(0, k, partition_chunk):
             z = buf[: min(partition_chunk, k - start)]
             rng.standard_normal(out=z)
             # the numba kernel resyncs its heading vector at global partition indices
             first = start if plan.kind == "compass" else j * k + start
-            if shifts is None:
+            if shifts is None and slip is None:
                 advance(state, z, coef, first)
             else:
-                advance(state, z, coef, first, shifts[j])
+                advance(state, z, coef, first, None if shifts is None else shifts[j], slip)
         if ends is not None:
             ends[:, j, :] = state[:3].T
     return state[:3].T.copy(), ends

@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.path import Segment
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import Robot
 from odomkit.simulate import _kernels
@@ -34,7 +35,7 @@ from odomkit.simulate.distributed import Scheduler
 from odomkit.simulate.plan import Plan, SystematicErrors, make_plan
 
 __all__ = ["check_scheduler", "check_size", "Engine", "MAX_MEMORY", "MAX_WORK", "MonteCarloRuns",
-           "Progress", "simulate_runs"]
+           "simulate_runs"]
 
 #: Default limit on runs × partitions × segments, the partition steps one simulation
 #: integrates. Chong–Kleeman's experiment, 10⁴ runs × 10⁴ partitions of one arc, is 10⁸
@@ -51,7 +52,6 @@ _BYTES_PER_POSE = 4 * 3 * 8
 _ADDRESS = re.compile(r"^(?:[a-z][a-z0-9+.-]*://)?(?:\[[0-9a-fA-F:.]+\]|[^\s:/\[\]]+):\d+$")
 
 Engine = Literal["auto", "numba", "numpy"]
-Progress = Callable[[int], None]
 
 
 @dataclass(frozen=True)
@@ -140,6 +140,8 @@ def _duration(seconds: float) -> str:
 def check_scheduler(scheduler: Scheduler) -> None:
     """A scheduler given as text must be a Dask address ``[protocol://]host:port``.
 
+    Examples
+    --------
     >>> check_scheduler("tcp://10.0.0.5:8786")
     >>> check_scheduler("")
     Traceback (most recent call last):
@@ -184,7 +186,7 @@ def simulate_runs(
     chunk_runs: int | None = None,
     scheduler: Scheduler = None,
     engine: Engine = "auto",
-    progress: Progress | None = None,
+    progress: Progress = NO_PROGRESS,
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
     robot: Robot | None = None,
@@ -230,8 +232,9 @@ def simulate_runs(
     scheduler : str or dask.distributed.Client, optional
         Run the tasks on a Dask cluster instead (see :mod:`odomkit.simulate.distributed`).
     engine : {"auto", "numba", "numpy"}
-    progress : callable, optional
-        Called with the number of runs just finished, after each task.
+    progress : Progress
+        One stage, ``"Monte Carlo runs"`` of ``runs`` units, advanced by the runs of each
+        task as it finishes (:mod:`odomkit.progress`); never changes a number.
     max_work : float
         Largest runs × partitions × segments allowed (:func:`check_size`).
     compass_period : float, optional
@@ -270,14 +273,15 @@ def simulate_runs(
     if plan.kind != "increment":
         engine_used = "numpy"  # the classical and compass kernels exist in numpy only
     tasks = make_tasks(runs, chunk_runs)
-    if scheduler is not None:
-        from odomkit.simulate.distributed import run_tasks_dask
+    with stage(progress, runs, "Monte Carlo runs"):
+        if scheduler is not None:
+            from odomkit.simulate.distributed import run_tasks_dask
 
-        results = run_tasks_dask(scheduler, plan, seed_used, tasks, engine_used, segment_ends,
-                                 progress)
-    else:
-        results = _run_tasks_local(plan, seed_used, tasks, engine_used, segment_ends,
-                                   workers, progress)
+            results = run_tasks_dask(scheduler, plan, seed_used, tasks, engine_used, segment_ends,
+                                     progress.advance)
+        else:
+            results = _run_tasks_local(plan, seed_used, tasks, engine_used, segment_ends,
+                                       workers, progress.advance)
     blocks = [r for task in results for r in task]
     final = np.concatenate([f for f, _ in blocks])
     # The statistics need the spread of the runs too: its 3×3 scatter must be finite.
@@ -291,7 +295,7 @@ def simulate_runs(
 
 
 def _run_tasks_local(plan: Plan, seed: int, tasks: list[list[tuple[int, int]]], engine: str,
-                     want_ends: bool, workers: int | None, progress: Progress | None,
+                     want_ends: bool, workers: int | None, advance: Callable[[int], None],
                      ) -> list[Any]:
     n_workers = (os.cpu_count() or 1) if workers is None else validate.positive_int(workers, "workers")
     if engine == "numba" and plan.kind == "increment":
@@ -300,8 +304,7 @@ def _run_tasks_local(plan: Plan, seed: int, tasks: list[list[tuple[int, int]]], 
     if n_workers == 1 or len(tasks) == 1:
         for i, task in enumerate(tasks):
             results[i] = run_task(plan, seed, task, engine, want_ends)
-            if progress:
-                progress(sum(n for _, n in task))
+            advance(sum(n for _, n in task))
         return results
     with ThreadPoolExecutor(max_workers=n_workers) as pool:
         futures = {pool.submit(run_task, plan, seed, task, engine, want_ends): i
@@ -309,6 +312,5 @@ def _run_tasks_local(plan: Plan, seed: int, tasks: list[list[tuple[int, int]]], 
         for fut in as_completed(futures):
             i = futures[fut]
             results[i] = fut.result()
-            if progress:
-                progress(sum(n for _, n in tasks[i]))
+            advance(sum(n for _, n in tasks[i]))
     return results

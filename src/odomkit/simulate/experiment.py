@@ -12,10 +12,11 @@ from odomkit.angles import TWO_PI, wrap_angle
 from odomkit.errors import ModelError
 from odomkit.noise import NoiseSet
 from odomkit.path import Segment
+from odomkit.progress import NO_PROGRESS, Progress
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import Robot
 from odomkit.simulate.distributed import Scheduler
-from odomkit.simulate.engine import MAX_WORK, Engine, Progress, check_scheduler, check_size, simulate_runs
+from odomkit.simulate.engine import MAX_WORK, Engine, check_scheduler, check_size, simulate_runs
 from odomkit.simulate.plan import SystematicErrors, resolve_model
 from odomkit.simulate.stats import compare, correlations
 
@@ -75,7 +76,7 @@ def monte_carlo(
     chunk_runs: int | None = None,
     scheduler: Scheduler = None,
     engine: Engine = "auto",
-    progress: Progress | None = None,
+    progress: Progress = NO_PROGRESS,
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
     robot: Robot | None = None,

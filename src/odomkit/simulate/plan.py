@@ -9,6 +9,10 @@ every partition of segment j then moves by K_j β more, K_j = ∂(Δd, Δθ)/∂
 partition (the model's own ``bias_jacobian``, checked against the vehicles' kinematics by
 finite differences in tests/noise): ``Plan.bias`` holds K_j diag(σ). A compass's heading
 offset moves every reading (``Plan.bias_heading`` = ∂θ/∂β · σ).
+
+Lateral slip (:class:`~odomkit.noise.LateralSlipNoise`): every partition of segment j also
+moves across its own (noisy) chord by ``Plan.lateral[j]`` = √(α_lat·|Δd|) times a third
+standard normal (:mod:`odomkit.simulate.blocks` draws three per partition then).
 """
 
 from __future__ import annotations
@@ -43,7 +47,10 @@ class Plan:
     of kernel steps per segment (a compass segment may use fewer: its ``m``).
     ``bias[j]`` (2, p) = K_j diag(σ) moves each partition of segment j by ``bias[j] @ zβ``
     for a run's p bias normals zβ; ``bias_heading`` (p,) moves a compass's every reading
-    by ``bias_heading @ zβ``. Both None without bias noise.
+    by ``bias_heading @ zβ``. Both None without bias noise. ``lateral[j]`` is the σ [m]
+    of the sideways slip of one kernel step of segment j (along the step's chord, times
+    a third normal per step); None without a lateral slip (or with a zero one), so that
+    the draws, and every number, stay as without the model.
     """
 
     kind: str
@@ -53,6 +60,7 @@ class Plan:
     factor0: NDArray[np.float64]  # (3, 3): initial pose = pose0 + factor0 @ z
     bias: NDArray[np.float64] | None = None  # (S, 2, p)
     bias_heading: NDArray[np.float64] | None = None  # (p,)
+    lateral: NDArray[np.float64] | None = None  # (S,)
 
 
 def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
@@ -71,6 +79,8 @@ def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
     """The odometry model a noise argument selects, as in ``predict``
     (:func:`odomkit.propagate.paths.path_model`).
 
+    Examples
+    --------
     >>> from odomkit.noise import WheelNoise
     >>> resolve_model(WheelNoise(0.001, 0.001)).family
     'wheel'
@@ -120,11 +130,21 @@ def _bias_factor(model: PathModel, steps: BodySteps) -> NDArray[np.float64] | No
     return np.asarray(model.noise.bias_jacobian(steps, 0, len(steps)) * sigma)
 
 
+def _lateral_factor(model: PathModel, steps: BodySteps) -> NDArray[np.float64] | None:
+    """σ of the sideways slip of each step [m], (S,), or None when there is none (no
+    position-only model, or zero variance everywhere: the runs then draw as without)."""
+    var = model.noise.lateral_variances(steps, 0, len(steps))
+    if var is None or not np.any(var > 0):
+        return None
+    return np.sqrt(var)
+
+
 def _coefs(model: PathModel, path: Sequence[Segment], k: int, systematic: SystematicErrors | None
-           ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+           ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None]:
     """(S, 6) kernel coefficients: the mean body motion of one partition of each segment
     and a factor A (A Aᵀ = Q) of its white noise, as the noise models give them
-    (:meth:`odomkit.noise.NoiseSet.input_factor`); and the bias factor (S, 2, p) or None."""
+    (:meth:`odomkit.noise.NoiseSet.input_factor`); the bias factor (S, 2, p) or None; the
+    lateral slip's σ (S,) or None."""
     robot = model.robot
     scales = (1.0, 1.0)
     if model.diff:
@@ -139,11 +159,12 @@ def _coefs(model: PathModel, path: Sequence[Segment], k: int, systematic: System
     coefs[:, 0], coefs[:, 3] = steps.dd, steps.dtheta
     coefs[:, 1], coefs[:, 2] = factor[:, 0, 0], factor[:, 0, 1]
     coefs[:, 4], coefs[:, 5] = factor[:, 1, 0], factor[:, 1, 1]
-    return coefs, _bias_factor(model, steps)
+    return coefs, _bias_factor(model, steps), _lateral_factor(model, steps)
 
 
 def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: float
-                   ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+                   ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None,
+                              NDArray[np.float64] | None]:
     """(S, 7) compass kernel coefficients ``[dd, σ_d, θ_start, dθ, σ_h, q, m]``.
 
     The compass is read every T = ``model.compass_period``; segment j lasts n_j readings
@@ -152,7 +173,8 @@ def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: fl
     between two readings into q_j equal arcs (the same arc: K only splits the speed
     noise). Each step: distance dd + σ_d·z0 (the speed noise of T/q_j), nominal heading
     change dθ; σ_h = √(σ_θθ/T) is the σ of each reading's error (one z1 per reading).
-    Also the bias factor of each kernel step (S, 2, p), or None.
+    Also the bias factor of each kernel step (S, 2, p), or None, and the lateral slip's σ
+    of each kernel step (S,), or None.
     """
     period = model.compass_period
     assert period is not None
@@ -169,7 +191,7 @@ def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: fl
     coefs[:, 2] = theta0 + np.concatenate([[0.0], np.cumsum(turns)[:-1]])
     coefs[:, 4] = math.sqrt(model.var_heading)
     coefs[:, 5], coefs[:, 6] = q, q * np.asarray(counts, dtype=float)
-    return coefs, _bias_factor(model, steps)
+    return coefs, _bias_factor(model, steps), _lateral_factor(model, steps)
 
 
 def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None, partitions: int,
@@ -210,7 +232,7 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
     if model.compass_period is not None:
         if systematic is not None:
             raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
-        coefs, bias = _compass_coefs(model, path, k, float(p0[2]))
+        coefs, bias, lateral = _compass_coefs(model, path, k, float(p0[2]))
         start = np.zeros((3, 3))
         if cov0 is not None:
             start[:2, :2] = validate.covariance(cov0, "initial covariance", variances=True)[:2, :2]
@@ -220,7 +242,7 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
             heading = model.noise.bias_heading(model.robot) * np.sqrt(
                 model.noise.bias_variances(model.robot))
         return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start),
-                    bias, heading)
-    coefs, bias = _coefs(model, path, k, systematic)
+                    bias, heading, lateral)
+    coefs, bias, lateral = _coefs(model, path, k, systematic)
     kind = "classical" if model.family == "classical" else "increment"
-    return Plan(kind, coefs, k, p0, _cov_factor(cov0), bias)
+    return Plan(kind, coefs, k, p0, _cov_factor(cov0), bias, lateral=lateral)

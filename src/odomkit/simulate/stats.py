@@ -69,6 +69,8 @@ def correlations(cov: ArrayLike) -> dict[str, float]:
     """Correlation coefficients ``xy``, ``xtheta``, ``ytheta`` of a 3×3 (x, y, θ)
     covariance; NaN where a standard deviation is 0.
 
+    Examples
+    --------
     >>> correlations([[4.0, 1.0, 0.0], [1.0, 1.0, 0.0], [0.0, 0.0, 0.0]])
     {'xy': 0.5, 'xtheta': nan, 'ytheta': nan}
     """

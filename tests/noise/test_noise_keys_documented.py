@@ -1,4 +1,5 @@
-"""The README lists the noise keys of every robot type, with units and kind (issue 10, item 9),
+"""The documentation lists the noise keys of every robot type, with units and kind (issue 10,
+item 9; the table moved from the README to docs/reference/robot-files.md in issue 13),
 and the list agrees with what a robot file accepts (the noise registry and
 :data:`odomkit.noise.parameters.PARAMETERS`)."""
 
@@ -14,15 +15,15 @@ from odomkit.noise import NOISE_MODELS
 from odomkit.noise.parameters import PARAMETERS
 from odomkit.robot import ROBOT_TYPES
 
-README = Path(__file__).resolve().parents[2] / "README.md"
+PAGE = Path(__file__).resolve().parents[2] / "docs" / "reference" / "robot-files.md"
 HEADER = "| type | white `[noise]` keys | bias `[noise.parameters]` keys |"
 GENERIC = "Every type also takes the generic white models"
 
 
 def _table() -> dict[str, tuple[str, str]]:
-    """type -> (white cell, bias cell) of the README's noise-key table."""
-    text = README.read_text(encoding="utf-8")
-    assert HEADER in text, "README lost its noise-key table"
+    """type -> (white cell, bias cell) of the page's noise-key table."""
+    text = PAGE.read_text(encoding="utf-8")
+    assert HEADER in text, f"{PAGE.name} lost its noise-key table"
     rows = {}
     for line in text.split(HEADER, 1)[1].splitlines()[2:]:
         if not line.startswith("| `"):
@@ -33,8 +34,8 @@ def _table() -> dict[str, tuple[str, str]]:
 
 
 def _generic() -> str:
-    text = README.read_text(encoding="utf-8")
-    assert GENERIC in text, "README lost the sentence on the generic noise models"
+    text = PAGE.read_text(encoding="utf-8")
+    assert GENERIC in text, f"{PAGE.name} lost the sentence on the generic noise models"
     return text.split(GENERIC, 1)[1].split("\n\n", 1)[0]
 
 
