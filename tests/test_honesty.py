@@ -1,11 +1,13 @@
-"""The README's "How honest is the covariance?" table for the OptiOdom differential robot
-stays true: the protocol of ``benchmarks/honesty.py`` run again on the real data, each
-coverage within three binomial standard errors of the README's figure and each NEES mean
-within three standard errors of its sample. The targets of issue 11 (held out, 95 % in
-[0.88, 0.99] and 50 % in [0.40, 0.80] at 10 s AND 30 s with one fitted model) are NOT met
-by this model family; the test asserts what the README says instead, including which
-window lengths miss them, so a change that meets them (or loses the 10 s result) fails here
-and the README must be updated with it.
+"""The "How honest is the covariance?" table for the OptiOdom differential robot
+(docs/results/honesty.md) stays true: the protocol of ``benchmarks/honesty.py`` run again
+on the real data, each coverage within three binomial standard errors of the page's figure
+and each NEES mean within three standard errors of its sample. The targets of issue 11
+(held out, 95 % in [0.88, 0.99] and 50 % in [0.40, 0.80] at 10 s AND 30 s with one fitted
+model) are met at 10 s and missed at 30 s by one window end by the best model (slip and
+bias, trimmed, fitted on both lengths); the test asserts what the page says, including
+which window lengths miss them, so a change that meets them (or loses the 10 s result)
+fails here and the page must be updated with it.
+``tests/test_docs.py`` checks that :data:`README` below is the page's table.
 """
 
 from __future__ import annotations
@@ -17,23 +19,24 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from odomkit.calibrate.fit_noise import fit_noise, noise_parameters
+from odomkit.calibrate.fit_noise import DEFAULT_TRIM, fit_noise, noise_parameters
 from odomkit.evaluate import nees
 from odomkit.io.robotfile import read_robot
-from odomkit.noise import ParameterUncertainty, WheelNoise
+from odomkit.noise import LateralSlipNoise, ParameterUncertainty, SpeedNoise, WheelNoise
 
 pytestmark = pytest.mark.slow
 
 REPO = Path(__file__).resolve().parents[1]
 LEVELS = ("0.5", "0.9", "0.95", "0.99")
 
-#: The README's differential table: (fit) -> {window: (coverage 50/90/95/99, NEES mean, targets met)}
+#: The differential table of docs/results/honesty.md:
+#: (fit) -> {window: (coverage 50/90/95/99, NEES mean, targets met)}
 README = {
     "guess": {"10s": ((0.04, 0.13, 0.18, 0.26), 67.3, False), "30s": ((0.09, 0.41, 0.48, 0.67), 10.7, False)},
-    "white+bias 10s": {"10s": ((0.75, 0.96, 0.97, 0.99), 1.75, True),
-                       "30s": ((0.97, 1.00, 1.00, 1.00), 0.27, False)},
-    "white 30s": {"10s": ((0.41, 0.76, 0.83, 0.90), 6.22, False),
-                  "30s": ((0.89, 0.95, 0.98, 0.98), 0.91, False)},
+    "white 10s": {"10s": ((0.75, 0.96, 0.97, 0.99), 1.71, True),
+                  "30s": ((0.97, 1.00, 1.00, 1.00), 0.27, False)},
+    "white+slip+bias trimmed": {"10s": ((0.51, 0.87, 0.91, 0.95), 3.80, True),
+                                "30s": ((0.74, 0.97, 0.99, 1.00), 1.09, False)},
 }
 
 
@@ -58,20 +61,25 @@ def measured(data_dir):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         robot = bench.calibrate(fit_runs, nominal)
-        models = (WheelNoise(0.0, 0.0), ParameterUncertainty())
-        held = {w: bench.bases(held_runs, robot, models, w) for w in ("10s", "30s")}
         guess_models = (*guess, ParameterUncertainty())
         params = noise_parameters(guess_models, robot, ())
-        variances = {"guess": np.array([guess_models[p.model].variance_parameters()[p.name] for p in params])}
-        fits = (("white+bias 10s", ("white", "bias"), "10s"), ("white 30s", ("white",), "30s"))
-        for name, kinds, window in fits:
-            fitted = bench.bases(fit_runs, robot, models, window)
-            fit = fit_noise([b for _, b, _ in fitted], models, robot, kinds=kinds)
-            variances[name] = np.array(list(fit.variances.values()))
+        plain = (WheelNoise(0.0, 0.0), ParameterUncertainty())
+        slip = (WheelNoise(0.0, 0.0), SpeedNoise(0.0), LateralSlipNoise(0.0), ParameterUncertainty())
+        scored = {"guess": (plain, np.array([guess_models[p.model].variance_parameters()[p.name]
+                                             for p in params]))}
+        fits = (("white 10s", plain, ("white",), None, None),
+                ("white+slip+bias trimmed", slip, ("white", "bias"), bench.WINDOWS, DEFAULT_TRIM))
+        for name, models, kinds, windows, trim in fits:
+            fitted = (bench.merged(fit_runs, robot, models, windows) if windows
+                      else bench.bases(fit_runs, robot, models, "10s"))
+            fit = fit_noise([b for _, b, _ in fitted], models, robot, kinds=kinds, trim=trim)
+            scored[name] = (models, np.array(list(fit.variances.values())))
+        held = {models: {w: bench.bases(held_runs, robot, models, w) for w in ("10s", "30s")}
+                for models in {plain, slip}}
     out = {}
-    for name, v in variances.items():
+    for name, (models, v) in scored.items():
         out[name] = {}
-        for w, bases in held.items():
+        for w, bases in held[models].items():
             score = bench.score(bases, v)
             err = np.concatenate([b.error[:, :2] for _, b, _ in bases])
             cov = np.concatenate([b.covariance(v)[:, :2, :2] for _, b, _ in bases])
@@ -95,6 +103,12 @@ def test_readme_table_within_sampling_error(measured, fit, window):
     assert got["meets"] is claimed_meets
 
 
-def test_no_single_fitted_model_meets_the_targets_at_both_lengths(measured):
-    for fit in ("white+bias 10s", "white 30s"):
+def test_no_fitted_model_meets_the_targets_at_both_lengths_this_way_round(measured):
+    for fit in ("white 10s", "white+slip+bias trimmed"):
         assert not (measured[fit]["10s"]["meets"] and measured[fit]["30s"]["meets"])
+
+
+def test_trimmed_slip_misses_30_s_by_one_window_end(measured):
+    """The page's "144 of 145": the best model's only miss."""
+    got = measured["white+slip+bias trimmed"]["30s"]
+    assert round(got["coverage"]["0.95"] * got["n"]) == got["n"] - 1

@@ -1,7 +1,7 @@
 """UMBmark formulas (Borenstein–Feng 1996) checked against hand computation.
 
 Every expected value below is computed in the test from the paper's equations (re-derived,
-see the README, "UMBmark calibration"), not taken from the code under test.
+see docs/reference/commands/umbmark.md), not taken from the code under test.
 """
 
 from __future__ import annotations

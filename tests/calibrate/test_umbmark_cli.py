@@ -129,7 +129,7 @@ def test_runs_form_passes_every_run_to_the_workflow(tmp_path, capsys, monkeypatc
         def to_dict(self):
             return {"e_max_syst": 0.5}
 
-    def fake(runs, robot, side, log_options):
+    def fake(runs, robot, side, log_options, **_):  # plot, overwrite: not asked here
         calls.append((runs, robot, side, log_options))
         return Fake()
 

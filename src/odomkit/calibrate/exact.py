@@ -207,7 +207,7 @@ def calibrate_exact(
         a quarter of the mean path length of the runs (the side of a square: a heading
         error δθ at the end counts like a lateral miss of side·δθ). The default 0 fits
         positions only, like UMBmark and E_max,syst; on the OptiOdom squares adding the
-        heading made the calibration worse in and out of sample (README, "Exact least squares").
+        heading made the calibration worse in and out of sample (docs/results/real-data.md).
     fix_scale : bool, optional
         Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
         value. Default: automatically, when the compared poses lie closer to the start than

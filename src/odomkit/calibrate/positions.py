@@ -150,6 +150,25 @@ class _Problem:
         return np.asarray(starts, dtype=float).reshape(-1)
 
 
+_MAX_STEERING_OFFSET = 0.5  # rad: beyond this the steering channel is wrong, not offset
+
+
+def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Plausible ranges of q = (free robot parameters, start poses): a scale or length
+    within half to twice the robot file's value (a factor 2 is a wrong robot file, not a
+    calibration), a steering offset within ±0.5 rad; start poses free."""
+    lower = np.full(free.size + 3 * n_runs, -np.inf)
+    upper = np.full(free.size + 3 * n_runs, np.inf)
+    for j, k in enumerate(free):
+        value = float(model.p0[k])
+        if model.names[k] == "steering_offset":
+            lower[j], upper[j] = value - _MAX_STEERING_OFFSET, value + _MAX_STEERING_OFFSET
+        elif value > 0:
+            lower[j], upper[j] = value / 2, value * 2
+    return lower, upper
+
+
 def _first_horizon(problem: _Problem, min_fixes: int) -> float:
     """The shortest power-of-two fraction of every run holding at least ``min_fixes`` fixes."""
     horizon = 1.0
@@ -213,12 +232,17 @@ def calibrate_positions(
 
     horizon = _first_horizon(problem, min_first_fixes)
     q = np.concatenate([model.p0[free], problem.align_starts(model.p0)])
+    lower, upper = _bounds(model, free, len(with_truth))
     while True:
         n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(with_truth)))
         if n_res > q.size:
+            # Bounded (trust-region reflective): over a short first horizon a parameter the
+            # path does not yet excite (the wheel base before the first turn) is free to run
+            # off to ±1e185 under plain Levenberg–Marquardt, and no later stage brings it back.
             sol = least_squares(lambda x: problem.residuals_and_jacobian(x)[0], q,
-                                jac=lambda x: problem.residuals_and_jacobian(x)[1], method="lm",
-                                x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12, max_nfev=200)
+                                jac=lambda x: problem.residuals_and_jacobian(x)[1], method="trf",
+                                bounds=(lower, upper), x_scale="jac", xtol=1e-12, ftol=1e-12,
+                                gtol=1e-12, max_nfev=200)
             if not np.all(np.isfinite(sol.x)):
                 raise ModelError("the calibration diverged to non-finite parameters; check the "
                                  "truth's clock and the robot file's units")
@@ -229,6 +253,14 @@ def calibrate_positions(
             break
         horizon = min(1.0, 2 * horizon)
         problem.horizon = horizon
+    at_bound = [model.names[k] for j, k in enumerate(free)
+                if np.isclose(q[j], lower[j], rtol=1e-6, atol=0.0)
+                or np.isclose(q[j], upper[j], rtol=1e-6, atol=0.0)]
+    if at_bound:
+        raise ModelError(f"the calibration ran to the edge of the plausible range for "
+                         f"{', '.join(at_bound)} (half to twice the robot file's value; steering "
+                         f"offset ±{_MAX_STEERING_OFFSET} rad): check the channel signs, the robot "
+                         "file and the truth's clock, and that the runs turn both ways")
     res, jac = problem.residuals_and_jacobian(q)
     dof = res.size - q.size
     if dof <= 0:

@@ -189,6 +189,8 @@ def transfer(calibrated: DiffDrive, nominal: DiffDrive) -> DiffDrive:
     """``nominal`` with the physical parameters of ``calibrated`` (metres per tick of each
     wheel, effective wheel base) expressed as its corrections.
 
+    Examples
+    --------
     >>> r = transfer(DiffDrive(0.2, 1e-4, 1e-4, 1.01, 0.99, 1.05), DiffDrive(0.21, 1e-4, 1e-4))
     >>> round(r.c_wheel_base, 12), round(r.effective_wheel_base, 12)   # 0.2·1.05 = 0.21·1
     (1.0, 0.21)

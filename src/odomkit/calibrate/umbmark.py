@@ -5,7 +5,7 @@ counter-clockwise (CCW), starting at (0, 0) heading +x and making four on-the-sp
 turns. The return position errors ε = absolute − calculated (Borenstein–Feng eq. 3.1) of
 each run are the input here.
 
-Conventions (Borenstein–Feng section IV-A, re-derived; see the README, "UMBmark calibration"):
+Conventions (Borenstein–Feng section IV-A, re-derived; see docs/reference/commands/umbmark.md):
 
 - α [rad] is the Type A error of each nominal 90° turn, positive when the robot turns
   *less* than 90° in both directions (actual wheel base larger than believed, E_b > 1).
@@ -183,6 +183,8 @@ def _errors_array(errors: ArrayLike, name: str) -> NDArray[np.float64]:
 def e_max_syst(errors_cw: ArrayLike, errors_ccw: ArrayLike) -> float:
     """E_max,syst, Borenstein–Feng eq. (3.2)–(3.4) [m].
 
+    Examples
+    --------
     >>> e_max_syst([[0.3, 0.4], [0.3, 0.4]], [[0.0, 0.1]])
     0.5
     """
@@ -367,6 +369,8 @@ def umbmark_chong_kleeman(
     which corrects half of the Type A error (see the module docstring). ``E_b`` and
     ``wheel_base`` of the result hold c_b and c_b·b.
 
+    Examples
+    --------
     >>> a = np.radians(1.0)
     >>> r = umbmark_chong_kleeman([[-8 * a, -8 * a]], [[-8 * a, 8 * a]], 4.0, 0.34)
     >>> round(r.E_b, 6)   # 180/(180 − 1)
@@ -384,6 +388,8 @@ def apply_corrections(robot: DiffDrive, result: UmbmarkResult) -> DiffDrive:
     E_d while the mean (c_L + c_R)/2 is kept (eq. 4.28: do not change the average
     diameter), and c_wheel_base is multiplied by E_b (eq. 4.26).
 
+    Examples
+    --------
     >>> r = umbmark([[0.0, 0.0]], [[0.0, 0.0]], 4.0, 0.34)
     >>> apply_corrections(DiffDrive(0.34), r) == DiffDrive(0.34)
     True
@@ -404,6 +410,8 @@ def umbmark_summary(
     """Borenstein–Feng's result as a dict, with Chong–Kleeman's variant under
     ``"chong_kleeman"`` (what ``odomkit umbmark --json`` prints).
 
+    Examples
+    --------
     >>> s = umbmark_summary([[-0.1, -0.1], [-0.1, -0.1]], [[-0.1, 0.1], [-0.1, 0.1]], 4, 0.34)
     >>> round(s["E_b"] - 1, 6), round(s["chong_kleeman"]["c_b"] - 1, 6)  # 2α/π vs α/π
     (0.008022, 0.003995)

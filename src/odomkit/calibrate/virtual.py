@@ -95,6 +95,8 @@ def square_wheel_steps(
         Wheel travel the odometry believes each step [m]; legs first, each followed by a
         turn on the spot (the fourth turn too, as Borenstein–Feng did).
 
+    Examples
+    --------
     >>> dl, dr = square_wheel_steps(DiffDrive(0.4), 1.0, "ccw", step=0.5)
     >>> round(float((dl + dr).sum() / 2), 12), round(float((dr - dl).sum() / 0.4), 9)
     (4.0, 6.283185307)
@@ -270,6 +272,8 @@ def iterate_umbmark(
     Each pass treats the compensated robot as a new one (Borenstein–Feng section V);
     corrections compose (:func:`~odomkit.calibrate.umbmark.apply_corrections`).
 
+    Examples
+    --------
     >>> it = iterate_umbmark(SystematicErrors(1.002, 1.01), DiffDrive(0.34), 4.0, 1)
     >>> [round(e, 3) for e in it.e_max_syst]   # [m] before and after one compensation
     [0.448, 0.005]
@@ -309,6 +313,8 @@ def virtual_umbmark_logs(
     (Borenstein–Feng drove at 0.2 m/s), and ``meta`` {"direction", "side"}. With the same
     ``rng`` state the runs are the same as :func:`run_virtual_umbmark`'s.
 
+    Examples
+    --------
     >>> logs = virtual_umbmark_logs(SystematicErrors(E_b=1.01), DiffDrive(0.34), 4.0, 1)
     >>> [log.meta["direction"] for log in logs], logs[0].ground_truth.shape
     (['cw', 'ccw'], (1709, 3))
