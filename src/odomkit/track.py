@@ -13,6 +13,7 @@ from odomkit.errors import InputError
 from odomkit.integrate import dead_reckon, path_length
 from odomkit.kinematics import BodySteps, Method, body_steps
 from odomkit.log import OdometryLog
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import Robot
 
 if TYPE_CHECKING:
@@ -70,6 +71,8 @@ def dead_reckon_log(
     noise: NoiseArg | None = None,
     cov0: ArrayLike | None = None,
     engine: str = "recursion",
+    *,
+    progress: Progress = NO_PROGRESS,
 ) -> Track:
     """Dead-reckon a whole log.
 
@@ -88,6 +91,10 @@ def dead_reckon_log(
     engine : {"recursion", "transition"}
         Covariance engine: the step recursion (Chong–Kleeman eq. 2) or Kelly's
         transition-matrix solution; they agree to round-off.
+    progress : Progress
+        Two stages: ``"dead reckoning"`` (of unknown length) and, with ``noise``, the
+        covariance chunk by chunk (:func:`odomkit.propagate.recursion.track_covariance`);
+        never changes a number (:mod:`odomkit.progress`).
 
     Returns
     -------
@@ -95,17 +102,18 @@ def dead_reckon_log(
     """
     if len(log) == 0:
         raise InputError("the log is empty: no rows to dead-reckon", source=log.source)
-    steps = body_steps(robot, log)
-    p0 = initial_pose(log, pose0)
-    if robot.measures_heading:
-        # Direct heading: the measured heading replaces the integrated one.
-        heading = steps.inputs["heading"]
-        p0 = np.array([p0[0], p0[1], heading[0]])
-    poses = dead_reckon(steps.dd, steps.dtheta, p0, method)
+    with stage(progress, None, "dead reckoning"):
+        steps = body_steps(robot, log)
+        p0 = initial_pose(log, pose0)
+        if robot.measures_heading:
+            # Direct heading: the measured heading replaces the integrated one.
+            heading = steps.inputs["heading"]
+            p0 = np.array([p0[0], p0[1], heading[0]])
+        poses = dead_reckon(steps.dd, steps.dtheta, p0, method)
     cov = None
     if noise is not None:
         from odomkit.propagate.recursion import track_covariance
 
         c0 = np.zeros((3, 3)) if cov0 is None else validate.covariance(cov0, "initial covariance")
-        cov = track_covariance(steps, poses, noise, c0, method=method, engine=engine)
+        cov = track_covariance(steps, poses, noise, c0, method=method, engine=engine, progress=progress)
     return Track(log.t, poses, cov, steps)

@@ -12,7 +12,7 @@ import re
 import pytest
 
 COMMANDS = ("track", "predict", "simulate", "umbmark", "calibrate", "calibrate-noise", "evaluate",
-            "fit-noise", "fit-amcl", "check", "demo")
+            "fit-noise", "fit-amcl", "check", "demo", "report")
 
 #: option -> the unit(s) its help must show, each as "[...]", in every command that has it.
 UNITS: dict[str, tuple[str, ...]] = {
@@ -35,6 +35,7 @@ UNITS: dict[str, tuple[str, ...]] = {
     "--gyro-noise": ("rad²/s",),
     "--heading-noise": ("rad²·s",),
     "--compass-period": ("s",),
+    "--lateral-noise": ("m²/m",),
     # calibration and evaluation
     "--side": ("m",),
     "--heading-weight": ("m/rad",),
@@ -48,7 +49,7 @@ UNITS: dict[str, tuple[str, ...]] = {
 }
 
 #: Float options that are pure numbers: a probability or a count of work.
-UNITLESS = {"--level", "--alpha", "--max-work"}
+UNITLESS = {"--level", "--alpha", "--max-work", "--trim"}
 
 
 def _options(help_text: str) -> dict[str, str]:

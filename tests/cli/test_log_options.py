@@ -25,7 +25,7 @@ LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period",
 CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
 LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
 #: Every command that reads a log (issue 12 item 1: "Every command that reads a log shares these options").
-EVERY_LOG_COMMAND = (*LOG_COMMANDS, "fit-noise", "evaluate", "check", "fit-amcl")
+EVERY_LOG_COMMAND = (*LOG_COMMANDS, "fit-noise", "evaluate", "check", "fit-amcl", "report")
 
 
 def _log_params(command: str) -> dict[str, tuple[str | None, object]]:

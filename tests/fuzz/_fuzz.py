@@ -565,13 +565,16 @@ NULL_KEYS: dict[str, str] = {
     "xy": "predict: correlation of a zero variance", "xtheta": "predict: correlation of a zero variance",
     "ytheta": "predict: correlation of a zero variance",
 }
-#: Keys under which any value may be null: simulate's z-scores (``z.mean``, ``z.cov``...) are
-#: undefined (0/0) or ±inf where the predicted standard deviation is 0, which JSON cannot
-#: spell (the verdict names an infinite one); correlations (``corr.xy``...) of a zero variance.
-NULL_SUBTREES = frozenset({"z", "corr"})
+#: Keys under which any value may be null: correlations (``corr.xy``, ``z.corr.xy``...) of a
+#: zero variance.
+NULL_SUBTREES = frozenset({"corr"})
+#: simulate's z-scores (``z.mean``, ``z.std``, ``z.cov``) may be null only with a warning that
+#: names them: they are ±inf where a predicted variance is zero, which JSON cannot spell.
+Z_SCORES = "z"
 
 #: umbmark: the spread of the return errors (``sigma``, ``sem``) needs two runs per direction;
-#: with fewer they are null, as ``second_compensation_advised`` is ("unknown (< 2 runs)").
+#: with fewer they are null, as ``second_compensation_advised`` is ("unknown (< 2 runs)"),
+#: and a warning says so.
 NULL_IF_FEW_RUNS = frozenset({"sigma", "sem"})
 
 #: Keys of a figure that may be undefined (``null``) when the JSON's ``warnings`` say why (or,
@@ -606,13 +609,15 @@ def _null_allowed(path: tuple[str, ...], warned: bool, few_runs: bool = False) -
     keys = [p for p in path if not p.startswith("[")]
     if not keys:
         return False
+    if keys[0] == Z_SCORES and len(keys) > 1 and keys[1] != "corr":
+        return warned
     if path[-1].startswith("[") and any(k.startswith(tuple(NULL_IN_LISTS)) for k in keys[-2:]):
         return True
     if warned and any(k in NULL_IF_WARNED for k in keys[-2:]):
         return True
     if any(k in NULL_SUBTREES for k in keys):
         return True
-    if few_runs and any(k in NULL_IF_FEW_RUNS for k in keys):
+    if few_runs and warned and any(k in NULL_IF_FEW_RUNS for k in keys):
         return True
     return not path[-1].startswith("[") and keys[-1] in NULL_KEYS
 
@@ -654,8 +659,8 @@ def check_json(text: str) -> dict[str, Any]:
     for path, value in _walk(doc, ()):
         where = ".".join(path)
         if value is None:
-            assert _null_allowed(path, warned, few_runs), (f"null where a number is expected: {where} "
-                                         f"(warnings: {doc.get('warnings')})")
+            assert _null_allowed(path, warned, few_runs), (
+                f"null where a number is expected: {where} (warnings: {doc.get('warnings')})")
         if isinstance(value, float):
             assert math.isfinite(value), where
         if path and path[-1] == "ros_pose_covariance" and isinstance(value, list):

@@ -510,7 +510,7 @@ def test_fuzz_demo(case):
 # ------------------------------------------------------------------------ any command, any tokens
 
 COMMANDS = ("track", "predict", "simulate", "umbmark", "calibrate", "calibrate-noise", "evaluate",
-            "fit-noise", "fit-amcl", "check", "demo")
+            "fit-noise", "fit-amcl", "check", "demo", "report")
 
 
 @st.composite

@@ -42,6 +42,7 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
     MaxGapOption,
     TruthColumnsOption,
@@ -84,6 +85,10 @@ def calibrate_command(
     velocity_window: Annotated[int, typer.Option(
         "--velocity-window", help="--twist-speed: updates the published velocity averages "
                                   "(velocity_rolling_window_size).")] = 10,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw the runs with the robot file's and the calibrated parameters against the "
+                       "truth (with --side: UMBmark's return errors before and after) into this file "
+                       "(.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
     fmt: FormatOption = "auto",
     columns: ColumnsOption = None,
@@ -116,7 +121,7 @@ def calibrate_command(
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.
         out = calibrate_files(runs, robot, method=method, source=source, side=side,
-                              out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius,
+                              out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius, plot=plot,
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
                               overwrite=force, log_options=options, truth=per_run,
@@ -157,7 +162,8 @@ def calibrate_noise_command(
         "--known-mean", help="Assume zero mean end error instead of estimating it.")] = False,
     level: Annotated[float, typer.Option("--level", help="Confidence level of the intervals.")] = 0.95,
     plot: Annotated[Path | None, typer.Option(
-        "--plot", help="Draw the errors with fitted and empirical 95 % ellipses (PNG).")] = None,
+        "--plot", help="Draw the errors with fitted and empirical 95 % ellipses (.png, .svg or .pdf; "
+                       "needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     fmt: FormatOption = "auto",
     columns: ColumnsOption = None,
@@ -183,8 +189,9 @@ def calibrate_noise_command(
         kwargs["mean"] = [0.0] * len(comps)
     options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
-    with reported_warnings() as warned:
-        out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force, **kwargs)
+    with reported_warnings() as warned, progress_bar(json_out) as progress:
+        out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force,
+                          progress=progress, **kwargs)
     if json_out:
         print_json(with_warnings(out, warned))
         return

@@ -8,6 +8,7 @@ from odomkit.cli import (
     fit_amcl,  # noqa: F401
     fit_noise,  # noqa: F401
     predict,  # noqa: F401
+    report,  # noqa: F401
     simulate,  # noqa: F401
     track,  # noqa: F401
     umbmark,  # noqa: F401

@@ -31,6 +31,7 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
     MaxGapOption,
     TruthColumnsOption,
@@ -86,6 +87,10 @@ def evaluate_command(
     bag_time: BagTimeOption = False,
     truth_topic: TruthTopicOption = None,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw the tracks against truth, the coverage diagram and the NEES into this file "
+                       "(.png, .svg or .pdf; needs the plot extra).")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Score tracks against ground truth (ATE, RPE, drift, NEES, ellipse coverage); with --robot,
@@ -107,18 +112,21 @@ def evaluate_command(
         if options.given():
             raise InputError(f"{', '.join(options.given())} reads logs, so it needs --robot (and FILES "
                              "that are logs)")
-    with reported_warnings() as warned:
+    with reported_warnings() as warned, progress_bar(json_out) as progress:
         if robot is None:
             out = evaluate_tracks(files, per_file, align=align, rpe_distances=distances,
-                                  min_travel=min_travel)
+                                  min_travel=min_travel, progress=progress, plot=plot, overwrite=force)
         else:
             out = evaluate_logs(files, robot, per_file, log_options=options, window=window,
-                                min_travel=min_travel, align=align, rpe_distances=distances, method=method)
+                                min_travel=min_travel, align=align, rpe_distances=distances, method=method,
+                                progress=progress, plot=plot, overwrite=force)
     out = with_warnings(out, warned)
     if json_out:
         print_json(out)
         return
     print_report(out, windowed=robot is not None)
+    for kind, path in out.get("outputs", {}).items():
+        print(f"wrote {kind}: {path}")
 
 
 def _fmt(value: float | None, spec: str = ".4f") -> str:

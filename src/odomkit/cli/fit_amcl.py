@@ -77,7 +77,11 @@ def fit_amcl_command(
     bag_time: BagTimeOption = False,
     truth_topic: TruthTopicOption = None,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler (logs)")] = "exact",
-    force: Annotated[bool, typer.Option("--force", help="Replace an existing --yaml-out file.")] = False,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw each α's profile likelihood with its interval into this file (.png, .svg "
+                       "or .pdf; needs the plot extra).")] = None,
+    force: Annotated[bool, typer.Option(
+        "--force", help="Replace an existing --yaml-out or --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Maximum-likelihood nav2 AMCL motion-model alphas, with profile-likelihood intervals,
@@ -95,7 +99,7 @@ def fit_amcl_command(
     with reported_warnings() as warned:
         out = fit_amcl_files(odometry, per_file, robot_path=robot, log_options=options, model=model,
                              update_min_d=update_min_d, update_min_a=update_min_a, level=level,
-                             method=method, yaml_out=yaml_out, overwrite=force)
+                             method=method, yaml_out=yaml_out, overwrite=force, plot=plot)
     out = with_warnings(out, warned)
     if json_out:
         print_json(out)

@@ -33,6 +33,7 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
     MaxGapOption,
     TruthColumnsOption,
@@ -89,7 +90,11 @@ def fit_noise_command(
     joints: JointsOption = None,
     bag_time: BagTimeOption = False,
     truth_topic: TruthTopicOption = None,
-    force: Annotated[bool, typer.Option("--force", help="Replace an existing --out file.")] = False,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw each fitted parameter's profile likelihood with its interval and the "
+                       "in-sample coverage (white only beside white + bias) into this file (.png, .svg "
+                       "or .pdf; needs the plot extra).")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --out or --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """Maximum-likelihood white and bias noise variances from logs with ground truth, with
@@ -109,12 +114,13 @@ def fit_noise_command(
     base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
     per_log = truth_options_per_log(base, list(truth or []), len(log))
     fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
-    with reported_warnings() as warned:
+    with reported_warnings() as warned, progress_bar(json_out) as progress:
         result = fit_noise_files(robot, log, per_log, out, window=window, kinds=parse_kinds(kinds),
                                  fixed=fixed, log_options=options, min_travel=min_travel,
                                  method=method, level=level, cross_validate=cross_validate,
                                  trim=None if trim >= 1 else trim,
-                                 workers=workers, scheduler=scheduler, overwrite=force)
+                                 workers=workers, scheduler=scheduler, overwrite=force,
+                                 progress=progress, plot=plot)
     result = with_warnings(result, warned)
     if json_out:
         print_json(result)

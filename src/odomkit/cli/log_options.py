@@ -16,7 +16,6 @@ run unchanged.
 from __future__ import annotations
 
 import sys
-import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import Annotated, Any
@@ -81,27 +80,15 @@ def reported_warnings() -> Iterator[list[str]]:
     """Collect the warnings raised inside the block, and print each on stderr as one line
     ``odomkit: warning: ...`` when it ends (also when it ends in an error, which a warning
     may explain). The yielded list holds their texts, for the JSON ``warnings`` key."""
+    from odomkit.workflows.results import collected_warnings
+
     messages: list[str] = []
-    others: list[warnings.WarningMessage] = []
     try:
-        with warnings.catch_warnings(record=True) as caught:
-            # odomkit warns with UserWarning: every one is shown. Other categories (a
-            # library's DeprecationWarning, numpy's RuntimeWarning) keep Python's filters.
-            warnings.simplefilter("always", UserWarning)
-            try:
-                yield messages
-            finally:
-                for item in caught:
-                    text = " ".join(str(item.message).split())
-                    if not issubclass(item.category, UserWarning):
-                        others.append(item)
-                    elif text not in messages:
-                        messages.append(text)
+        with collected_warnings() as messages:
+            yield messages
     finally:
         for text in messages:
             print(f"odomkit: warning: {text}", file=sys.stderr)
-        for item in others:  # outside catch_warnings: Python's own display
-            warnings.showwarning(item.message, item.category, item.filename, item.lineno)
 
 
 def with_warnings(out: dict[str, Any], messages: list[str]) -> dict[str, Any]:

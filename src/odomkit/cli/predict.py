@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Annotated, Any
 
 from odomkit.cli.application import app
@@ -16,6 +17,7 @@ from odomkit.cli.options import (
     JsonOption,
     KLeftOption,
     KRightOption,
+    LateralNoiseOption,
     ModelOption,
     NoiseOption,
     Opt,
@@ -62,6 +64,7 @@ def predict_command(
     speed_noise: SpeedNoiseOption = None,
     gyro_noise: GyroNoiseOption = None,
     heading_noise: HeadingNoiseOption = None,
+    lateral_noise: LateralNoiseOption = None,
     compass_period: CompassPeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
@@ -72,6 +75,10 @@ def predict_command(
     partitions: Annotated[int | None, Opt(
         "--partitions", help=("Steps per segment (recursion engines; classical pieces). A "
                               "compass ignores it: its steps are its samples."))] = None,
+    plot: Annotated[Path | None, Opt(
+        "--plot", help="Draw the path with its 95 % ellipses and the covariance elements over the "
+                       "distance into this file (.png, .svg or .pdf; needs the plot extra).")] = None,
+    force: Annotated[bool, Opt("--force", help="Replace an existing --plot file.")] = False,
     json_out: JsonOption = False,
 ) -> None:
     """Predict the end pose and its covariance for a path of segments (closed form)."""
@@ -86,12 +93,16 @@ def predict_command(
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
-         "--heading-noise": heading_noise, "--compass-period": compass_period},
+         "--heading-noise": heading_noise, "--compass-period": compass_period,
+         "--lateral-noise": lateral_noise},
         initial_pose, initial_cov, initial_cov_matrix)
     result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
                          pose0=problem.pose0, cov0=problem.cov0, engine=engine,
-                         partitions=partitions, compass_period=problem.compass_period)
+                         partitions=partitions, compass_period=problem.compass_period,
+                         plot=plot, overwrite=force)
     if json_out:
         print_json(result)
     else:
         _print_table(result)
+        for kind, path in result.get("outputs", {}).items():
+            print(f"wrote {kind}: {path}")

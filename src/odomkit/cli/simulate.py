@@ -12,12 +12,11 @@ plus ``--runs --partitions --seed --workers --chunk-runs --scheduler --systemati
 from __future__ import annotations
 
 import math
-import sys
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from pathlib import Path
 from typing import Annotated, Any
 
 from odomkit.cli.application import app
+from odomkit.cli.log_options import reported_warnings, with_warnings
 from odomkit.cli.options import (
     CompassPeriodOption,
     GyroNoiseOption,
@@ -28,6 +27,7 @@ from odomkit.cli.options import (
     JsonOption,
     KLeftOption,
     KRightOption,
+    LateralNoiseOption,
     ModelOption,
     NoiseOption,
     Opt,
@@ -40,23 +40,10 @@ from odomkit.cli.options import (
     path_problem,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.errors import ModelError
 
 __all__ = ["simulate_command"]
-
-
-@contextmanager
-def _progress(total: int, enabled: bool) -> Iterator[Callable[[int], None] | None]:
-    if not enabled:
-        yield None
-        return
-    from rich.progress import BarColumn, Progress, TextColumn, TimeRemainingColumn
-
-    with Progress(TextColumn("simulating"), BarColumn(), TextColumn("{task.completed}/"
-                  "{task.total} runs"), TimeRemainingColumn(), transient=True,
-                  console=None) as bar:
-        task = bar.add_task("runs", total=total)
-        yield lambda n: bar.advance(task, n)
 
 
 def _fmt(v: float, digits: int = 5) -> str:
@@ -116,6 +103,7 @@ def simulate_command(
     speed_noise: SpeedNoiseOption = None,
     gyro_noise: GyroNoiseOption = None,
     heading_noise: HeadingNoiseOption = None,
+    lateral_noise: LateralNoiseOption = None,
     compass_period: CompassPeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
@@ -140,6 +128,11 @@ def simulate_command(
     max_work: Annotated[float | None, Opt(
         "--max-work", help="Largest runs x partitions x segments to accept (default 1e10, "
                            "a few minutes).")] = None,
+    plot: Annotated[Path | None, Opt(
+        "--plot", help="Draw the runs' end poses with the predicted 95 % ellipse into this file "
+                       "(.png, .svg or .pdf; needs the plot extra; the first 4096 runs are "
+                       "simulated again for it).")] = None,
+    force: Annotated[bool, Opt("--force", help="Replace an existing --plot file.")] = False,
     json_out: JsonOption = False,
 ) -> None:
     """Simulate noisy runs of a path and compare them with the predicted covariance."""
@@ -152,7 +145,8 @@ def simulate_command(
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
-         "--heading-noise": heading_noise, "--compass-period": compass_period},
+         "--heading-noise": heading_noise, "--compass-period": compass_period,
+         "--lateral-noise": lateral_noise},
         initial_pose, initial_cov, initial_cov_matrix)
     sys_err = None
     if systematic is not None:
@@ -160,8 +154,8 @@ def simulate_command(
         sys_err = SystematicErrors(E_d=e_d, E_b=e_b, E_s=e_s)
     if not (0 < alpha < 1):
         raise ModelError(f"--alpha must be between 0 and 1, got {alpha!r}")
-    show_bar = not json_out and sys.stdout.isatty() and runs * partitions >= 10**7
-    with _progress(runs, show_bar) as progress:
+    # The bar (stderr, a terminal only) closes before the warnings and the table are printed.
+    with reported_warnings() as warned, progress_bar(json_out) as progress:
         result = run_simulate(
             problem.segments,
             problem.noise,
@@ -170,9 +164,11 @@ def simulate_command(
             pose0=problem.pose0, cov0=problem.cov0,
             systematic=sys_err, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress, compass_period=problem.compass_period,
-            max_work=max_work,
+            max_work=max_work, plot=plot, overwrite=force,
         )
     if json_out:
-        print_json(result)
+        print_json(with_warnings(result, warned))
     else:
         _print_table(result)
+        for kind, path in result.get("outputs", {}).items():
+            print(f"wrote {kind}: {path}")

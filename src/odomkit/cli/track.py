@@ -25,6 +25,7 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
     MaxGapOption,
     TruthColumnsOption,
@@ -84,8 +85,9 @@ def track(
     truth_sigma: TruthSigmaOption = 0.0,
     max_gap: MaxGapOption = 0.5,
     covariance: Annotated[bool, typer.Option(help="Propagate the robot file's noise.")] = True,
-    engine: Annotated[str, typer.Option(
-        help="Covariance engine: recursion (step recursion) | transition (Kelly).")] = "recursion",
+    engine: Annotated[str | None, typer.Option(
+        help="Covariance engine: recursion (step recursion, the default) | transition (Kelly).",
+        show_default=False)] = None,
     out: Annotated[Path | None, typer.Option(help="Write the track as CSV here.")] = None,
     tum: Annotated[Path | None, typer.Option(help="Write a TUM trajectory here.")] = None,
     kitti: Annotated[Path | None, typer.Option(
@@ -98,6 +100,10 @@ def track(
         help="ros1 | db3 | mcap (default: ros1 for a .bag path, else mcap).")] = None,
     frame_id: Annotated[str, typer.Option(help="--bag-out header frame id.")] = "odom",
     child_frame_id: Annotated[str, typer.Option(help="--bag-out child frame id (the body).")] = "base_link",
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw the track with its 95 % ellipses against truth, the covariance over time, "
+                       "the error in its ±2σ band and the integration methods' drift into this file "
+                       "(.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
@@ -106,7 +112,7 @@ def track(
 
     options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
-    with reported_warnings() as warned:
+    with reported_warnings() as warned, progress_bar(json) as progress:
         result = run_track(
             log, robot, method=method,  # type: ignore[arg-type]
             log_options=options, pose0=parse_pose(initial_pose, theta0_deg),
@@ -114,6 +120,7 @@ def track(
             truth=truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap),
             with_covariance=covariance, engine=engine, out=out, tum=tum, kitti=kitti, overwrite=force,
             bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
+            progress=progress, plot=plot,
         )
         summary = result.summary()
     if json:

@@ -60,8 +60,13 @@ def _print_text(out: dict[str, Any]) -> None:
     print(f"c_left, c_right      : {out['c_left']:.6f}, {out['c_right']:.6f}")
     print(f"corrected wheel base : {out['wheel_base']:.6f} m "
           f"(was {out['wheel_base_nominal']:.6f} m)")
-    sem = out["sem"]
-    print(f"SEM CW, CCW          : {sem['cw'] * mm:.2f} mm, {sem['ccw'] * mm:.2f} mm")
+    sem, runs = out["sem"], out["runs"]
+    shown = [f"{sem[d] * mm:.2f} mm" if sem[d] is not None and math.isfinite(sem[d]) else "n/a"
+             for d in ("cw", "ccw")]
+    short = min(runs.values()) < 2
+    print(f"SEM CW, CCW          : {shown[0]}, {shown[1]}"
+          + (f" ({runs['cw']} CW, {runs['ccw']} CCW runs: a spread needs 2 or more runs per direction)"
+             if short else ""))
     advised = out["second_compensation_advised"]
     verdict = {True: "advised", False: "not needed", None: "unknown (< 2 runs)"}[advised]
     print(f"(further) compensation: {verdict} (3·SEM rule)")
@@ -97,6 +102,11 @@ def umbmark_command(
     joints: JointsOption = None,
     bag_time: BagTimeOption = False,
     truth_topic: TruthTopicOption = None,
+    plot: Annotated[Path | None, typer.Option(
+        "--plot", help="Draw the return errors, their centres of gravity and E_max,syst (with --runs: "
+                       "before and after the correction) into this file (.png, .svg or .pdf; needs the "
+                       "plot extra).")] = None,
+    force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
@@ -114,7 +124,8 @@ def umbmark_command(
             if robot is None:
                 raise InputError("--runs needs --robot ROBOT.toml (the parameters the odometry used)")
             out = workflow.umbmark_from_files(list(runs) + positional, robot, side,
-                                              log_options=options).to_dict()
+                                              log_options=options, plot=plot,
+                                              overwrite=force).to_dict()
         else:
             if options.given():
                 raise InputError(f"{', '.join(options.given())} applies to the logs of --runs, "
@@ -123,8 +134,12 @@ def umbmark_command(
                 raise InputError(
                     "give exactly one ERRORS.csv (or --runs RUN.csv ... --robot ROBOT.toml)")
             out = workflow.umbmark_from_errors_file(positional[0], side, wheel_base=wheel_base,
-                                                    robot_path=robot)
+                                                    robot_path=robot, plot=plot, overwrite=force)
+    if plot is not None:
+        out["outputs"] = {"plot": str(plot)}
     if json_out:
         print_json(with_warnings(out, warned))
     else:
         _print_text(out)
+        for kind, path in out.get("outputs", {}).items():
+            print(f"wrote {kind}: {path}")

@@ -71,6 +71,7 @@ from numpy.typing import NDArray
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError, OdomkitError
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
+from odomkit.progress import NO_PROGRESS, Progress, stage
 
 __all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_topics", "is_bag", "read_bag", "read_bag_odometry",
            "require_rosbags", "TRUTH_TYPES"]
@@ -90,6 +91,9 @@ TRUTH_TYPES = {
     "geometry_msgs/msg/PoseWithCovarianceStamped": "PoseWithCovarianceStamped",
 }
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
+#: Messages between two reports to a ``progress`` (one report per message would cost about as much
+#: as decoding the message).
+_REPORT_EVERY = 1000
 
 
 def require_rosbags() -> Any:
@@ -107,6 +111,8 @@ def require_rosbags() -> Any:
 def is_bag(path: str | Path) -> bool:
     """A ``.bag``, ``.db3`` or ``.mcap`` name, or a folder with a ROS 2 ``metadata.yaml``.
 
+    Examples
+    --------
     >>> is_bag("run.bag"), is_bag("rosbag2_2024_05_01/rosbag2_2024_05_01_0.mcap"), is_bag("log.csv")
     (True, True, False)
     """
@@ -209,8 +215,9 @@ def _seconds(ns: NDArray[np.int64]) -> NDArray[np.float64]:
 
 
 def _stamps(reader: Any, conns: list[Any], receive_time: bool, topic: str,
-            source: str) -> tuple[list[Any], NDArray[np.int64]]:
-    """The topic's messages and their times [ns] (header stamp, or the bag's time)."""
+            source: str, progress: Progress = NO_PROGRESS) -> tuple[list[Any], NDArray[np.int64]]:
+    """The topic's messages and their times [ns] (header stamp, or the bag's time);
+    ``progress`` is advanced every :data:`_REPORT_EVERY` messages and at the end."""
     messages, stamps = [], []
     with _bag_errors(source):
         for conn, bag_ns, raw in reader.messages(connections=conns):
@@ -221,6 +228,10 @@ def _stamps(reader: Any, conns: list[Any], receive_time: bool, topic: str,
             else:
                 stamps.append(int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec))
             messages.append(msg)
+            if len(messages) % _REPORT_EVERY == 0:
+                progress.advance(_REPORT_EVERY)
+    if len(messages) % _REPORT_EVERY:
+        progress.advance(len(messages) % _REPORT_EVERY)
     if len(messages) < 2:
         raise InputError(f"topic {topic} has {len(messages)} message(s); a log needs two or more",
                          source=source)
@@ -327,10 +338,11 @@ def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source:
     return stream
 
 
-def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str) -> _Stream:
+def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
+                  progress: Progress = NO_PROGRESS) -> _Stream:
     """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
     messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
-                           topic, source)
+                           topic, source, progress)
     kind = TRUTH_TYPES[msgtype]
     poses = [m.pose if kind == "PoseStamped" else m.pose.pose for m in messages]
     xyt = _finite(np.array([[p.position.x, p.position.y, _yaw(p.orientation)] for p in poses], dtype=float),
@@ -340,9 +352,9 @@ def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, sou
 
 
 def _read_stream(reader: Any, topic: str, msgtype: str, joints: Sequence[str], receive_time: bool,
-                 source: str) -> _Stream:
+                 source: str, progress: Progress = NO_PROGRESS) -> _Stream:
     conns = [c for c in reader.connections if c.topic == topic]
-    messages, ns = _stamps(reader, conns, receive_time, topic, source)
+    messages, ns = _stamps(reader, conns, receive_time, topic, source, progress)
     kind = MESSAGE_TYPES[msgtype]
     if kind == "JointState":
         return _joint_signals(messages, ns, joints, topic, source)
@@ -441,7 +453,8 @@ def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], di
 
 
 def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
-             receive_time: bool = False, truth_topic: str | None = None) -> OdometryLog:
+             receive_time: bool = False, truth_topic: str | None = None, *,
+             progress: Progress = NO_PROGRESS) -> OdometryLog:
     """Read a ROS bag's odometry topics as a log (module docstring: messages, time, topics).
 
     Parameters
@@ -454,6 +467,9 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     truth_topic : a pose topic (:data:`TRUTH_TYPES`, e.g. motion capture) that becomes the
         log's ground truth, interpolated at the rows (θ on the unwrapped yaw); rows outside
         its span are left out, with a warning
+    progress : Progress
+        One stage, ``"reading NAME"`` of the messages of the topics read (their count in the
+        bag's index), advanced every 1000 messages (:mod:`odomkit.progress`)
 
     Returns
     -------
@@ -476,9 +492,14 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
         chosen = _choose_topics(available, topics, source, truth)
         if joints and not any(MESSAGE_TYPES[available[c]] == "JointState" for c in chosen):
             raise InputError("--joints applies to a JointState topic; none is read", source=source)
-        streams = [_read_stream(reader, c, available[c], joints, receive_time, source) for c in chosen]
-        if truth is not None:
-            streams.append(_truth_stream(reader, truth, available[truth], receive_time, source))
+        read = [*chosen, *([truth] if truth is not None else [])]
+        total = sum(int(c.msgcount) for c in reader.connections if c.topic in read)
+        with stage(progress, total, f"reading {path.name}"):
+            streams = [_read_stream(reader, c, available[c], joints, receive_time, source, progress)
+                       for c in chosen]
+            if truth is not None:
+                streams.append(_truth_stream(reader, truth, available[truth], receive_time, source,
+                                             progress))
     t, channels = _merge(streams, source)
     poses = None
     if truth is not None:

@@ -45,6 +45,8 @@ SKIP_COLUMN = "_"
 def parse_columns(text: str) -> dict[str, str] | list[str]:
     """``--columns``: channel names in column order, or a map from channel to header name.
 
+    Examples
+    --------
     >>> parse_columns("t=time, ticks_left=L")
     {'t': 'time', 'ticks_left': 'L'}
     >>> parse_columns("t, speed, _, yaw_rate")

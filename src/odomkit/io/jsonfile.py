@@ -21,6 +21,8 @@ __all__ = ["to_jsonable", "write_json"]
 def to_jsonable(value: object) -> Any:
     """Convert numpy scalars/arrays (recursively) to plain JSON types; NaN/inf -> None.
 
+    Examples
+    --------
     >>> to_jsonable({"a": np.array([1.0, np.nan]), 2: (np.int64(3),)})
     {'a': [1.0, None], '2': [3]}
     """

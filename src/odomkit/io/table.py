@@ -281,6 +281,8 @@ def unwrap_counter(counts: NDArray[Any], bits: int) -> NDArray[Any]:
     Integer counts are unwrapped exactly (int64, modulo 2**64); float counts in float64
     (exact below 2**53).
 
+    Examples
+    --------
     >>> unwrap_counter(np.array([65530.0, 65535.0, 3.0, 10.0]), 16)
     array([65530., 65535., 65539., 65546.])
     >>> unwrap_counter(np.array([2, 0, 65534]), 16)   # reversing through zero
@@ -303,6 +305,8 @@ def counter_increments(counts: NDArray[Any], bits: int | None = None) -> NDArray
     Integer counts (:meth:`NumericTable.counter`) are differenced, and unwrapped if
     ``bits`` is given, in exact integer arithmetic before the conversion to float.
 
+    Examples
+    --------
     >>> counter_increments(np.array([2**63 - 2, -(2**63) + 3]), 64).tolist()
     [0.0, 5.0]
     """
@@ -368,6 +372,8 @@ def to_seconds(t: NDArray[np.float64], seconds_per_unit: float) -> NDArray[np.fl
     whose value in the file's unit is an exact double (any whole number below 2**53, e.g.
     ns stamps of a day) gives the same double as the same time written in seconds.
 
+    Examples
+    --------
     >>> bool(to_seconds(np.array([1234567891.0]), 1e-9)[0] == float("1.234567891"))
     True
     """

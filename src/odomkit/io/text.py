@@ -126,6 +126,8 @@ def is_number(field: str) -> bool:
     """Whether ``field`` is a number as numpy and polars read one (``1.5``, ``-2e-3``,
     ``nan``, ``inf``; not ``1_000``, ``0x1f`` or non-ASCII digits).
 
+    Examples
+    --------
     >>> is_number(" 1.5e3 "), is_number("1_000"), is_number("1,5")
     (True, False, False)
     """
@@ -294,6 +296,8 @@ def seconds_per_unit(unit: str | float, flag: str = "--time-unit") -> float:
     """Seconds per unit of a time column: a unit of :data:`TIME_UNITS` or a positive number
     of seconds (``"1e-4"`` for 100 µs ticks).
 
+    Examples
+    --------
     >>> seconds_per_unit("ms"), seconds_per_unit("1e-4"), seconds_per_unit(2.5)
     (0.001, 0.0001, 2.5)
     """

@@ -213,6 +213,8 @@ def kitti_times_path(path: str | Path) -> Path:
     suffix replaced by ``.times.txt`` (``run.kitti`` -> ``run.times.txt``, ``poses.txt`` ->
     ``poses.times.txt``).
 
+    Examples
+    --------
     >>> kitti_times_path("out/run.kitti").as_posix()
     'out/run.times.txt'
     """

@@ -60,6 +60,8 @@ _HEADER_NAMES = {
 def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
     """``--truth-columns``: ``"t,x,y,_,theta"`` (in order) or ``"t=stamp,x=px,y=py"`` (a map).
 
+    Examples
+    --------
     >>> parse_truth_columns("t,x,y,_,theta")
     ['t', 'x', 'y', '_', 'theta']
     >>> parse_truth_columns("t=stamp, x=px, y=py")

@@ -11,7 +11,7 @@ from __future__ import annotations
 import warnings
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from odomkit.calibrate.exact import calibrate_exact
 from odomkit.calibrate.export import twist_covariance
@@ -28,12 +28,17 @@ from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, load_truth
 
-__all__ = ["calibrate_files", "noise_files", "optiodom_square_table"]
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Robot
+
+__all__ = ["calibrate_files", "file_wheel_radius", "noise_files", "optiodom_square_table"]
 
 
 def calibrate_files(
@@ -52,6 +57,7 @@ def calibrate_files(
     overwrite: bool = False,
     log_options: LogOptions | None = None,
     truth: Sequence[TruthOptions] | None = None,
+    plot: str | Path | None = None,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -82,6 +88,9 @@ def calibrate_files(
         and fit each run's start pose with the robot's parameters
         (:func:`odomkit.calibrate.positions.calibrate_positions`; position-only, noisy truth
         such as GPS is enough). ``--from`` and ``--heading-weight`` do not apply.
+    plot : .png, .svg or .pdf file, optional
+        Draw the runs before and after calibration against the truth and, with ``side``,
+        UMBmark's return errors (:func:`odomkit.workflows.figures.calibration_figure`).
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -90,8 +99,12 @@ def calibrate_files(
     as in the robot file) and ``outputs`` (paths written).
     """
     truth_paths = [t.path for t in truth or () if t.path is not None]
-    check_outputs({"--out-robot": out_robot, "--ros-yaml": ros_yaml}, overwrite=overwrite,
+    check_outputs({"--out-robot": out_robot, "--ros-yaml": ros_yaml, "--plot": plot}, overwrite=overwrite,
                   inputs=[robot_path, *run_paths, *truth_paths])
+    if plot is not None:
+        from odomkit.plot import check_plot_file
+
+        check_plot_file(plot)
     if truth is not None:
         if method != "exact":
             raise InputError("--truth applies to --method exact")
@@ -175,10 +188,50 @@ def calibrate_files(
                                            "controller_period": twist.period, "velocity_window": twist.window}
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
                                                   overwrite=overwrite, twist=twist))
+    if plot is not None:
+        outputs["plot"] = str(_calibration_plot(plot, runs, truth, robot, new_robot, side))
     summary["method"] = method
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,
+                      robot: Robot, new_robot: Robot, side: float | None) -> Path:
+    """The runs from their truth start pose (the log's own truth, or ``--truth``), and with
+    square runs of a differential drive UMBmark's return errors before and after."""
+    import numpy as np
+
+    from odomkit.calibrate.realdata import return_errors_from_runs
+    from odomkit.truth import start_pose
+    from odomkit.workflows.figures import calibration_figure
+
+    shown, paths, starts = [], [], []
+    for i, log in enumerate(runs):
+        if truth is not None:
+            found = load_truth(truth[i], log)
+            assert found is not None  # the calibration found it
+            try:
+                start, _ = start_pose(found, float(log.t[0]), truth[i].max_gap)
+            except InputError:
+                continue  # no truth at the log's first row: the run is left out of the figure
+            xy = found.xy
+        else:
+            assert log.ground_truth is not None  # the calibration needs it
+            start, xy = log.ground_truth[0], log.ground_truth[:, :2]
+        shown.append(log)
+        paths.append(np.asarray(xy, dtype=float))
+        starts.append(np.asarray(start, dtype=float))
+    umbmark = None
+    if side is not None and isinstance(robot, DiffDrive) and isinstance(new_robot, DiffDrive):
+        try:
+            cw, ccw = return_errors_from_runs(runs, robot)
+            after = return_errors_from_runs(runs, new_robot)
+        except InputError:  # not square runs after all: no UMBmark panel
+            cw = ccw = np.empty((0, 2))
+        if len(cw) and len(ccw):
+            umbmark = (cw, ccw, *after)
+    return calibration_figure(plot, shown, paths, starts, robot, new_robot, umbmark=umbmark)
 
 
 # The CLI flag of each keyword argument of calibrate_exact, for messages.
@@ -203,7 +256,7 @@ def _controller_radius(robot_path: str | Path, given: float | None) -> float:
     """The nominal wheel radius for the ROS controller: ``given`` (``--wheel-radius``) or the
     robot file's own (mean of the two wheels), and an error when the two disagree, since the
     multipliers are computed against the file's nominal wheels."""
-    radius = _file_wheel_radius(robot_path)
+    radius = file_wheel_radius(robot_path)
     if given is None:
         if radius is None:
             raise InputError("--ros-yaml needs --wheel-radius (the controller's nominal radius, m): "
@@ -217,7 +270,7 @@ def _controller_radius(robot_path: str | Path, given: float | None) -> float:
     return given
 
 
-def _file_wheel_radius(robot_path: str | Path) -> float | None:
+def file_wheel_radius(robot_path: str | Path) -> float | None:
     """The mean nominal wheel radius [m] a diff robot file gives through ``wheel_radius`` or
     ``wheel_diameter`` (plain or ``_left``/``_right``), or None when it gives metres per tick
     (:func:`odomkit.io.robotfile.read_robot` has already checked the file)."""
@@ -238,25 +291,30 @@ def _file_wheel_radius(robot_path: str | Path) -> float | None:
 def noise_files(
     run_paths: Sequence[str | Path], robot_path: str | Path, *,
     log_options: LogOptions | None = None, plot: str | Path | None = None,
-    overwrite: bool = False, **kwargs: Any,
+    overwrite: bool = False, progress: Progress = NO_PROGRESS, **kwargs: Any,
 ) -> dict[str, Any]:
     """Read repeated runs and a robot file and fit k_L, k_R
     (:func:`odomkit.calibrate.noise_fit.fit_wheel_noise_from_runs`); JSON-ready dict.
     With ``plot``, also draw the runs' errors with the fitted and empirical 95 % ellipses
     (needs matplotlib). The fit's ``warnings`` (k's the data cannot identify, runs beyond
-    the first-order regime) are also issued as :class:`UserWarning`\\ s."""
+    the first-order regime) are also issued as :class:`UserWarning`\\ s. ``progress``
+    (:mod:`odomkit.progress`) sees two stages: ``"runs"``, a unit per run read, then
+    ``"fitting"``."""
     check_outputs({"--plot": plot}, overwrite=overwrite, inputs=[robot_path, *run_paths])
     if plot is not None:
-        from odomkit.plot import have_matplotlib
+        from odomkit.plot import check_plot_file
 
-        if not have_matplotlib():
-            raise InputError("--plot needs matplotlib: pip install 'odomkit[plot]'")
+        check_plot_file(plot)
     robot, _ = read_robot(robot_path)
     if not isinstance(robot, DiffDrive):
         raise InputError(f"calibrate-noise fits the wheel noise k_L, k_R of a differential drive; "
                          f"the robot file describes a {robot.type_name!r} robot", source=str(robot_path))
-    runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
-    with numeric_guard("the noise fit"):
+    runs = []
+    with stage(progress, len(run_paths), "runs"):
+        for path in run_paths:
+            runs.append(load_log(path, robot, log_options or LogOptions()))
+            progress.advance()
+    with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_wheel_noise_from_runs(runs, robot, **kwargs)
     # An interval open above is a finding (see warnings), not an overflow.
     check_result("the noise fit", {"k_left": fit.k_left, "k_right": fit.k_right,

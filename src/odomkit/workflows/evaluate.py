@@ -23,10 +23,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.errors import InputError
+from odomkit.progress import NO_PROGRESS, Progress, stage
 
 if TYPE_CHECKING:
     from odomkit.io.trackio import TrackFile
     from odomkit.log import OdometryLog
+    from odomkit.noise import NoiseModel
     from odomkit.propagate.plan import NoiseArg
     from odomkit.robot import Robot
     from odomkit.truth import Truth
@@ -34,7 +36,8 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["CONTAINMENT_NOTE", "evaluate_logs", "evaluate_tracks", "Scored", "summarise", "WINDOWED_NOTE"]
+__all__ = ["CONTAINMENT_NOTE", "evaluate_logs", "evaluate_tracks", "score_logs", "Scored", "summarise",
+           "TrackRows", "WINDOWED_NOTE"]
 
 #: The one line every text report carries about what a single run's containment means.
 CONTAINMENT_NOTE = (
@@ -60,6 +63,23 @@ class Scored:
     honesty_cov: NDArray[np.float64]  # (m, 2, 2)
     windows: int = 0
     warnings: list[str] = field(default_factory=list)
+    # (m,) log time of each window end [s], for figures over time; empty when the honesty
+    # samples are track rows
+    honesty_t: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    # The evaluated rows themselves (the whole run of a log), for figures
+    rows: TrackRows | None = None
+
+
+@dataclass(frozen=True)
+class TrackRows:
+    """The evaluated rows of a track: time ``t`` (n,) [s], the estimate after alignment and
+    the truth (n, 3) [m, m, rad; truth θ NaN if unknown], the estimate's covariance
+    (n, 3, 3) or None."""
+
+    t: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    truth: NDArray[np.float64]
+    cov: NDArray[np.float64] | None
 
 
 def _rpe_key(distance: float) -> str:
@@ -69,8 +89,9 @@ def _rpe_key(distance: float) -> str:
 def _score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] | None,
                 truth: NDArray[np.float64], valid: NDArray[np.bool_], *, align: str,
                 truth_sigma: float, rpe_distances: Sequence[float], min_travel: float,
-                honesty_from_rows: bool) -> Scored:
-    """Score the rows of one track where ``valid``; ``truth`` (N, 3), θ NaN if unknown."""
+                honesty_from_rows: bool, t: NDArray[np.float64] | None = None) -> Scored:
+    """Score the rows of one track where ``valid``; ``truth`` (N, 3), θ NaN if unknown;
+    ``t`` (N,) the rows' times, kept with them (:class:`TrackRows`) when given."""
     from odomkit.evaluate import align_track, relative_pose_errors
 
     notes: list[str] = []
@@ -110,7 +131,8 @@ def _score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64]
         he, hc = np.empty((0, 2)), np.empty((0, 2, 2))
         if honesty_from_rows:
             notes.append(f"{label}: the track has no covariance, so there is no NEES or coverage")
-    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes)
+    kept = None if t is None else TrackRows(np.asarray(t, dtype=float)[rows], est, ref, P)
+    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept)
 
 
 def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
@@ -170,6 +192,9 @@ def evaluate_tracks(
     align: str = "none",
     rpe_distances: Sequence[float] = (1.0,),
     min_travel: float = 0.05,
+    progress: Progress = NO_PROGRESS,
+    plot: str | Path | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """Score track CSVs (``odomkit track --out``) against truth.
 
@@ -181,29 +206,45 @@ def evaluate_tracks(
     align : {"none", "start", "se2"}
     rpe_distances : true travel of each RPE [m]
     min_travel : a track whose truth travels less [m] is an error (nothing to score)
+    progress : one stage, ``"tracks"``, a unit per track (:mod:`odomkit.progress`)
+    plot, overwrite : draw the tracks against truth, the coverage diagram and the NEES of the
+        rows into this .png, .svg or .pdf file (:func:`odomkit.workflows.figures.honesty_figure`;
+        replaced only when ``overwrite``); adds ``outputs``
 
     Returns
     -------
     dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
     """
+    _check_plot(plot, overwrite, [*tracks, *(t.path for t in truth if t.path is not None)])
+    scored = []
+    with stage(progress, len(tracks), "tracks"):
+        for path, opts in zip(tracks, truth, strict=True):
+            scored.append(_score_track(Path(path), opts, align, rpe_distances, min_travel))
+            progress.advance()
+    out = _report(scored, rpe_distances)
+    if plot is not None:
+        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, {"track rows": out["coverage"]}, None))}
+    return out
+
+
+def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequence[float],
+                 min_travel: float) -> Scored:
+    """One track file of :func:`evaluate_tracks` scored against its truth."""
     from odomkit.truth import truth_at
 
-    scored = []
-    for path, opts in zip(tracks, truth, strict=True):
-        track = _read_estimate(Path(path))
-        if opts.path is not None:
-            found = _load(opts, None)
-            samples = truth_at(found, track.t, opts.max_gap)
-            ref, valid = samples.poses, samples.valid
-        elif track.truth is not None:
-            ref, valid = track.truth, np.isfinite(track.truth[:, 0]) & np.isfinite(track.truth[:, 1])
-        else:
-            raise InputError("no truth: give --truth, or a track written with truth (gt_* columns)",
-                             source=str(path))
-        scored.append(_score_rows(str(path), track.poses, track.cov, ref, valid, align=align,
-                                  truth_sigma=opts.sigma, rpe_distances=rpe_distances,
-                                  min_travel=min_travel, honesty_from_rows=True))
-    return _report(scored, rpe_distances)
+    track = _read_estimate(path)
+    if opts.path is not None:
+        found = _load(opts, None)
+        samples = truth_at(found, track.t, opts.max_gap)
+        ref, valid = samples.poses, samples.valid
+    elif track.truth is not None:
+        ref, valid = track.truth, np.isfinite(track.truth[:, 0]) & np.isfinite(track.truth[:, 1])
+    else:
+        raise InputError("no truth: give --truth, or a track written with truth (gt_* columns)",
+                         source=str(path))
+    return _score_rows(str(path), track.poses, track.cov, ref, valid, align=align,
+                       truth_sigma=opts.sigma, rpe_distances=rpe_distances,
+                       min_travel=min_travel, honesty_from_rows=True, t=track.t)
 
 
 def _read_estimate(path: Path) -> TrackFile:
@@ -236,8 +277,13 @@ def evaluate_logs(
     align: str = "none",
     rpe_distances: Sequence[float] = (1.0,),
     method: str = "exact",
+    progress: Progress = NO_PROGRESS,
+    plot: str | Path | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """The honesty test: dead reckoning restarted from truth in each window, scored at its end.
+
+    :func:`score_logs` pooled by :func:`summarise`, with each log's own figures.
 
     Parameters
     ----------
@@ -250,11 +296,109 @@ def evaluate_logs(
     align : alignment of the whole-run track for ATE (see :func:`evaluate_tracks`)
     rpe_distances : true travel of each RPE [m]
     method : integration method
+    progress : one stage, ``"logs"``, a unit per log read and scored (:mod:`odomkit.progress`)
+    plot, overwrite : draw the whole runs against truth, the coverage diagram of the window
+        ends (the robot file's noise and, when it has bias models, its white models alone)
+        and their NEES into this .png, .svg or .pdf file
+        (:func:`odomkit.workflows.figures.honesty_figure`); adds ``outputs``
 
     Returns
     -------
     dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
     """
+    _check_plot(plot, overwrite, [*logs, robot_path, *(t.path for t in truth if t.path is not None)])
+    scored = score_logs(logs, robot_path, truth, log_options=log_options, window=window,
+                        min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
+                        progress=progress)
+    out = _report(scored, rpe_distances)
+    if plot is not None:
+        from odomkit.evaluate import coverage
+        from odomkit.io.robotfile import read_robot
+
+        robot, noise = read_robot(robot_path)
+        kinds = {m.kind for m in noise}
+        both = " + ".join(sorted(kinds, reverse=True))
+        name = "window ends" if kinds == {"white"} else f"window ends ({both})"
+        covers = {name: out["coverage"]}
+        if kinds > {"white"}:  # the white models alone, for comparison
+            white = [m for m in noise if m.kind == "white"]
+            alone = _white_only(logs, robot, white, truth, log_options, window, min_travel, method)
+            covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
+                                                          np.concatenate([a.honesty_cov for a in alone]))
+        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"]))}
+    return out
+
+
+def _check_plot(plot: str | Path | None, overwrite: bool, inputs: Sequence[str | Path]) -> None:
+    if plot is not None:
+        from odomkit.io.files import check_outputs
+        from odomkit.plot import check_plot_file
+
+        check_outputs({"--plot": plot}, overwrite=overwrite, inputs=inputs)
+        check_plot_file(plot)
+
+
+def _white_only(logs: Sequence[str | Path], robot: Robot, white: Sequence[NoiseModel],
+                truth: Sequence[TruthOptions], log_options: LogOptions | None, window: str | None,
+                min_travel: float, method: str) -> list[Scored]:
+    """The window ends scored with the white noise models alone (for ``--plot``)."""
+    from odomkit.windows import parse_window
+    from odomkit.workflows.logs import LogOptions, load_log
+
+    if not white:
+        return []
+    spec = parse_window(window) if window else None
+    out = []
+    for path, opts in zip(logs, truth, strict=True):
+        log = load_log(path, robot, log_options or LogOptions())
+        out.append(_score_log(log, robot, list(white) if len(white) > 1 else white[0], _load(opts, log), opts,
+                              spec, min_travel=min_travel, align="none", rpe_distances=(), method=method))
+    return out
+
+
+def _honesty_plot(plot: str | Path, scored: Sequence[Scored], coverages: dict[str, dict[str, float | None]],
+                  windows: int | None) -> Path:
+    """``evaluate --plot``: each run against truth, the coverage and the NEES of the scored
+    samples (window ends when ``windows`` is given, else track rows)."""
+    from odomkit.evaluate import nees
+    from odomkit.workflows.figures import honesty_figure
+
+    tracks = [(Path(s.label).name, s.rows.poses, s.rows.cov, s.rows.truth)
+              for s in scored if s.rows is not None]
+    values = [nees(s.honesty_errors, s.honesty_cov) if s.honesty_errors.shape[0] else np.empty(0)
+              for s in scored]
+    if windows is not None:
+        times = [s.honesty_t for s in scored]
+        note = "window ends restart from truth: independent samples"
+    else:
+        times = [s.rows.t if s.rows is not None and s.rows.t.size == v.size
+                 else np.arange(v.size, dtype=float) for s, v in zip(scored, values, strict=True)]
+        note = "rows of one run are correlated: the fraction inside is one draw, not a statistic"
+    if len(scored) == 1 and times[0].size:
+        t, label = times[0] - times[0][0], "time since the first sample [s]"
+    else:
+        t, label = np.arange(sum(v.size for v in values), dtype=float), "sample (all files, in order)"
+    return honesty_figure(plot, coverages=coverages, n_scored=windows or None, nees_t=t,
+                          nees=np.concatenate(values) if values else np.empty(0), nees_label=label,
+                          tracks=tracks, note=note)
+
+
+def score_logs(
+    logs: Sequence[str | Path],
+    robot_path: str | Path,
+    truth: Sequence[TruthOptions],
+    *,
+    log_options: LogOptions | None = None,
+    window: str | None = None,
+    min_travel: float = 0.05,
+    align: str = "none",
+    rpe_distances: Sequence[float] = (1.0,),
+    method: str = "exact",
+    progress: Progress = NO_PROGRESS,
+) -> list[Scored]:
+    """Each log's raw figures of :func:`evaluate_logs` (same parameters), before pooling:
+    its position errors, and its window-end errors, covariances and times (for figures).
+    Its notes are in each :class:`Scored`'s ``warnings``, not yet issued."""
     from odomkit.io.robotfile import read_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions, load_log
@@ -266,12 +410,14 @@ def evaluate_logs(
     noise_arg = noise if len(noise) > 1 else noise[0]
     spec = parse_window(window) if window else None
     scored = []
-    for path, opts in zip(logs, truth, strict=True):
-        log = load_log(path, robot, log_options or LogOptions())
-        found = _load(opts, log)
-        scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
-                                 align=align, rpe_distances=rpe_distances, method=method))
-    return _report(scored, rpe_distances)
+    with stage(progress, len(logs), "logs"):
+        for path, opts in zip(logs, truth, strict=True):
+            log = load_log(path, robot, log_options or LogOptions())
+            found = _load(opts, log)
+            scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
+                                     align=align, rpe_distances=rpe_distances, method=method))
+            progress.advance()
+    return scored
 
 
 def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, opts: TruthOptions,
@@ -299,7 +445,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     track = dead_reckon_log(sub, robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
     whole = _score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
                          align=align, truth_sigma=opts.sigma, rpe_distances=rpe_distances,
-                         min_travel=0.0, honesty_from_rows=False)
+                         min_travel=0.0, honesty_from_rows=False, t=track.t)
     notes = list(whole.warnings)
     if first != rows[0]:
         notes.append(f"{log.source}: the whole-run track starts at {log.t[first]:.6g} s, the first "
@@ -328,7 +474,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                                "fitted to the position-only truth")
     # found.cov holds the truth's noise at both window ends already (odomkit.windows).
     return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
-                   honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes)
+                   honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
+                   honesty_t=log.t[found.end_rows])
 
 
 def _whole_run_start(log: OdometryLog, truth: Truth, opts: TruthOptions, rows: NDArray[np.intp],

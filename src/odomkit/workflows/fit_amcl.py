@@ -134,6 +134,7 @@ def fit_amcl_files(
     method: str = "exact",
     yaml_out: str | Path | None = None,
     overwrite: bool = False,
+    plot: str | Path | None = None,
 ) -> dict[str, Any]:
     """Fit AMCL's α's to odometry files with ground truth; write the nav2 snippet if asked.
 
@@ -149,6 +150,8 @@ def fit_amcl_files(
     level : confidence level of the intervals
     method : dead-reckoning method for logs
     yaml_out : write the nav2 snippet here (never over a file unless ``overwrite``)
+    plot : draw each α's profile likelihood with its interval into this .png, .svg or .pdf
+        file (:func:`odomkit.workflows.figures.profiles_figure`)
 
     Returns
     -------
@@ -170,8 +173,12 @@ def fit_amcl_files(
         if not (np.isfinite(value) and value > 0):
             raise InputError(f"{flag} must be a positive number, got {value!r}")
     truth_files = [t.path for t in truth if t.path is not None]
-    check_outputs({"--yaml-out": yaml_out}, overwrite=overwrite,
+    check_outputs({"--yaml-out": yaml_out, "--plot": plot}, overwrite=overwrite,
                   inputs=[*odometry, *truth_files, *([robot_path] if robot_path else [])])
+    if plot is not None:
+        from odomkit.plot import check_plot_file
+
+        check_plot_file(plot)
     robot = None
     if robot_path is not None:
         from odomkit.io.robotfile import read_robot
@@ -222,5 +229,15 @@ def fit_amcl_files(
         text = nav2_amcl_yaml(out["alpha"], model, update_min_d=update_min_d, update_min_a=update_min_a,
                               notes=[f"fitted by odomkit fit-amcl on {fit.updates} updates"])
         outputs["yaml"] = str(write_new_text(yaml_out, text, overwrite))
+    if plot is not None:
+        from odomkit.calibrate.profile import amcl_profiles
+        from odomkit.workflows.figures import profiles_figure
+
+        units = {"diff": ("rad²/rad²", "rad²/m²", "m²/m²", "m²/rad²"),
+                 "omni": ("rad²/rad²", "rad²/m²", "m²/m²", "m²/rad²", "m²/m²")}[fit.model]
+        outputs["plot"] = str(profiles_figure(
+            plot, amcl_profiles(parts, fit), units=dict(zip(fit.names, units, strict=True)),
+            title=f"fit-amcl: profile likelihoods of AMCL's α ({fit.updates} updates, "
+                  f"{100 * fit.level:g} % intervals)"))
     out["outputs"] = outputs
     return out

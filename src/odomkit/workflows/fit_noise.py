@@ -22,8 +22,10 @@ from typing import TYPE_CHECKING, Any, TypeVar
 
 from odomkit.calibrate.fit_noise import DEFAULT_TRIM
 from odomkit.errors import InputError
+from odomkit.progress import NO_PROGRESS, Progress, stage
 
 if TYPE_CHECKING:
+    from odomkit.calibrate.fit_noise import NoiseFit
     from odomkit.noise import NoiseModel
     from odomkit.robot import Robot
     from odomkit.windows import WindowBasis, WindowSpec
@@ -122,24 +124,41 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
-def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: str | None) -> list[R]:
-    """``fn`` over ``tasks`` in order: on Dask, in worker processes, or here."""
+def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: str | None,
+             progress: Progress = NO_PROGRESS) -> list[R]:
+    """``fn`` over ``tasks`` in order: on Dask, in worker processes, or here; ``progress``
+    is advanced by one as each task's result arrives."""
     if scheduler is not None:
         from odomkit.simulate.distributed import get_client
 
-        client, owned = get_client(scheduler)
+        client, owned = get_client(scheduler)  # one line if dask is missing
+        from dask.distributed import as_completed
+
         try:
-            return list(client.gather(client.map(fn, list(tasks), pure=False)))
+            futures = client.map(fn, list(tasks), pure=False)
+            index = {f.key: i for i, f in enumerate(futures)}
+            done: list[Any] = [None] * len(futures)
+            for fut in as_completed(futures):
+                done[index[fut.key]] = fut.result()
+                progress.advance()
+            return done
         finally:
             if owned:
                 client.close()
+    results: list[R] = []
     if workers <= 1 or len(tasks) < 2:
-        return [fn(t) for t in tasks]
+        for task in tasks:
+            results.append(fn(task))
+            progress.advance()
+        return results
     # Spawned, not forked: a fork copies numba's and OpenBLAS's threads' locks mid-use and
     # can hang the child.
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=context) as pool:
-        return list(pool.map(fn, tasks, chunksize=max(1, len(tasks) // (4 * workers))))
+        for result in pool.map(fn, tasks, chunksize=max(1, len(tasks) // (4 * workers))):
+            results.append(result)
+            progress.advance()
+    return results
 
 
 def _rows(path: Path) -> int:
@@ -167,6 +186,8 @@ def fit_noise_files(
     workers: int | None = None,
     scheduler: str | None = None,
     overwrite: bool = False,
+    progress: Progress = NO_PROGRESS,
+    plot: str | Path | None = None,
 ) -> dict[str, Any]:
     """Fit the noise of ``robot_path`` to ``logs`` and write the fitted robot file to ``out``.
 
@@ -189,6 +210,10 @@ def fit_noise_files(
     scheduler : a Dask scheduler address: run those tasks on its cluster instead.
     trim : fit the bulk: window ends outside this probability's ellipse of the fit are left
         out and counted (:func:`odomkit.calibrate.fit_noise.fit_noise`); None: keep all.
+    progress : two stages (:mod:`odomkit.progress`): ``"logs"``, one unit per log read and
+        cut into windows, then ``"fitting"`` (of unknown length).
+    plot : draw each fitted parameter's profile likelihood and the in-sample coverage into
+        this .png, .svg or .pdf file (:func:`odomkit.workflows.figures.profiles_figure`).
 
     Returns
     -------
@@ -212,8 +237,12 @@ def fit_noise_files(
     if trim is not None and not 0.5 < trim < 1:
         raise InputError(f"--trim must be a probability in (0.5, 1) (or none), got {trim}")
     # Checked against the inputs too: ``--out ROBOT --force`` must not replace the robot file.
-    check_outputs({"--out": out}, overwrite=overwrite,
+    check_outputs({"--out": out, "--plot": plot}, overwrite=overwrite,
                   inputs=[robot_path, *logs, *(t.path for t in truths if t.path is not None)])
+    if plot is not None:
+        from odomkit.plot import check_plot_file
+
+        check_plot_file(plot)
     robot, file_models = read_robot(robot_path)
     models, default_fixed = models_to_fit(robot, file_models, kinds)
     options = log_options if log_options is not None else LogOptions()
@@ -222,7 +251,8 @@ def fit_noise_files(
     if workers is None:
         big = sum(_rows(Path(p)) for p in logs) >= PARALLEL_ROWS
         workers = (os.cpu_count() or 1) if big else 1
-    prepared = _run_all(prepare_log, tasks, workers, scheduler)
+    with stage(progress, len(tasks), "logs"):
+        prepared = _run_all(prepare_log, tasks, workers, scheduler, progress)
     used = [p for p in prepared if p.basis is not None]
     if not used:
         first = prepared[0]
@@ -238,7 +268,7 @@ def fit_noise_files(
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
-    with numeric_guard("the noise fit"):
+    with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                         level=level, log_names=[p.name for p in used], cross_validate=cross_validate,
                         trim=trim)
@@ -258,4 +288,42 @@ def fit_noise_files(
         "outputs": {"robot": str(written)},
         "seconds": time.perf_counter() - started,
     })
+    if plot is not None:
+        drawn = _noise_plot(plot, bases, models, robot, fit, kinds, set(fixed) | default_fixed, level, trim)
+        result["outputs"] = {"robot": str(written), "plot": str(drawn)}
     return result
+
+
+#: The unit of each noise field (the variance parameter is its square for σ and k fields).
+_NOISE_UNITS = {"k_left": "m^½", "k_right": "m^½", "alpha_ss": "m", "psd_gyro": "rad²/s",
+               "psd_compass": "rad²·s", "alpha_lateral": "m", "sigma_speed": "m/s", "sigma_steer": "rad",
+               "sigma_dt": "s", "sigma_distance": "m", "sigma_angle": "rad", "sigma_wheel_base": "m",
+               "sigma_scale_left": "relative", "sigma_scale_right": "relative",
+               "sigma_steering_offset": "rad",
+               "sigma_yaw_rate_offset": "rad/s", "sigma_yaw_rate_scale": "relative",
+               "sigma_heading_offset": "rad"}
+
+
+def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence[NoiseModel],
+                robot: Robot, fit: NoiseFit, kinds: Sequence[str], fixed: set[str], level: float,
+                trim: float | None) -> Path:
+    """``fit-noise --plot``: the profiles of the fit and its in-sample coverage; when it
+    fitted white and bias noise, beside the coverage of a white-only refit (bias at zero),
+    and the leave-one-log-out coverage when it was cross-validated."""
+    from odomkit.calibrate.fit_noise import fit_noise
+    from odomkit.calibrate.profile import noise_profiles
+    from odomkit.workflows.figures import profiles_figure
+
+    profiles = noise_profiles(bases, models, robot, fit, kinds=kinds, fixed=fixed)
+    label = " + ".join(k for k in ("white", "bias") if k in kinds)
+    coverages = {f"{label} (this fit)": fit.coverage_in_sample}
+    if "bias" in kinds and "white" in kinds:
+        white = tuple(m if m.kind != "bias"
+                      else m.from_variances({n: 0.0 for n in m.variance_parameters(robot)}) for m in models)
+        alone = fit_noise(bases, white, robot, kinds=("white",), fixed=fixed, level=level, trim=trim)
+        coverages["white only (refitted, bias zero)"] = alone.coverage_in_sample
+    if fit.cross_validation is not None:
+        coverages["leave-one-log-out"] = fit.cross_validation["coverage"]  # type: ignore[assignment]
+    units = {p.name: _NOISE_UNITS.get(p.name.rsplit(".", 1)[-1], "") for p in profiles}
+    return profiles_figure(plot, profiles, units=units, coverages=coverages, n_scored=fit.windows,
+                           title=f"fit-noise: profile likelihoods ({100 * level:g} % intervals) and coverage")

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from odomkit.errors import InputError
+from odomkit.progress import NO_PROGRESS, Progress, stage
 
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
@@ -47,6 +48,8 @@ def detect_format(path: Path) -> str:
     """Guess a log format from its file name (a ``.gz`` suffix is looked through); a
     ``.bag``/``.db3``/``.mcap`` file or a folder with a ``metadata.yaml`` is a ROS bag.
 
+    Examples
+    --------
     >>> detect_format(Path("230620202042_run-01.csv")), detect_format(Path("log.csv.gz"))
     ('optiodom', 'csv')
     >>> detect_format(Path("230620202042_run-01.csv.gz"))
@@ -140,9 +143,13 @@ def _positive(value: float) -> bool:
             and math.isfinite(value) and value > 0)
 
 
-def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None) -> OdometryLog:
+def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, *,
+             progress: Progress = NO_PROGRESS) -> OdometryLog:
     """Read a log in any supported format (plain or gzip) and decimate it as ``options`` say
     (default: :class:`LogOptions`, the format from the file name).
+
+    ``progress`` (:mod:`odomkit.progress`) gets one stage, ``"reading NAME"``: of the bag's
+    messages for a ROS bag, of unknown length for a text log (read at once).
 
     Raises
     ------
@@ -166,22 +173,24 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None) 
         from odomkit.io.bag import read_bag
 
         options.check_format(fmt, str(path))
-        log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic)
+        log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
+                       progress=progress)
         return log.decimate(options.decimate)
     if not path.is_file():
         raise InputError("no such file", source=str(path))
     options.check_format(fmt, str(path))
-    if fmt == "khepera":
-        log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
-    elif fmt == "snowhite":
-        log = read_snowhite(path, **({"period": options.period} if options.period else {}))
-    elif fmt == "optiodom":
-        log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
-    else:
-        if not options.columns:
-            raise InputError("a text log needs --columns: header names (t=time,ticks_left=L,"
-                             "ticks_right=R) or the columns in order (t,ticks_left,ticks_right)",
-                             source=str(path))
-        log = read_csv_log(path, parse_columns(options.columns), cumulative=options.cumulative,
-                           wrap_bits=options.wrap_bits, time_unit=options.time_unit)
-    return log.decimate(options.decimate)
+    if fmt == "csv" and not options.columns:
+        raise InputError("a text log needs --columns: header names (t=time,ticks_left=L,"
+                         "ticks_right=R) or the columns in order (t,ticks_left,ticks_right)",
+                         source=str(path))
+    with stage(progress, None, f"reading {path.name}"):
+        if fmt == "khepera":
+            log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
+        elif fmt == "snowhite":
+            log = read_snowhite(path, **({"period": options.period} if options.period else {}))
+        elif fmt == "optiodom":
+            log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
+        else:
+            log = read_csv_log(path, parse_columns(options.columns or ""), cumulative=options.cumulative,
+                               wrap_bits=options.wrap_bits, time_unit=options.time_unit)
+        return log.decimate(options.decimate)

@@ -8,10 +8,12 @@ command's output also carries the covariance in ROS's 6×6 layout
 from __future__ import annotations
 
 from collections.abc import Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from numpy.typing import ArrayLike
 
+from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.io.ros import ros_pose_covariance
 from odomkit.path import Segment
@@ -32,6 +34,8 @@ def add_ros_pose_covariance(summary: dict[str, Any]) -> dict[str, Any]:
     """``summary`` with ``ros_pose_covariance`` (36 numbers, from its ``cov``) right after
     ``cov``, the order in which the command prints them.
 
+    Examples
+    --------
     >>> d = add_ros_pose_covariance({"pose": [0, 0, 0], "cov": [[1, 0, 0], [0, 1, 0], [0, 0, 1]],
     ...                              "std": [1, 1, 1]})
     >>> list(d), d["ros_pose_covariance"][35], d["ros_pose_covariance"][14]
@@ -55,14 +59,27 @@ def run_predict(
     engine: str = "closed",
     partitions: int | None = None,
     compass_period: float | None = None,
+    plot: str | Path | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """Predict the end pose of ``segments`` and its covariance: the ``--json`` object.
 
     Parameters are those of :func:`odomkit.propagate.predict.predict`. Returns
     :meth:`~odomkit.propagate.predict.Prediction.to_dict` plus ``ros_pose_covariance``.
+    With ``plot`` (.png, .svg or .pdf; replaced only when ``overwrite``) it also draws
+    :func:`odomkit.workflows.figures.predict_figure` and adds ``outputs``.
     """
     from odomkit.propagate.predict import predict
 
+    if plot is not None:
+        from odomkit.io.files import check_outputs
+        from odomkit.plot import check_plot_file
+
+        check_outputs({"--plot": plot}, overwrite=overwrite)
+        check_plot_file(plot)
+
+    if partitions is not None:  # checked here too, so that the message names the flag
+        validate.positive_int(partitions, "--partitions")
     if partitions is not None and partitions * max(len(segments), 1) > MAX_STEPS:
         raise ModelError(f"--partitions {partitions} × {len(segments)} segment(s) = "
                          f"{partitions * len(segments):.3g} steps, above the limit {MAX_STEPS:.0e} "
@@ -72,4 +89,11 @@ def run_predict(
                          engine=engine,  # type: ignore[arg-type]
                          partitions=partitions, compass_period=compass_period)
     check_result("the prediction", {"the pose": result.pose}, {"the covariance": result.cov})
-    return add_ros_pose_covariance(result.to_dict())
+    out = add_ros_pose_covariance(result.to_dict())
+    if plot is not None:
+        from odomkit.workflows.figures import predict_figure
+
+        out["outputs"] = {"plot": str(predict_figure(
+            plot, segments, noise, wheel_base, pose0=pose0, cov0=cov0, end_pose=result.pose,
+            end_cov=result.cov, compass_period=compass_period, partitions=partitions))}
+    return out

@@ -12,6 +12,7 @@ the first number that is not finite.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Iterator, Mapping
 from contextlib import contextmanager
 
@@ -20,7 +21,7 @@ from numpy.typing import ArrayLike
 
 from odomkit.errors import ModelError
 
-__all__ = ["check_result", "numeric_guard", "RESULT_RTOL"]
+__all__ = ["check_result", "collected_warnings", "numeric_guard", "RESULT_RTOL"]
 
 #: Asymmetry and negative eigenvalue a computed covariance may show, relative to its largest
 #: entry: rounding of long recursions and prefix sums (~1e-13), far below any real defect.
@@ -34,6 +35,8 @@ def numeric_guard(what: str) -> Iterator[None]:
     """Run a command's numerics with numpy's floating-point warnings off and its overflow
     failures turned into one :class:`~odomkit.errors.ModelError` naming ``what``.
 
+    Examples
+    --------
     >>> with numeric_guard("the track"):
     ...     float(np.float64(1e300) * 1e300)
     inf
@@ -121,3 +124,28 @@ def _check_psd(what: str, name: str, cov: np.ndarray) -> None:
     if asymmetric or float(np.min(np.linalg.eigvalsh(0.5 * (last + last.T)))) < -RESULT_RTOL * scale:
         raise ModelError(f"{what}: {name} is not a covariance (not symmetric positive "
                          f"semi-definite: {last.tolist()}); the numerics lost all precision; {_ADVICE}")
+
+
+@contextmanager
+def collected_warnings() -> Iterator[list[str]]:
+    """Collect the UserWarnings raised inside the block: the yielded list gets their texts,
+    once each, whitespace folded to one line, when the block ends (also when it raises).
+    odomkit warns with UserWarning; other categories (a library's DeprecationWarning,
+    numpy's RuntimeWarning) are warned again afterwards, under Python's own filters."""
+    texts: list[str] = []
+    others: list[warnings.WarningMessage] = []
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", UserWarning)
+            try:
+                yield texts
+            finally:
+                for item in caught:
+                    text = " ".join(str(item.message).split())
+                    if not issubclass(item.category, UserWarning):
+                        others.append(item)
+                    elif text not in texts:
+                        texts.append(text)
+    finally:
+        for item in others:  # outside catch_warnings: Python's own display
+            warnings.showwarning(item.message, item.category, item.filename, item.lineno)

@@ -19,6 +19,7 @@ from odomkit.io.ros import ros_pose_covariance
 from odomkit.io.trackio import kitti_times_path, write_kitti, write_track_csv, write_tum
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.track import Track, dead_reckon_log
 from odomkit.truth import start_pose, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
@@ -89,7 +90,7 @@ def run_track(
     cov0: list[list[float]] | None = None,
     truth: TruthOptions | None = None,
     with_covariance: bool = True,
-    engine: str = "recursion",
+    engine: str | None = None,
     out: str | Path | None = None,
     tum: str | Path | None = None,
     kitti: str | Path | None = None,
@@ -98,6 +99,8 @@ def run_track(
     bag_format: str | None = None,
     frame_id: str = "odom",
     child_frame_id: str = "base_link",
+    progress: Progress = NO_PROGRESS,
+    plot: str | Path | None = None,
 ) -> TrackRun:
     """Read a robot file and a log, dead-reckon, write the requested outputs.
 
@@ -111,6 +114,11 @@ def run_track(
     variance of a heading fitted to position-only truth); the CSV gets ``gt_*`` columns.
     ``bag_out`` writes ``nav_msgs/Odometry`` (:mod:`odomkit.io.bag_writer`; ``bag_format``
     ros1, db3 or mcap, default from the path) with ``frame_id``/``child_frame_id``.
+    ``engine`` (default ``"recursion"``) and ``cov0`` apply to the covariance only: given
+    without one (``with_covariance`` false, or a robot file without ``[noise]``) they are
+    refused. ``progress`` (:mod:`odomkit.progress`) sees the stages: reading the log, dead
+    reckoning, the covariance chunk by chunk, writing the outputs. ``plot`` (.png, .svg or
+    .pdf) draws :func:`odomkit.workflows.figures.track_figure`.
     """
     options = truth or TruthOptions()
     inputs = [p for p in (log_path, robot_path, options.path) if p is not None]
@@ -119,10 +127,15 @@ def run_track(
     bag = None if bag_out is None else check_bag_out(bag_out, bag_format, overwrite=overwrite, inputs=inputs)
     check_outputs({"--out": out, "--tum": tum, "--kitti": kitti,
                    "--kitti (its times)": None if kitti is None else kitti_times_path(kitti),
-                   "--bag-out": None if bag is None else bag.file_check},
+                   "--bag-out": None if bag is None else bag.file_check, "--plot": plot},
                   overwrite=overwrite, inputs=inputs)
+    if plot is not None:
+        from odomkit.plot import check_plot_file
+
+        check_plot_file(plot)
     robot, noise = read_robot(robot_path)
-    log = load_log(log_path, robot, log_options or LogOptions())
+    _refuse_covariance_flags(engine, cov0, with_covariance, bool(noise), robot_path)
+    log = load_log(log_path, robot, log_options or LogOptions(), progress=progress)
     found = load_truth(options, log)
     truth_rows = None
     if found is not None:
@@ -139,20 +152,46 @@ def run_track(
                 cov0 = start_cov.tolist()
     use_noise = (noise if len(noise) > 1 else noise[0]) if (noise and with_covariance) else None
     with numeric_guard("the track"):
-        track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, cov0=cov0, engine=engine)
+        track = dead_reckon_log(log, robot, method, pose0, noise=use_noise, cov0=cov0,
+                                engine=engine or "recursion", progress=progress)
     check_result("the track", {"the poses": track.poses, "the path length": track.path_length},
                  {"the covariance": track.cov})
     outputs = {}
-    # The bag first: its writer still checks the content (ROS stamps), and a refusal there
-    # must leave nothing half-written; the text writers can fail only on the file system.
-    if bag is not None:
-        outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
-                                             child_frame_id=child_frame_id))
-    if out is not None:
-        outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
-    if tum is not None:
-        outputs["tum"] = str(write_tum(tum, track, overwrite))
-    if kitti is not None:
-        poses, times = write_kitti(kitti, track, overwrite)
-        outputs["kitti"], outputs["kitti_times"] = str(poses), str(times)
-    return TrackRun(track, log, outputs, truth_rows)
+    with stage(progress, sum(p is not None for p in (bag, out, tum, kitti)), "writing"):
+        # The bag first: its writer still checks the content (ROS stamps), and a refusal there
+        # must leave nothing half-written; the text writers can fail only on the file system.
+        if bag is not None:
+            outputs["bag"] = str(write_track_bag(bag, track, use_noise, frame_id=frame_id,
+                                                 child_frame_id=child_frame_id))
+            progress.advance()
+        if out is not None:
+            outputs["track_csv"] = str(write_track_csv(out, track, overwrite, truth=truth_rows))
+            progress.advance()
+        if tum is not None:
+            outputs["tum"] = str(write_tum(tum, track, overwrite))
+            progress.advance()
+        if kitti is not None:
+            poses, times = write_kitti(kitti, track, overwrite)
+            outputs["kitti"], outputs["kitti_times"] = str(poses), str(times)
+            progress.advance()
+    run = TrackRun(track, log, outputs, truth_rows)
+    if plot is not None:
+        from odomkit.workflows.figures import track_figure
+
+        outputs["plot"] = str(track_figure(plot, run, robot))
+    return run
+
+
+def _refuse_covariance_flags(engine: str | None, cov0: object, with_covariance: bool, has_noise: bool,
+                             robot_path: str | Path) -> None:
+    """``--engine`` and ``--initial-cov`` shape the covariance: without one they would be
+    ignored silently, so they are refused (as a log option that the log's format does not use)."""
+    stray = [flag for flag, value in (("--engine", engine), ("--initial-cov", cov0)) if value is not None]
+    if not stray or (with_covariance and has_noise):
+        return
+    flags = " and ".join(stray)
+    verb = "apply" if len(stray) > 1 else "applies"
+    if not with_covariance:
+        raise InputError(f"{flags} {verb} to the covariance, which --no-covariance turns off")
+    raise InputError(f"{flags} {verb} to the covariance, and the robot file has no [noise] table to "
+                     "propagate", source=str(robot_path))

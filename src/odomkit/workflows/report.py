@@ -1,0 +1,568 @@
+"""``odomkit report``: one self-contained HTML page about one log.
+
+The page gathers what the other commands compute, by running their workflows on the log:
+the track with its covariance (:mod:`~odomkit.workflows.track`); with ground truth also the
+error metrics and the windowed honesty test (:func:`~odomkit.workflows.evaluate.score_logs`
+pooled by :func:`~odomkit.workflows.evaluate.summarise`, exactly what ``odomkit evaluate``
+prints), the calibration (:func:`~odomkit.workflows.calibration.calibrate_files`) and the
+metrics after it, the fitted noise (:func:`~odomkit.workflows.fit_noise.fit_noise_files`) with
+its own honesty test, nav2 AMCL's α's (:func:`~odomkit.workflows.fit_amcl.fit_amcl_files`) and
+the ROS parameter snippets (:mod:`odomkit.io.ros`). Nothing is computed another way here.
+Figures come from :mod:`odomkit.plot` (the optional ``plot`` extra; without it the page has
+the numbers and says how to get the figures); the page itself is :mod:`odomkit.report`.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+import warnings
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from odomkit import __version__
+from odomkit.errors import OdomkitError
+from odomkit.report import Cell, Code, Figure, Paragraph, Section, Table, number, render_report, svg_figure
+from odomkit.workflows.results import collected_warnings
+from odomkit.workflows.truth import TruthOptions
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+
+    from odomkit.workflows.evaluate import Scored
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.track import TrackRun
+
+__all__ = ["DEFAULT_WINDOW", "LEVELS", "ReportFigures", "coverage_table",
+           "run_report", "write_page"]
+
+#: Window of the honesty test when none is given, if the log has three of them with truth.
+DEFAULT_WINDOW = "10s"
+#: The probabilities of the coverage tables (keys of the evaluate workflow's ``coverage``).
+LEVELS = ("0.5", "0.9", "0.95", "0.99")
+#: Updates a ROS 2 diff_drive_controller averages its velocity over (its default
+#: ``velocity_rolling_window_size``), for the twist covariance of the snippet.
+VELOCITY_WINDOW = 10
+
+DrawFunction = Callable[[ModuleType, list["Axes"]], object]
+
+
+class ReportFigures:
+    """Draws figures with :mod:`odomkit.plot` and embeds them as SVG.
+
+    Without matplotlib, or when a drawing function is missing from :mod:`odomkit.plot`,
+    :meth:`draw` returns None and :attr:`notes` says why (once).
+    """
+
+    def __init__(self) -> None:
+        from odomkit.plot import have_matplotlib
+
+        self.enabled = have_matplotlib()
+        self.notes: list[str] = []
+        self.drawn = 0
+        if not self.enabled:
+            self.notes.append("the figures need matplotlib: pip install 'odomkit[plot]' and run again")
+
+    def draw(self, needs: Sequence[str], build: DrawFunction, caption: str, alt: str, *,
+             panels: tuple[int, int] = (1, 1), size: tuple[float, float] | None = None) -> Figure | None:
+        """A figure of ``panels`` (rows, columns) axes drawn by ``build(plot, axes)``.
+
+        Parameters
+        ----------
+        needs : names of the :mod:`odomkit.plot` functions ``build`` calls
+        build : draws on the axes (a list, row by row)
+        caption, alt : the text under the figure, and the text that stands for it
+        size : (width, height) [inches]; default from :func:`odomkit.plot.new_figure`
+        """
+        if not self.enabled:
+            return None
+        from odomkit import plot
+
+        missing = [name for name in (*needs, "new_figure", "figure_svg") if not hasattr(plot, name)]
+        if missing:
+            self.notes.append(f"odomkit.plot has no {', '.join(missing)}: a figure was left out")
+            return None
+        fig, axes = plot.new_figure(*panels, size=size)
+        assert isinstance(axes, list)
+        build(plot, axes)
+        self.drawn += 1
+        return svg_figure(plot.figure_svg(fig), caption, alt)
+
+
+def write_page(path: str | Path, page: str, overwrite: bool) -> Path:
+    """Write the page (the caller has checked ``path`` with :func:`odomkit.io.files.check_outputs`)."""
+    from odomkit.io.files import write_new_text
+
+    return write_new_text(path, page, overwrite)
+
+
+def coverage_table(rows: Sequence[tuple[str, dict[str, Any], str]], scored: str) -> Table:
+    """Predicted probability against the observed fraction inside, one column per noise.
+
+    ``rows`` holds (label, coverage dict of the evaluate workflow, key prefix); ``scored``
+    names what was counted (e.g. "9 window ends")."""
+    header = ("predicted probability", *(f"inside, {label}" for label, _, _ in rows))
+    body: tuple[tuple[str | Cell, ...], ...] = tuple(
+        (f"{float(level):.0%}",
+         *(number(cov[level], key=f"{prefix}coverage.{level}", decimals=2) for _, cov, prefix in rows))
+        for level in LEVELS)
+    return Table(header, body, f"Fraction of {scored} inside the predicted position ellipse")
+
+
+# ----------------------------------------------------------------------------------- the steps
+def _auto_window(run: TrackRun) -> tuple[str | None, str | None]:
+    """:data:`DEFAULT_WINDOW` when the log has three such windows with truth, else one
+    window for the whole log, with a note saying so."""
+    from odomkit.windows import parse_window
+
+    assert run.truth is not None
+    t = run.log.t[np.isfinite(run.truth[:, 0])]
+    span = float(t[-1] - t[0]) if t.size else 0.0
+    if span >= 3 * parse_window(DEFAULT_WINDOW).length:
+        return DEFAULT_WINDOW, None
+    return None, (f"the log has {span:.3g} s with truth, too short for three {_window_text(DEFAULT_WINDOW)}: "
+                  "the honesty test scores the whole log as one window, a single sample; give a longer "
+                  "log or --window")
+
+
+def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptions | None,
+            window: str | None, method: str) -> tuple[list[Scored], dict[str, Any]]:
+    """The evaluate workflow's figures: each log's raw scores and the pooled JSON keys."""
+    from odomkit.workflows.evaluate import score_logs, summarise
+
+    scored = score_logs([log], robot, [options], log_options=log_options, window=window, method=method)
+    for note in dict.fromkeys(w for s in scored for w in s.warnings):
+        warnings.warn(note, stacklevel=2)
+    return scored, summarise(scored, (1.0,))
+
+
+def _attempt(what: str, step: Callable[[], Any], problems: list[str]) -> Any:
+    """Run one optional step; a refusal (bad or unsuitable data) becomes a note, not a failure
+    of the whole report."""
+    try:
+        return step()
+    except OdomkitError as exc:
+        problems.append(f"{what}: {exc}")
+        warnings.warn(f"{what} left out: {exc}", stacklevel=2)
+        return None
+
+
+# ---------------------------------------------------------------------------------- the sections
+def _track_section(run: TrackRun, figures: ReportFigures, summary: dict[str, Any]) -> Section:
+    from odomkit.windows import cumulative_travel
+
+    track = run.track
+    cov = track.cov
+    blocks: list[Any] = [Paragraph(
+        "Dead reckoning integrates the wheel (or speed and yaw-rate) increments of the log with the "
+        "robot file's geometry. The covariance grows with the robot file's [noise]: the "
+        "ellipses hold the true position with 95 % probability if that noise model is right.")]
+    s = cumulative_travel(track.steps)
+    fig = figures.draw(("draw_track",), lambda plot, ax: plot.draw_track(
+        ax[0], track.poses, cov, truth=run.truth, label="odometry"),
+        "The dead-reckoned track (solid) with its 95 % position ellipses (χ² with 2 degrees of freedom, "
+        "5.99), and the ground truth (dashed) where there is one.", "Track of the log with ellipses",
+        size=(7.0, 5.6))
+    blocks += [f for f in (fig,) if f is not None]
+    x, y, th = summary["pose"]
+    rows: list[tuple[str | Cell, ...]] = [
+        ("poses", Cell(str(summary["samples"]), "samples", float(summary["samples"]))),
+        ("duration", number(summary["duration"], "s", key="duration")),
+        ("path length", number(summary["path_length"], "m", key="path_length")),
+        ("final pose x, y", Cell(f"{x:.4g} m, {y:.4g} m")),
+        ("final heading θ", number(th, "rad", key="final_theta")),
+    ]
+    if cov is not None:
+        rows += [("final σx, σy", Cell(f"{np.sqrt(cov[-1, 0, 0]):.3g} m, {np.sqrt(cov[-1, 1, 1]):.3g} m")),
+                 ("final σθ", number(float(np.sqrt(cov[-1, 2, 2])), "rad", 3, key="final_sigma_theta"))]
+        fig = figures.draw(("draw_covariance_elements",), lambda plot, ax: plot.draw_covariance_elements(
+            ax, s, cov, s_label="distance travelled [m]"),
+            "The six elements of the pose covariance along the path: variances grow with distance, and "
+            "the correlations (x–θ, y–θ) show how a heading error turns into a position error.",
+            "Covariance elements over distance", panels=(2, 3), size=(10.0, 5.6))
+        blocks += [f for f in (fig,) if f is not None]
+    blocks.insert(1, Table(("", "value"), tuple(rows), "The track"))
+    if run.truth is not None and cov is not None:
+        err = track.poses - run.truth  # θ wrapped by draw_error_band
+        sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
+        fig = figures.draw(("draw_error_band",), lambda plot, ax: plot.draw_error_band(
+            ax, track.t, err, sigma),
+            "The true error (odometry − truth) in x, y and θ with the ±2σ band of the predicted standard "
+            "deviation. Along one run the errors are correlated, so the fraction inside is one sample, "
+            "not a test: the windowed honesty test below is.", "True error against predicted band",
+            panels=(3, 1), size=(8.0, 6.6))
+        blocks += [f for f in (fig,) if f is not None]
+    return Section("track", "The track and its uncertainty", tuple(blocks))
+
+
+def _metric_rows(ev: dict[str, Any], prefix: str = "") -> list[tuple[str | Cell, ...]]:
+    rows: list[tuple[str | Cell, ...]] = [
+        (label, number(ev[key], unit, digits, key=prefix + key)) for label, key, unit, digits in (
+            ("final position error", "final_position_error", "m", 4),
+            ("largest position error", "max_position_error", "m", 4),
+            ("ATE (RMSE of the position error)", "ate_rmse", "m", 4),
+            ("drift (final error per distance)", "drift_percent", "%", 3))]
+    rows += [(f"RPE over {d} m (RMSE)", number(v, "m", key=f"{prefix}rpe.{d}")) for d, v in ev["rpe"].items()]
+    return rows
+
+
+def _errors_section(ev: dict[str, Any]) -> Section:
+    rows = _metric_rows(ev) + [("rows scored / left out (no truth there)",
+                                Cell(f"{ev['rows_evaluated']} / {ev['rows_skipped']}"))]
+    return Section("errors", "How wrong: error metrics", (
+        Paragraph("The track dead-reckoned from the truth at the first row, compared with the truth row by "
+                  "row (no alignment). ATE is the RMS position error over the run; RPE the error of the "
+                  "motion over each stretch of 1 m of true travel, which does not grow with the run; drift "
+                  "the final error as a share of the distance travelled."),
+        Table(("metric", "value"), tuple(rows), "Against ground truth (odomkit evaluate)"),
+    ))
+
+
+def _window_text(window: str | None) -> str:
+    """``"10s"`` -> "10 s windows"."""
+    if window is None:
+        return "one window, the whole log"
+    from odomkit.windows import parse_window
+
+    spec = parse_window(window)
+    return f"{spec.length:g} {'s' if spec.unit == 's' else 'm of travel'} windows"
+
+
+def _honesty_section(scored: list[Scored], ev: dict[str, Any], window: str | None,
+                     figures: ReportFigures) -> Section:
+    from odomkit.evaluate import nees
+
+    n = ev["windows"]
+    blocks: list[Any] = [Paragraph(
+        f"The log is cut into {_window_text(window)}; each is dead-reckoned "
+        "again from the truth at its start and scored at its end, so the window ends are independent "
+        "samples. An honest covariance puts about 50 / 90 / 95 / 99 % of them inside its 50 / 90 / 95 / "
+        "99 % ellipses, and its mean NEES (normalised error squared, 2 for a position) inside the bounds.")]
+    lo_hi = ev["nees_bounds"]
+    rows: list[tuple[str | Cell, ...]] = [
+        ("windows scored", Cell(str(n), "windows", float(n))),
+        ("NEES mean (ideal 2)", number(ev["nees_position_mean"], "", 3, key="nees_position_mean")),
+        ("95 % bounds of the mean", Cell("n/a" if lo_hi is None else f"{lo_hi[0]:.3g} … {lo_hi[1]:.3g}")),
+        ("NEES median (ideal 1.39)", number(ev["nees_position_median"], "", 3, key="nees_position_median")),
+    ]
+    blocks.append(Table(("", "value"), tuple(rows), "Position NEES of the window ends"))
+    blocks.append(coverage_table([("robot file's noise", ev["coverage"], "")], f"{n} window ends"))
+    mean = ev["nees_position_mean"]
+    if mean is not None and lo_hi is not None:
+        verdict = ("within its bounds: the covariance is honest here" if lo_hi[0] <= mean <= lo_hi[1] else
+                   "above its bounds: the covariance is too small (overconfident)" if mean > lo_hi[1] else
+                   "below its bounds: the covariance is too large (pessimistic)")
+        blocks.append(Paragraph(f"The mean NEES {mean:.3g} is {verdict}.", "note"))
+    t = np.concatenate([s.honesty_t for s in scored])
+    e = np.concatenate([s.honesty_errors for s in scored])
+    c = np.concatenate([s.honesty_cov for s in scored])
+    if t.size == e.shape[0] and t.size:
+        fig = figures.draw(("draw_nees", "draw_reliability"), lambda plot, ax: (
+            plot.draw_nees(ax[0], t, nees(e, c)),
+            plot.draw_reliability(ax[1], {"robot file's noise": ev["coverage"]}, n_scored=n)),
+            "Left: the NEES of each window end against the band that holds 95 % of them for an honest "
+            "covariance. Right: predicted probability against the observed fraction inside (on the "
+            "diagonal when honest; below it when overconfident).", "NEES per window and reliability diagram",
+            panels=(1, 2), size=(10.5, 5.0))
+        blocks += [f for f in (fig,) if f is not None]
+    return Section("honesty", "How honest: the windowed test of the covariance", tuple(blocks))
+
+
+def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before: dict[str, Any],
+                         after: dict[str, Any] | None, run: TrackRun, run_after: TrackRun | None,
+                         figures: ReportFigures) -> Section:
+    blocks: list[Any] = [Paragraph(
+        "The robot's systematic errors (unequal wheel sizes E_d, a wrong wheel base E_b) are fitted to "
+        "this log's truth (odomkit calibrate); the metrics are then computed again with the corrected "
+        "robot. On the log it was fitted to, 'after' is optimistic: check it on another log.")]
+    if cal is None or after is None:
+        blocks.append(Paragraph(f"No calibration: {problem}", "warning"))
+        return Section("calibration", "Calibration before and after", tuple(blocks))
+    params = cal.get("parameters", {})
+    errors = cal.get("std_errors", {})
+    rows: list[tuple[str | Cell, ...]] = [
+        (name, number(value, "", 6, key=f"calibration.{name}"),
+         number(errors.get(name), "", 2, key=f"calibration.std_error.{name}"))
+        for name, value in params.items()]
+    for name in ("E_d", "E_b"):
+        if name in cal:
+            rows.append((name, number(cal[name], "", 6, key=f"calibration.{name}"), Cell("")))
+    blocks.append(Table(("parameter", "fitted", "standard error"), tuple(rows),
+                        f"Calibration ({cal.get('method', 'exact')}, from {cal.get('source', 'truth')})"))
+    pairs = zip(_metric_rows(before, "before."), _metric_rows(after, "after."), strict=True)
+    blocks.append(Table(("metric", "before", "after"), tuple((b[0], b[1], a[1]) for b, a in pairs),
+                        "Error metrics with the robot file's parameters and with the calibrated ones"))
+    if run_after is not None:
+        def draw(plot: ModuleType, ax: list[Axes]) -> None:
+            plot.draw_track(ax[0], run.track.poses, truth=run.truth, label="before calibration")
+            plot.draw_track(ax[0], run_after.track.poses, label="after calibration")
+
+        fig = figures.draw(("draw_track",), draw, "The track with the robot file's parameters and with the "
+                           "calibrated ones, against the ground truth.",
+                           "Tracks before and after calibration", size=(7.0, 5.6))
+        blocks += [f for f in (fig,) if f is not None]
+    return Section("calibration", "Calibration before and after", tuple(blocks))
+
+
+def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dict[str, float],
+                   ev: dict[str, Any], ev_fit: dict[str, Any] | None, figures: ReportFigures) -> Section:
+    blocks: list[Any] = [Paragraph(
+        "The noise variances that make the window ends most likely (maximum likelihood, odomkit "
+        "fit-noise), with their 95 % profile-likelihood intervals, fitted with the calibrated robot. "
+        "The honesty test with the fitted noise is in-sample here (fitted and scored on the same windows): "
+        "score it on another log (odomkit evaluate) before trusting it.")]
+    if fit is None or ev_fit is None:
+        blocks.append(Paragraph(f"No noise fit: {problem}", "warning"))
+        return Section("noise", "The fitted noise", tuple(blocks))
+    def interval(key: str) -> Cell:
+        ends = fit["interval95"].get(key)
+        return Cell("n/a" if ends is None else " … ".join(
+            "∞" if v is None or not np.isfinite(v) else f"{v:.3g}" for v in ends))
+
+    rows = tuple((key, number(guessed.get(key), "", 4, key=f"noise.file.{key}"),
+                  number(value, "", 4, key=f"noise.fitted.{key}"), interval(key))
+                 for key, value in fit["parameters"].items())
+    blocks.append(Table(("parameter", "robot file", "fitted", "95 % interval"), rows,
+                        f"Fitted on {fit['windows']} windows (in the robot file's units: k_* m^½, "
+                        "sigma_* as named)"))
+    n = ev_fit["windows"]
+    blocks.append(coverage_table([("robot file's noise", ev["coverage"], ""),
+                                  ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")],
+                                 f"{n} window ends"))
+    fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
+        ax[0], {"robot file's noise": ev["coverage"], "fitted noise (in-sample)": ev_fit["coverage"]},
+        n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
+        "against the observed fraction of window ends inside.",
+        "Reliability diagram, guessed and fitted noise", size=(5.6, 4.6))
+    blocks += [f for f in (fig,) if f is not None]
+    return Section("noise", "The fitted noise", tuple(blocks))
+
+
+def _ros_section(snippets: list[Code], notes: list[str]) -> Section:
+    blocks: list[Any] = [Paragraph(
+        "Parameter snippets for ROS 2, from the calibrated robot and the fitted noise where there are some. "
+        "Paste them into the node's parameter file; the comments say where each number holds.")]
+    blocks += snippets
+    blocks += [Paragraph(n, "note") for n in notes]
+    return Section("ros", "ROS parameters", tuple(blocks))
+
+
+def _without_truth_section() -> Section:
+    return Section("truth", "What ground truth would add", (Paragraph(
+        "This log has no ground truth (no --truth file and no gt_* columns), so the report shows the track "
+        "and the covariance the robot file's noise predicts, and cannot say whether either is right. With "
+        "truth (motion capture, a total station, RTK GPS; position only is enough) it would add: the error "
+        "metrics (ATE, RPE, drift, final and largest error); the honesty test, which checks the predicted "
+        "covariance against the true errors; the calibration of the wheel sizes and wheel base, before and "
+        "after; the noise fitted to the data; and nav2 AMCL's α's. Run it again with --truth FILE."),))
+
+
+def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: str,
+              amcl_yaml: str | None, notes: list[str]) -> list[Code]:
+    """The controller YAML (with the twist covariance of the noise), nav2 AMCL's α's and the
+    final pose covariance in ROS's 6×6 layout (robot_localization reads it from odometry).
+
+    ``robot_file`` (default ``robot_path``) gives the geometry and the noise, which ``what``
+    names ("the calibrated robot and the fitted noise"); the wheel radius is ``robot_path``'s."""
+    from odomkit.calibrate.export import twist_covariance
+    from odomkit.io.robotfile import read_robot
+    from odomkit.io.ros import ros2_controller_yaml, ros_pose_covariance
+    from odomkit.robot import DiffDrive, Tricycle
+    from odomkit.workflows.calibration import file_wheel_radius
+
+    out = []
+    robot, noise = read_robot(robot_file or robot_path)
+    radius = file_wheel_radius(robot_path)
+    if not isinstance(robot, DiffDrive | Tricycle):
+        notes.append(f"no controller snippet: ROS 2's diff_drive and tricycle controllers take a diff or "
+                     f"tricycle robot, this is a {robot.type_name!r} one")
+    elif radius is None:
+        notes.append("no controller snippet: the robot file gives metres per tick, not the wheel size "
+                     "(wheel_radius or wheel_diameter) the controller needs")
+    else:
+        twist = None
+        dt = np.diff(run.log.t)
+        speed = run.track.path_length / run.track.duration if run.track.duration > 0 else 0.0
+        if any(getattr(m, "kind", None) == "white" for m in noise) and dt.size:
+            twist = _attempt("the twist covariance", lambda: twist_covariance(
+                robot, noise, speed, float(np.median(dt)), window=VELOCITY_WINDOW), notes)
+        caption = f"ROS 2 controller, from {what}: wheel separation and radius multipliers"
+        if twist is not None:
+            caption += (", and the twist covariance robot_localization fuses from /odom (at this log's mean "
+                        "speed)")
+        out.append(Code(ros2_controller_yaml(robot, radius, twist=twist), caption))
+    if amcl_yaml is not None:
+        out.append(Code(amcl_yaml, "nav2 AMCL: the motion-model α's fitted to this log (odomkit fit-amcl)"))
+    if run.track.cov is not None:
+        cov = ros_pose_covariance(run.track.cov[-1])
+        rows = "\n".join("  " + ", ".join(f"{v:11.4g}" for v in cov[i:i + 6]) + ("," if i < 30 else "")
+                         for i in range(0, 36, 6))
+        out.append(Code(f"pose:\n  covariance: [\n{rows}]\n",
+                        "nav_msgs/Odometry pose covariance at the end of the log (x, y, z, roll, pitch, "
+                        "yaw; 1e6 on the axes planar odometry does not observe), as odomkit track --bag-out "
+                        "writes it"))
+    return out
+
+
+# ---------------------------------------------------------------------------------- the workflow
+def run_report(
+    log_path: str | Path,
+    robot_path: str | Path,
+    out: str | Path,
+    *,
+    truth: TruthOptions | None = None,
+    log_options: LogOptions | None = None,
+    window: str | None = None,
+    kinds: Sequence[str] = ("white",),
+    method: str = "exact",
+    pose0: tuple[float, float, float] | None = None,
+    overwrite: bool = False,
+) -> dict[str, Any]:
+    """Write the HTML report of one log to ``out``.
+
+    Parameters
+    ----------
+    log_path, robot_path : the log and its robot file
+    out : the HTML file (never replaced unless ``overwrite``, never one of the inputs)
+    truth : :class:`~odomkit.workflows.truth.TruthOptions`; default the log's own ``gt_*`` columns
+    log_options : how to read the log
+    window : honesty-test windows (``"30s"``, ``"5m"``); default :data:`DEFAULT_WINDOW` when
+        the log has three of them with truth, else the whole log as one window
+    kinds : the noise kinds fitted ("white", "bias")
+    method : integration method
+    pose0 : start of the track (x, y, θ) [m, m, rad]; default the truth pose at the first
+        row, else the origin (as ``odomkit track``). The error metrics start from the truth
+        as ``odomkit evaluate`` does, whatever ``pose0``.
+
+    Returns
+    -------
+    dict
+        ``report`` (the path written), ``sections`` (their keys, in order), ``warnings``.
+    """
+    from odomkit.io.files import check_outputs
+    from odomkit.windows import parse_window
+    from odomkit.workflows.track import run_track
+
+    started = time.perf_counter()
+    options = truth or TruthOptions()
+    log_path, robot_path = Path(log_path), Path(robot_path)
+    check_outputs({"--out": out}, overwrite=overwrite,
+                  inputs=[p for p in (log_path, robot_path, options.path) if p is not None])
+    if window is not None:
+        parse_window(window)  # a bad value is one line before any work
+    figures = ReportFigures()
+    with collected_warnings() as notes:
+        run = run_track(log_path, robot_path, method=method, log_options=log_options,  # type: ignore[arg-type]
+                        truth=options, pose0=pose0)
+        summary = run.summary()
+        sections = [_track_section(run, figures, summary)]
+        if run.truth is None:
+            ros_notes: list[str] = []
+            snippets = _snippets(run, robot_path, None, "the robot file", None, ros_notes)
+            sections += [_without_truth_section(), _ros_section(snippets, ros_notes)]
+            sections.insert(0, _summary_section(run, None, None, None, None, None))
+        else:
+            summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options, window,
+                                                 kinds, method, figures)
+            sections = [summary_section, *sections, *rest]
+        notes += [n for n in figures.notes if n not in notes]
+    title = f"odomkit report: {log_path.name}"
+    truth_text = options.path or ("the log's own gt_* columns" if run.truth is not None else "none")
+    subtitle = [f"Log: {log_path} · robot: {robot_path} · truth: {truth_text}",
+                f"{summary['samples']} poses over {summary['duration']:.4g} s, "
+                f"{summary['path_length']:.4g} m travelled"]
+    footer = (f"Written by odomkit {__version__} in {time.perf_counter() - started:.1f} s. One file, no "
+              "network: figures are embedded SVG.")
+    page = render_report(title, sections, subtitle=subtitle, warnings=notes, footer=footer)
+    written = write_page(out, page, overwrite)
+    for text in notes:
+        warnings.warn(text, stacklevel=2)
+    return {"report": str(written), "sections": [s.key for s in sections], "warnings": list(notes)}
+
+
+def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
+                log_options: LogOptions | None, window: str | None, kinds: Sequence[str], method: str,
+                figures: ReportFigures) -> list[Section]:
+    """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS."""
+    from odomkit.io.robotfile import read_robot
+    from odomkit.workflows.calibration import calibrate_files
+    from odomkit.workflows.fit_amcl import fit_amcl_files
+    from odomkit.workflows.fit_noise import fit_noise_files
+    from odomkit.workflows.track import run_track
+
+    if window is None:
+        window, note = _auto_window(run)
+        if note:
+            warnings.warn(note, stacklevel=2)
+    scored, ev = _scored(log, robot, options, log_options, window, method)
+    sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures)]
+    problems: list[str] = []
+    with tempfile.TemporaryDirectory(prefix="odomkit-report-") as tmp:
+        folder = Path(tmp)
+        cal_path, fit_path = folder / "calibrated.toml", folder / "fitted.toml"
+        # With the log's own truth (with heading) every pose is compared (exact, trajectory); a
+        # truth file is compared position by position on its own clock.
+        how: dict[str, Any] = ({"truth": [options]} if options.path is not None else {"source": "trajectory"})
+        cal = _attempt("the calibration", lambda: calibrate_files(
+            [log], robot, out_robot=cal_path, log_options=log_options, **how), problems)
+        after = run_after = None
+        if cal is not None:
+            after = _scored(log, cal_path, options, log_options, window, method)[1]
+            start = run.track.poses[0]  # where the track before calibration started
+            run_after = run_track(log, cal_path, method=method, log_options=log_options,  # type: ignore[arg-type]
+                                  truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])))
+        sections.append(_calibration_section(cal, problems[-1] if problems else None, ev, after, run,
+                                             run_after, figures))
+        base = cal_path if cal is not None else robot
+        before = len(problems)
+        fit = _attempt("the noise fit", lambda: fit_noise_files(
+            base, [log], [options], fit_path, window=window, kinds=kinds, log_options=log_options,
+            method=method), problems)
+        ev_fit = None if fit is None else _scored(log, fit_path, options, log_options, window, method)[1]
+        for note in [] if fit is None else fit["warnings"]:  # the CLI prints them; here they join the page's
+            warnings.warn(f"the noise fit: {note}", stacklevel=2)
+        guessed = {k: float(v) for m in read_robot(robot)[1] for k, v in vars(m).items()
+                   if fit is not None and k in fit["parameters"]}
+        sections.append(_noise_section(fit, problems[-1] if len(problems) > before else None, guessed, ev,
+                                       ev_fit, figures))
+        amcl = _attempt("nav2 AMCL's α's", lambda: fit_amcl_files(
+            [log], [options], robot_path=base, log_options=log_options, method=method,
+            yaml_out=folder / "amcl.yaml"), problems)
+        amcl_yaml = None if amcl is None else (folder / "amcl.yaml").read_text(encoding="utf-8")
+        notes: list[str] = []
+        geometry = "the calibrated robot" if cal is not None else "the robot file"
+        source, noise = (fit_path, "the fitted noise") if fit else (base, "the robot file's noise")
+        snippets = _snippets(run_after or run, robot, source, f"{geometry} and {noise}", amcl_yaml, notes)
+    sections.append(_ros_section(snippets, notes))
+    sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit))
+    return sections
+
+
+def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, Any] | None,
+                     after: dict[str, Any] | None, fit: dict[str, Any] | None,
+                     ev_fit: dict[str, Any] | None) -> Section:
+    cov = run.track.cov
+    rows: list[tuple[str | Cell, ...]] = [("distance travelled", number(run.track.path_length, "m"))]
+    if cov is not None:
+        rows.append(("predicted σ of the final position (x, y)",
+                     Cell(f"{np.sqrt(cov[-1, 0, 0]):.3g} m, {np.sqrt(cov[-1, 1, 1]):.3g} m")))
+    if ev is not None:
+        rows += [
+            ("final position error", number(ev["final_position_error"], "m", key="final_position_error")),
+            ("ATE", number(ev["ate_rmse"], "m", key="ate_rmse")),
+            ("inside the 95 % ellipse (robot file's noise; ideal 0.95)",
+             number(ev["coverage"]["0.95"], key="coverage.0.95", decimals=2))]
+    if cal is not None and after is not None:
+        rows.append(("ATE after calibration", number(after["ate_rmse"], "m", key="after.ate_rmse")))
+    if fit is not None and ev_fit is not None:
+        rows.append(("inside the 95 % ellipse, fitted noise (in-sample)",
+                     number(ev_fit["coverage"]["0.95"], key="fitted.coverage.0.95", decimals=2)))
+    return Section("summary", "At a glance", (
+        Paragraph("The headline numbers; each section below explains one of them and shows where it comes "
+                  "from."),
+        Table(("", "value"), tuple(rows)),
+    ))

@@ -1,0 +1,317 @@
+"""``odomkit report``: one self-contained HTML page whose numbers are the other commands'.
+
+The page is read back with :mod:`html.parser` (not with the code that wrote it): every
+reference must be embedded or a same-page anchor, every figure a decodable SVG, and every
+number carried by a table cell (``data-key``/``data-value``) must equal what ``odomkit
+evaluate --json`` (and, after calibration, ``odomkit calibrate`` then ``evaluate``) prints
+for the same input, run through the CLI as a user would.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import warnings
+import xml.etree.ElementTree as ET
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from odomkit.data import builtin_data_path
+from odomkit.plot import have_matplotlib
+
+ROBOT = builtin_data_path("optiodom_diff.toml")
+RUN = builtin_data_path("230620202042_run-01.csv")
+RUN2 = builtin_data_path("230620202042_run-02.csv")
+COLUMNS = ("--columns", "t=t,ticks_left=ticks_left,ticks_right=ticks_right")
+
+# Attributes through which a page makes the browser fetch something.
+_FETCHING = {"src", "href", "xlink:href", "srcset", "poster", "data", "action", "formaction", "background",
+             "ping", "manifest", "cite", "longdesc", "codebase", "archive", "icon", "lowsrc", "dynsrc"}
+
+
+class Page(HTMLParser):
+    """Everything of a report the tests look at."""
+
+    def __init__(self, text: str) -> None:
+        super().__init__()
+        self.references: list[tuple[str, str, str]] = []  # (tag, attribute, value)
+        self.tags: list[str] = []
+        self.images: list[dict[str, str]] = []
+        self.styles: list[str] = []
+        self.cells: dict[str, tuple[float, str]] = {}
+        self.rows: dict[str, float] = {}  # the first keyed number of a row, by the row's first cell
+        self._label: str | None = None
+        self.headings: list[tuple[str, str]] = []  # (id, text) of each h2
+        self.text: list[str] = []
+        self._open: tuple[str, dict[str, str]] | None = None
+        self._style = False
+        self.feed(text)
+        self.close()
+
+    def handle_starttag(self, tag, attrs):
+        a = {k: v or "" for k, v in attrs}
+        self.tags.append(tag)
+        self.references += [(tag, k, v) for k, v in a.items() if k in _FETCHING]
+        if tag == "img":
+            self.images.append(a)
+        if tag == "tr":
+            self._label = None
+        if tag in ("td", "h2"):
+            self._open = (tag, a)
+            self._buffer: list[str] = []
+        self._style = tag == "style"
+        if "style" in a:
+            self.styles.append(a["style"])
+
+    def handle_endtag(self, tag):
+        if self._open and tag == self._open[0]:
+            text = "".join(self._buffer)
+            attrs = self._open[1]
+            if tag == "td" and "data-key" in attrs and "data-value" in attrs:
+                value = float(attrs["data-value"])
+                # a key names one number: shown twice (the summary repeats some), it is the same
+                assert self.cells.get(attrs["data-key"], (value,))[0] == value, attrs["data-key"]
+                self.cells[attrs["data-key"]] = (value, text)
+                if self._label is not None:
+                    self.rows.setdefault(self._label, value)
+            if tag == "td" and self._label is None:
+                self._label = text
+            if tag == "h2":
+                self.headings.append((attrs.get("id", ""), text))
+            self._open = None
+        self._style = False
+
+    def handle_data(self, data):
+        self.text.append(data)
+        if self._open:
+            self._buffer.append(data)
+        if self._style:
+            self.styles.append(data)
+
+
+def network_references(page: Page) -> list[str]:
+    """Every reference that leaves the page: not a data: URI nor a #fragment."""
+    bad = [f"<{tag} {attr}={value!r}>" for tag, attr, value in page.references
+           if not (value.startswith("data:") or value.startswith("#"))]
+    for css in page.styles:
+        bad += [f"css {m}" for m in re.findall(r"url\(\s*['\"]?([^)'\"]*)", css) if not m.startswith("data:")]
+        bad += [f"css @import {m}" for m in re.findall(r"@import\s+([^;]+)", css)]
+    bad += [f"<{tag}>" for tag in page.tags if tag in ("script", "link", "iframe", "object", "embed", "base")]
+    return bad
+
+
+def test_the_reference_check_can_fail():
+    page = Page('<html><head><link rel="stylesheet" href="https://cdn.example/x.css"><style>'
+                'body{background:url(http://x/y.png)}</style></head><body><img src="http://a/b.png">'
+                '<a href="#ok">ok</a><img src="data:image/png;base64,AAAA"><script>1</script></body></html>')
+    found = network_references(page)
+    assert len(found) == 5 and not any("#ok" in f or "AAAA" in f for f in found), found
+
+
+def _run_json(run_cli, *args):
+    code, out, err = run_cli(*args, "--json")
+    assert code == 0, err
+    return json.loads(out)
+
+
+@pytest.fixture(scope="module")
+def with_truth(tmp_path_factory):
+    """The report of a built-in run with its own OptiTrack truth: (json, page, folder)."""
+    from odomkit.cli import main
+
+    folder = tmp_path_factory.mktemp("report")
+    out = folder / "r.html"
+    import contextlib
+    import io
+
+    stdout = io.StringIO()
+    with contextlib.redirect_stdout(stdout):
+        assert main(["report", str(RUN), "--robot", str(ROBOT), "--out", str(out), "--json"]) == 0
+    return json.loads(stdout.getvalue()), Page(out.read_text(encoding="utf-8")), folder
+
+
+def test_json_names_the_file_and_the_sections(with_truth):
+    result, page, folder = with_truth
+    assert set(result) == {"report", "sections", "warnings"}
+    assert Path(result["report"]) == folder / "r.html"
+    assert result["sections"] == ["summary", "track", "errors", "honesty", "calibration", "noise", "ros"]
+    assert [h[0] for h in page.headings] == result["sections"]
+
+
+def test_the_page_needs_no_network(with_truth):
+    _, page, _ = with_truth
+    assert network_references(page) == []
+
+
+@pytest.mark.skipif(not have_matplotlib(), reason="figures need matplotlib (the plot extra)")
+def test_every_figure_is_an_embedded_svg(with_truth):
+    _, page, _ = with_truth
+    # track, covariance elements, error band, NEES + reliability, calibration, noise reliability
+    assert len(page.images) >= 6
+    for image in page.images:
+        prefix = "data:image/svg+xml;base64,"
+        assert image["src"].startswith(prefix) and image["alt"]
+        svg = ET.fromstring(base64.b64decode(image["src"][len(prefix):]))
+        assert svg.tag.endswith("svg") and float(svg.get("width", "0").rstrip("pt")) > 100
+        assert len(list(svg.iter("{http://www.w3.org/2000/svg}path"))) > 20  # something is drawn
+
+
+def _same(cells, expected: dict, prefix: str = "") -> int:
+    """Compare the page's cells with evaluate's JSON; returns how many were compared."""
+    n = 0
+    for key in ("final_position_error", "max_position_error", "ate_rmse", "drift_percent",
+                "nees_position_mean", "nees_position_median"):
+        value, text = cells[prefix + key]
+        assert value == pytest.approx(expected[key], rel=1e-12), key
+        shown = text.split()[0]  # the value rounded to the digits shown
+        digits = len(re.sub(r"\D", "", shown.split("e")[0]).lstrip("0"))
+        assert shown == format(expected[key], f"#.{digits}g").rstrip("."), (key, text)
+        n += 1
+    for level, fraction in expected["coverage"].items():
+        assert cells[f"{prefix}coverage.{level}"][0] == pytest.approx(fraction, abs=1e-12)
+        n += 1
+    for distance, rmse in expected["rpe"].items():
+        assert cells[f"{prefix}rpe.{distance}"][0] == pytest.approx(rmse, rel=1e-12)
+        n += 1
+    return n
+
+
+def test_numbers_are_odomkit_evaluates(with_truth, run_cli):
+    _, page, _ = with_truth
+    expected = _run_json(run_cli, "evaluate", RUN, "--robot", ROBOT, "--window", "10s")
+    # each number in the row that says what it is
+    for label, key in (("final position error", "final_position_error"),
+                       ("largest position error", "max_position_error"),
+                       ("ATE (RMSE of the position error)", "ate_rmse"),
+                       ("drift (final error per distance)", "drift_percent"),
+                       ("NEES mean (ideal 2)", "nees_position_mean"),
+                       ("NEES median (ideal 1.39)", "nees_position_median")):
+        assert page.rows[label] == pytest.approx(expected[key], rel=1e-12), label
+    assert page.rows["RPE over 1 m (RMSE)"] == pytest.approx(expected["rpe"]["1"], rel=1e-12)
+    assert page.rows["95%"] == pytest.approx(expected["coverage"]["0.95"], abs=1e-12)
+    assert _same(page.cells, expected) == 11  # 6 metrics, 4 coverages, 1 RPE
+    assert page.cells["windows"][0] == expected["windows"] > 3
+
+
+def test_numbers_after_calibration_are_evaluate_on_the_calibrated_robot(with_truth, run_cli, tmp_path):
+    _, page, _ = with_truth
+    calibrated = tmp_path / "cal.toml"
+    cal = _run_json(run_cli, "calibrate", RUN, "--robot", ROBOT, "--from", "trajectory",
+                    "--out-robot", calibrated)
+    for name, value in cal["parameters"].items():
+        assert page.cells[f"calibration.{name}"][0] == pytest.approx(value, rel=1e-12)
+    after = _run_json(run_cli, "evaluate", RUN, "--robot", calibrated, "--window", "10s")
+    for key in ("final_position_error", "ate_rmse", "drift_percent"):
+        assert page.cells[f"after.{key}"][0] == pytest.approx(after[key], rel=1e-9)
+    assert after["ate_rmse"] < page.cells["before.ate_rmse"][0]
+
+
+def test_fitted_noise_is_fit_noises(with_truth, run_cli, tmp_path):
+    _, page, _ = with_truth
+    calibrated = tmp_path / "cal.toml"
+    _run_json(run_cli, "calibrate", RUN, "--robot", ROBOT, "--from", "trajectory", "--out-robot", calibrated)
+    fit = _run_json(run_cli, "fit-noise", "--robot", calibrated, "--log", RUN, "--window", "10s",
+                    "--out", tmp_path / "fit.toml")
+    for key, value in fit["parameters"].items():
+        assert page.cells[f"noise.fitted.{key}"][0] == pytest.approx(value, rel=1e-9)
+    fitted = _run_json(run_cli, "evaluate", RUN, "--robot", tmp_path / "fit.toml", "--window", "10s")
+    assert page.cells["fitted.coverage.0.5"][0] == pytest.approx(fitted["coverage"]["0.5"], abs=1e-12)
+
+
+def test_the_ros_snippets_are_there(with_truth):
+    _, page, _ = with_truth
+    text = "".join(page.text)
+    for needle in ("diff_drive_controller:", "twist_covariance_diagonal", "amcl:", "alpha1:",
+                   "covariance: ["):
+        assert needle in text, needle
+
+
+def test_a_truth_file_gives_the_same_numbers_as_evaluate(run_cli, tmp_path):
+    """Truth from a file on its own clock (the log without gt_* columns), as evaluate takes it."""
+    data = np.loadtxt(RUN2, delimiter=",")
+    log = tmp_path / "log.csv"
+    np.savetxt(log, data[:, [0, 4, 5]], delimiter=",", header="t,ticks_left,ticks_right", comments="",
+               fmt=["%.17g", "%d", "%d"])
+    gt = tmp_path / "gt.csv"
+    np.savetxt(gt, np.column_stack([data[:, 0] - 0.02, data[:, 1:4]]), delimiter=",",
+               header="t,x,y,theta", comments="")
+    out = tmp_path / "r.html"
+    result = _run_json(run_cli, "report", log, *COLUMNS, "--robot", ROBOT, "--truth", gt, "--out", out)
+    page = Page(out.read_text(encoding="utf-8"))
+    expected = _run_json(run_cli, "evaluate", log, *COLUMNS, "--robot", ROBOT, "--truth", gt,
+                         "--window", "10s")
+    assert _same(page.cells, expected) == 11
+    assert "truth" not in result["sections"] and "honesty" in result["sections"]
+
+
+def test_without_truth_the_report_says_what_truth_would_add(run_cli, tmp_path):
+    data = np.loadtxt(RUN, delimiter=",")
+    log = tmp_path / "no_truth.csv"
+    np.savetxt(log, data[:, [0, 4, 5]], delimiter=",", header="t,ticks_left,ticks_right", comments="",
+               fmt=["%.17g", "%d", "%d"])
+    out = tmp_path / "r.html"
+    result = _run_json(run_cli, "report", log, *COLUMNS, "--robot", ROBOT, "--out", out)
+    assert result["sections"] == ["summary", "track", "truth", "ros"]
+    page = Page(out.read_text(encoding="utf-8"))
+    text = " ".join("".join(page.text).split())
+    assert "This log has no ground truth" in text and "Run it again with --truth FILE" in text
+    assert network_references(page) == []
+    track = _run_json(run_cli, "track", log, *COLUMNS, "--robot", ROBOT)
+    assert page.cells["path_length"][0] == pytest.approx(track["path_length"], rel=1e-12)
+    assert page.cells["final_sigma_theta"][0] == pytest.approx(np.sqrt(track["cov"][2][2]), rel=1e-12)
+    if have_matplotlib():
+        assert len(page.images) == 2  # the track and its covariance elements; no truth to compare
+
+
+def test_an_existing_out_is_refused_without_force(run_cli, tmp_path):
+    out = tmp_path / "r.html"
+    out.write_text("mine")
+    code, stdout, err = run_cli("report", RUN, "--robot", ROBOT, "--out", out)
+    assert code == 2 and stdout == ""
+    assert err.count("\n") == 1 and err.startswith("odomkit: error:") and "--force" in err
+    assert out.read_text() == "mine"
+
+
+@pytest.mark.parametrize(("args", "says"), [
+    (["--window", "ten"], "window"),
+    (["--kinds", "pink"], "--kinds"),
+    (["--truth", "missing.csv"], "missing.csv"),
+    (["--truth-sigma", "-1"], "--truth-sigma"),
+    (["--columns", "t=t"], "--columns"),
+])
+def test_bad_input_is_one_line(run_cli, tmp_path, args, says):
+    out = tmp_path / "r.html"
+    code, _, err = run_cli("report", RUN, "--robot", ROBOT, "--out", out, *args)
+    assert code == 2 and err.count("\n") == 1 and err.startswith("odomkit: error:") and says in err, err
+    assert not out.exists()
+
+
+def test_a_missing_log_is_one_line(run_cli, tmp_path):
+    code, _, err = run_cli("report", tmp_path / "nope.csv", "--robot", ROBOT, "--out", tmp_path / "r.html")
+    assert code == 2 and err.count("\n") == 1 and "nope.csv" in err
+
+
+def test_the_out_may_not_be_an_input(run_cli, tmp_path):
+    log = tmp_path / "run.csv"
+    log.write_bytes(RUN.read_bytes())
+    code, _, err = run_cli("report", log, "--robot", ROBOT, "--out", log, "--force")
+    assert code == 2 and "input" in err
+    assert log.read_bytes() == RUN.read_bytes()
+
+
+def test_without_matplotlib_the_page_says_how_to_get_figures(monkeypatch, tmp_path):
+    import odomkit.plot
+    from odomkit.workflows.report import run_report
+
+    monkeypatch.setattr(odomkit.plot, "have_matplotlib", lambda: False)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = run_report(RUN, ROBOT, tmp_path / "r.html")
+    assert any("matplotlib" in str(w.message) for w in caught)  # also said on stderr
+    page = Page((tmp_path / "r.html").read_text(encoding="utf-8"))
+    assert page.images == [] and "pip install 'odomkit[plot]'" in "".join(page.text)
+    assert any("matplotlib" in w for w in result["warnings"])
