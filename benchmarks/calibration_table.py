@@ -4,7 +4,7 @@ exact (endpoint least-squares) calibration, in sample and out of sample.
     .venv/bin/python benchmarks/calibration_table.py [DATA_DIR]
 
 DATA_DIR defaults to $ODOMKIT_DATA or ../shared/data beside the repository. Prints the
-markdown table of the README (section "Exact least squares") and, as the ratio line, the mean
+markdown table of docs/results/real-data.md (the acceptance table) and, as the ratio line, the mean
 out-of-sample E_max,syst of the exact calibration over that of UMBmark (below 1 = better).
 """
 

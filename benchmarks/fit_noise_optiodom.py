@@ -1,4 +1,4 @@
-"""``fit-noise`` on OptiOdom: in-sample and held-out window coverage (README table).
+"""``fit-noise`` on OptiOdom: in-sample and held-out window coverage (table in docs/results/honesty.md).
 
 The differential experiments of each kind (square, circular, ivanjko, free) are sorted by
 name; every other one is fitted (each with its own nominal robot from its metadata), the

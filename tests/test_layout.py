@@ -47,7 +47,6 @@ PENDING: Mapping[str, str] = {
     "io/optiodom.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/trackio.py": "issue 9: tested in tests/test_cli_track.py for now",
     "io/umbmark_errors.py": "issue 9: new module; tested through the umbmark CLI for now",
-    "plot.py": "issue 9: needs matplotlib; test module after the refactor",
     "simulate/blocks.py": "issue 9: new module; tested through tests/simulate/test_engine.py",
     "simulate/distributed.py": "issue 9: tested in tests/simulate/test_dask.py",
     "simulate/experiment.py": "issue 9: tested in tests/simulate/test_against_predict.py for now",

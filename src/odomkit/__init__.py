@@ -1,7 +1,7 @@
 """odomkit: wheeled-robot odometry with honest uncertainty.
 
-The public API is the ``__all__`` of each public module (the README's "Python API"
-section lists them all, and ``tests/test_architecture.py`` keeps that list true); a name
+The public API is the ``__all__`` of each public module (the documentation's "Python API"
+pages, docs/reference/api/, list them all, and ``tests/test_architecture.py`` keeps them true); a name
 that is not listed there, and every underscored module or name, may change without notice.
 
 - the core, pure functions on numpy arrays, SI units inside (metres, radians, seconds):

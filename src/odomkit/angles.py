@@ -283,6 +283,8 @@ def sinc_pair(u: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
 def sinc_half(dtheta: ArrayLike) -> NDArray[np.float64]:
     """sin(Δθ/2)/(Δθ/2), the chord-to-arc factor of a turn Δθ [rad]; 1 at Δθ = 0.
 
+    Examples
+    --------
     >>> float(sinc_half(0.0)), round(float(sinc_half(np.pi)), 12)
     (1.0, 0.636619772368)
     """

@@ -20,6 +20,8 @@ class OdomkitError(Exception):
     multi-line text (a YAML parser's pointer into a corrupt ROS bag's ``metadata.yaml``)
     has its line breaks folded into single spaces, so the CLI's answer stays one line.
 
+    Examples
+    --------
     >>> str(OdomkitError("not a readable bag (while scanning\\n  in line 3)"))
     'not a readable bag (while scanning in line 3)'
     """

@@ -234,6 +234,8 @@ def nees_bounds(n: int, dof: int = 2, prob: float = 0.95) -> tuple[float, float]
     "Estimation with Applications to Tracking and Navigation", 2001, §5.4.2), so the bounds
     are χ²⁻¹((1 ∓ prob)/2; n·dof)/n.
 
+    Examples
+    --------
     >>> [round(b, 4) for b in nees_bounds(50, 2)]
     [1.4844, 2.5912]
     """

@@ -132,6 +132,8 @@ def car_speed_factor(steer: ArrayLike, wheel_base: float, encoder_offset: float 
     v/v_e = 1/√((1 − tan α·H/L)² + tan² α) = cos α/√((cos α − sin α·H/L)² + sin² α)
     (H = 0: cos α, the tricycle). Derived here; checked against a closed circle.
 
+    Examples
+    --------
     >>> float(car_speed_factor(0.0, 2.7, 0.8))
     1.0
     >>> round(float(car_speed_factor(0.3, 2.0, 0.0, "front")), 12) == round(float(np.cos(0.3)), 12)

@@ -109,6 +109,8 @@ _SYNTAX = {
 def parse_segment(text: str, model: str = "diff") -> Segment:
     """Parse a ``--segment`` option.
 
+    Examples
+    --------
     >>> parse_segment("arc:3,1")
     Arc(left=3.0, right=1.0)
     >>> parse_segment("straight:0.5,10", model="gyro")

@@ -52,6 +52,8 @@ def metres_per_tick(wheel_diameter: float, encoder_resolution: float, gear_ratio
     between motor (where the encoder sits) and wheel, C_e the encoder resolution
     [ticks per motor revolution].
 
+    Examples
+    --------
     >>> round(metres_per_tick(0.084, 64, 43.7), 10)   # OptiOdom differential robot
     9.43556e-05
     """
@@ -343,6 +345,8 @@ class SystematicErrors:
         D_avg/D_nominal, the average-diameter scale error (section II-B); it scales both
         legs and turns (eq. 2.15) and UMBmark cannot see it in the legs.
 
+    Examples
+    --------
     >>> left, right = SystematicErrors(E_d=1.002).wheel_scales()  # relative to nominal
     >>> round(right / left, 12), round((left + right) / 2, 12)       # E_d and E_s
     (1.002, 1.0)
@@ -363,6 +367,8 @@ class SystematicErrors:
 def true_robot(true_errors: SystematicErrors, robot: DiffDrive) -> DiffDrive:
     """The true robot as a :class:`~odomkit.robot.DiffDrive` with no corrections.
 
+    Examples
+    --------
     >>> round(true_robot(SystematicErrors(E_b=1.01), DiffDrive(0.34)).wheel_base, 12)
     0.3434
     """

@@ -113,6 +113,8 @@ def positive(value: object, name: str, *, unit: str | None = None,
              error: ErrorFactory = ModelError) -> float:
     """A finite real number > 0 (parameters as in :func:`finite`).
 
+    Examples
+    --------
     >>> positive(0.4, "wheel_base", unit="m")
     0.4
     >>> positive(0, "wheel_base", unit="m")
@@ -130,6 +132,8 @@ def non_negative(value: object, name: str, *, unit: str | None = None,
                  error: ErrorFactory = ModelError) -> float:
     """A finite real number >= 0 (parameters as in :func:`finite`); −0.0 is zero.
 
+    Examples
+    --------
     >>> non_negative(0, "k_left", unit="m^½")
     0.0
     """
@@ -148,6 +152,8 @@ def _as_int(value: object) -> int | None:
 def positive_int(value: object, name: str, *, error: ErrorFactory = ModelError) -> int:
     """An integer >= 1; bool and floats (even ``3.0``) are rejected.
 
+    Examples
+    --------
     >>> positive_int(np.int64(3), "runs")
     3
     >>> positive_int(1e3, "runs")
@@ -164,6 +170,8 @@ def positive_int(value: object, name: str, *, error: ErrorFactory = ModelError) 
 def non_negative_int(value: object, name: str, *, error: ErrorFactory = ModelError) -> int:
     """An integer >= 0; bool and floats are rejected.
 
+    Examples
+    --------
     >>> non_negative_int(0, "seed")
     0
     """
@@ -228,6 +236,8 @@ def finite_array(values: ArrayLike, name: str, spec: Sequence[int | str] | None 
     The message names the first non-finite element: ``dd[1] is nan; expected finite
     numbers``.
 
+    Examples
+    --------
     >>> finite_array([1.0, float("inf")], "dd")
     Traceback (most recent call last):
     ...
@@ -254,6 +264,8 @@ def pose(values: ArrayLike, name: str = "initial pose", *,
 
     Any array of three elements is accepted (a (1, 3) row too).
 
+    Examples
+    --------
     >>> pose([1, 2, 0.5]).tolist()
     [1.0, 2.0, 0.5]
     >>> pose((0, 0))

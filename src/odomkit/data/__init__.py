@@ -31,6 +31,8 @@ OPTIODOM_EXPERIMENTS: dict[str, tuple[str, str]] = {
 def builtin_data_path(name: str) -> Path:
     """Path of a file shipped in ``odomkit/data`` (``name`` may hold ``/``).
 
+    Examples
+    --------
     >>> builtin_data_path("optiodom_diff.toml").name
     'optiodom_diff.toml'
     """
@@ -41,6 +43,8 @@ def builtin_experiment_path(experiment: str) -> Path:
     """The folder of a built-in OptiOdom experiment (its ``<id>_metadata.csv`` and
     ``<id>_run-NN.csv`` files, for :func:`odomkit.io.optiodom.read_experiment`).
 
+    Examples
+    --------
     >>> sorted(p.name for p in builtin_experiment_path("231220200154").iterdir())
     ['231220200154_metadata.csv', '231220200154_run-01.csv', '231220200154_run-02.csv']
     """
