@@ -289,7 +289,8 @@ def fit_noise_files(
         "seconds": time.perf_counter() - started,
     })
     if plot is not None:
-        drawn = _noise_plot(plot, bases, models, robot, fit, kinds, set(fixed) | default_fixed, level, trim)
+        drawn = _noise_plot(plot, bases, models, robot, fit, kinds, set(fixed) | default_fixed, level, trim,
+                            overlapping=len(specs) > 1)
         result["outputs"] = {"robot": str(written), "plot": str(drawn)}
     return result
 
@@ -306,10 +307,12 @@ _NOISE_UNITS = {"k_left": "m^½", "k_right": "m^½", "alpha_ss": "m", "psd_gyro"
 
 def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence[NoiseModel],
                 robot: Robot, fit: NoiseFit, kinds: Sequence[str], fixed: set[str], level: float,
-                trim: float | None) -> Path:
+                trim: float | None, *, overlapping: bool = False) -> Path:
     """``fit-noise --plot``: the profiles of the fit and its in-sample coverage; when it
     fitted white and bias noise, beside the coverage of a white-only refit (bias at zero),
-    and the leave-one-log-out coverage when it was cross-validated."""
+    and the leave-one-log-out coverage when it was cross-validated. The binomial band of
+    the coverage diagram assumes independent window ends: with windows of several lengths
+    (``overlapping``) they are not, and no band is drawn."""
     from odomkit.calibrate.fit_noise import fit_noise
     from odomkit.calibrate.profile import noise_profiles
     from odomkit.workflows.figures import profiles_figure
@@ -325,5 +328,7 @@ def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence
     if fit.cross_validation is not None:
         coverages["leave-one-log-out"] = fit.cross_validation["coverage"]  # type: ignore[assignment]
     units = {p.name: _NOISE_UNITS.get(p.name.rsplit(".", 1)[-1], "") for p in profiles}
-    return profiles_figure(plot, profiles, units=units, coverages=coverages, n_scored=fit.windows,
+    # Coverage is scored on every window end, the trimmed ones too.
+    scored = None if overlapping else fit.windows + fit.trimmed
+    return profiles_figure(plot, profiles, units=units, coverages=coverages, n_scored=scored,
                            title=f"fit-noise: profile likelihoods ({100 * level:g} % intervals) and coverage")
