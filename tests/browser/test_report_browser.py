@@ -30,8 +30,8 @@ _MISSING = [what for what, ok in (("chromium", CHROMIUM), ("chromedriver", DRIVE
                                   ("the selenium package", importlib.util.find_spec("selenium")))
             if not ok]
 if _MISSING:
-    pytest.skip(f"no {', '.join(_MISSING)}: run `make test-browser` (installs Debian's chromium and "
-                "chromium-driver and the 'browser' extra)", allow_module_level=True)
+    pytest.skip(f"not installed: {', '.join(_MISSING)}; run `make test-browser` (installs Debian's "
+                "chromium and chromium-driver and the 'browser' extra)", allow_module_level=True)
 
 WIDTH = 1280
 # As root Chromium needs --no-sandbox; the rest keeps it from reaching any network service.
