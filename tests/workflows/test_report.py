@@ -315,3 +315,21 @@ def test_without_matplotlib_the_page_says_how_to_get_figures(monkeypatch, tmp_pa
     page = Page((tmp_path / "r.html").read_text(encoding="utf-8"))
     assert page.images == [] and "pip install 'odomkit[plot]'" in "".join(page.text)
     assert any("matplotlib" in w for w in result["warnings"])
+
+
+@pytest.mark.filterwarnings("ignore:the noise fit")  # 9 windows: the fit warns, rightly
+def test_progress_reports_every_stage_to_its_end(tmp_path):
+    """The report's progress: the track's stages, then the truth steps, each closed with
+    done == total (and the page the same as without progress)."""
+    from odomkit.data import builtin_data_path
+    from odomkit.progress import RecordingProgress
+    from odomkit.workflows.report import run_report
+
+    seen = RecordingProgress()
+    log, robot = builtin_data_path("230620202042_run-01.csv"), builtin_data_path("optiodom_diff.toml")
+    with_progress = run_report(log, robot, tmp_path / "a.html", progress=seen)
+    without = run_report(log, robot, tmp_path / "b.html")
+    assert with_progress["sections"] == without["sections"]
+    assert seen.stages and all(s.closed for s in seen.stages)
+    assert all(s.done == s.total for s in seen.stages if s.total is not None)
+    assert seen.stages[-1].description.startswith("report:") and seen.stages[-1].total == 4

@@ -30,6 +30,7 @@ from odomkit.cli.log_options import (
     with_warnings,
 )
 from odomkit.cli.output import print_json
+from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
     MaxGapOption,
     TruthColumnsOption,
@@ -84,11 +85,11 @@ def report(
     fitted = parse_kinds(kinds)
     options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                           topic, joints, bag_time, truth_topic)
-    with reported_warnings() as warned:
+    with reported_warnings() as warned, progress_bar(json_out) as progress:
         result = run_report(log, robot, out, truth=truth_options(truth, truth_format, truth_columns,
                                                                  truth_time_unit, truth_sigma, max_gap),
                             log_options=options, window=window, kinds=fitted, method=method,
-                            pose0=parse_pose(initial_pose), overwrite=force)
+                            pose0=parse_pose(initial_pose), overwrite=force, progress=progress)
     result = with_warnings(result, warned)
     if json_out:
         print_json(result)

@@ -26,6 +26,7 @@ import numpy as np
 
 from odomkit import __version__
 from odomkit.errors import OdomkitError
+from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.report import Cell, Code, Figure, Paragraph, Section, Table, number, render_report, svg_figure
 from odomkit.workflows.results import collected_warnings
 from odomkit.workflows.truth import TruthOptions
@@ -409,6 +410,10 @@ def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: st
 
 
 # ---------------------------------------------------------------------------------- the workflow
+#: Steps of the report that need truth: scoring, calibration, noise fit, AMCL.
+_TRUTH_STEPS = 4
+
+
 def run_report(
     log_path: str | Path,
     robot_path: str | Path,
@@ -421,6 +426,7 @@ def run_report(
     method: str = "exact",
     pose0: tuple[float, float, float] | None = None,
     overwrite: bool = False,
+    progress: Progress = NO_PROGRESS,
 ) -> dict[str, Any]:
     """Write the HTML report of one log to ``out``.
 
@@ -437,6 +443,9 @@ def run_report(
     pose0 : start of the track (x, y, θ) [m, m, rad]; default the truth pose at the first
         row, else the origin (as ``odomkit track``). The error metrics start from the truth
         as ``odomkit evaluate`` does, whatever ``pose0``.
+    progress : :class:`~odomkit.progress.Progress`; the track's stages (reading, dead
+        reckoning, covariance), then one stage of the steps that need truth (scoring,
+        calibration, noise fit, AMCL).
 
     Returns
     -------
@@ -457,7 +466,7 @@ def run_report(
     figures = ReportFigures()
     with collected_warnings() as notes:
         run = run_track(log_path, robot_path, method=method, log_options=log_options,  # type: ignore[arg-type]
-                        truth=options, pose0=pose0)
+                        truth=options, pose0=pose0, progress=progress)
         summary = run.summary()
         sections = [_track_section(run, figures, summary)]
         if run.truth is None:
@@ -466,8 +475,9 @@ def run_report(
             sections += [_without_truth_section(), _ros_section(snippets, ros_notes)]
             sections.insert(0, _summary_section(run, None, None, None, None, None))
         else:
-            summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options, window,
-                                                 kinds, method, figures)
+            with stage(progress, _TRUTH_STEPS, "report: scoring, calibration, noise fit, AMCL") as step:
+                summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options,
+                                                     window, kinds, method, figures, step)
             sections = [summary_section, *sections, *rest]
         notes += [n for n in figures.notes if n not in notes]
     title = f"odomkit report: {log_path.name}"
@@ -486,8 +496,10 @@ def run_report(
 
 def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                 log_options: LogOptions | None, window: str | None, kinds: Sequence[str], method: str,
-                figures: ReportFigures) -> list[Section]:
-    """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS."""
+                figures: ReportFigures, step: Progress = NO_PROGRESS) -> list[Section]:
+    """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS
+    (``step`` advances once per step, :data:`_TRUTH_STEPS` in all; the workflows called
+    report no progress of their own, so that stages do not nest)."""
     from odomkit.io.robotfile import read_robot
     from odomkit.workflows.calibration import calibrate_files
     from odomkit.workflows.fit_amcl import fit_amcl_files
@@ -500,6 +512,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             warnings.warn(note, stacklevel=2)
     scored, ev = _scored(log, robot, options, log_options, window, method)
     sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures)]
+    step.advance()
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="odomkit-report-") as tmp:
         folder = Path(tmp)
@@ -517,6 +530,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                                   truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])))
         sections.append(_calibration_section(cal, problems[-1] if problems else None, ev, after, run,
                                              run_after, figures))
+        step.advance()
         base = cal_path if cal is not None else robot
         before = len(problems)
         fit = _attempt("the noise fit", lambda: fit_noise_files(
@@ -529,10 +543,12 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                    if fit is not None and k in fit["parameters"]}
         sections.append(_noise_section(fit, problems[-1] if len(problems) > before else None, guessed, ev,
                                        ev_fit, figures))
+        step.advance()
         amcl = _attempt("nav2 AMCL's α's", lambda: fit_amcl_files(
             [log], [options], robot_path=base, log_options=log_options, method=method,
             yaml_out=folder / "amcl.yaml"), problems)
         amcl_yaml = None if amcl is None else (folder / "amcl.yaml").read_text(encoding="utf-8")
+        step.advance()
         notes: list[str] = []
         geometry = "the calibrated robot" if cal is not None else "the robot file"
         source, noise = (fit_path, "the fitted noise") if fit else (base, "the robot file's noise")
