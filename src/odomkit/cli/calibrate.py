@@ -20,44 +20,34 @@ position-only, noisy truth such as GPS works.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthListOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
-    truth_options,
+    with_truth_options,
 )
 from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["calibrate_command", "calibrate_noise_command"]
 
 
 @app.command("calibrate")
+@with_log_options
+@with_truth_options
 def calibrate_command(
     runs: Annotated[list[Path], typer.Argument(help="Logs with ground truth (e.g. OptiOdom run files).")],
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML) the odometry used.")],
@@ -90,33 +80,19 @@ def calibrate_command(
                        "truth (with --side: UMBmark's return errors before and after) into this file "
                        "(.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
-    fmt: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     truth: TruthListOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
     """Calibrate wheel scales and wheel base, or a tricycle's or car's speed scale, steering
     offset and wheel base (exact least squares or UMBmark) from logs with ground truth."""
     from odomkit.workflows.calibration import calibrate_files
     from odomkit.workflows.truth import truth_options_per_log
 
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
-    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    options = log_opts
+    base = truth_base
     per_run = truth_options_per_log(base, list(truth), len(runs)) if truth else None
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.
@@ -153,6 +129,7 @@ def _print_text(out: dict[str, Any]) -> None:
 
 
 @app.command("calibrate-noise")
+@with_log_options
 def calibrate_noise_command(
     runs: Annotated[list[Path], typer.Argument(help="Repeated runs of one path, with ground truth.")],
     robot: Annotated[Path, typer.Option("--robot", help="Calibrated robot file (TOML).")],
@@ -165,18 +142,9 @@ def calibrate_noise_command(
         "--plot", help="Draw the errors with fitted and empirical 95 % ellipses (.png, .svg or .pdf; "
                        "needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
-    fmt: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
 ) -> None:
     """Maximum-likelihood k_L, k_R (per-wheel noise [m^½]) with profile-likelihood intervals."""
     from odomkit.workflows.calibration import noise_files
@@ -187,8 +155,7 @@ def calibrate_noise_command(
     kwargs: dict[str, Any] = {"components": comps, "level": level}
     if known_mean:
         kwargs["mean"] = [0.0] * len(comps)
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
+    options = log_opts
     with reported_warnings() as warned, progress_bar(json_out) as progress:
         out = noise_files(runs, robot, log_options=options, plot=plot, overwrite=force,
                           progress=progress, **kwargs)

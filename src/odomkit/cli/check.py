@@ -10,75 +10,54 @@ bad input as everywhere.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
-    truth_options,
+    with_truth_options,
 )
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
 
 __all__ = ["check_command", "print_findings"]
 
 
 @app.command("check")
+@with_log_options
+@with_truth_options
 def check_command(
     log: Annotated[Path, typer.Argument(help="The log to check.")],
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML) of the log.")],
     spin: Annotated[str | None, typer.Option(
         "--spin", help="The log is a spin in place, ccw or cw: checks the wheels without truth.")] = None,
     truth: TruthOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
-    format: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
+
     """Check a log before calibrating: time jumps, counter wraps, stuck encoders, NaNs, swapped or
     sign-flipped channels, turning both ways, distance, what each parameter can be fitted from;
     and say what to record next. Exit status 1 when a check fails."""
     from odomkit.workflows.check import check_file
 
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
-    topts = truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    options = log_opts
+    topts = replace(truth_base, path=truth)
     # Reading the log and the truth may warn (repeated truth times, cumulative-looking
     # counters): one "odomkit: warning:" line each, and in the JSON, as every command does.
     with reported_warnings() as warned:

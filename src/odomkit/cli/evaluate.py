@@ -9,39 +9,27 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthListOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
-    truth_options,
+    with_truth_options,
 )
 from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["evaluate_command", "print_report"]
 
@@ -57,6 +45,8 @@ def _distances(text: str) -> list[float]:
 
 
 @app.command("evaluate")
+@with_log_options
+@with_truth_options
 def evaluate_command(
     files: Annotated[list[Path], typer.Argument(
         help="Track CSVs (odomkit track --out), or logs with --robot.")],
@@ -70,28 +60,15 @@ def evaluate_command(
     align: Annotated[str, typer.Option("--align", help="none | start | se2 (Umeyama, no scale).")] = "none",
     rpe: Annotated[str, typer.Option("--rpe", help="RPE distances [m], comma-separated.")] = "1",
     truth: TruthListOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
-    format: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler")] = "exact",
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw the tracks against truth, the coverage diagram and the NEES into this file "
                        "(.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
     """Score tracks against ground truth (ATE, RPE, drift, NEES, ellipse coverage); with --robot,
     the windowed honesty test of the robot file's noise on logs."""
@@ -102,10 +79,9 @@ def evaluate_command(
     if align not in ALIGNMENTS:
         raise InputError(f"--align must be one of {', '.join(ALIGNMENTS)}, got {align!r}")
     distances = _distances(rpe)
-    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    base = truth_base
     per_file = truth_options_per_log(base, list(truth or []), len(files))
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
+    options = log_opts
     if robot is None:
         if window is not None:
             raise InputError("--window re-runs dead reckoning, so it needs --robot (and FILES that are logs)")

@@ -9,42 +9,32 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthListOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
-    truth_options,
+    with_truth_options,
 )
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["fit_amcl_command", "print_fit"]
 
 
 @app.command("fit-amcl")
+@with_log_options
+@with_truth_options
 def fit_amcl_command(
     odometry: Annotated[list[Path], typer.Argument(
         help="Odometry pose tracks (odomkit track --out, TUM, t,x,y,theta), ROS bags with a "
@@ -60,22 +50,6 @@ def fit_amcl_command(
     yaml_out: Annotated[Path | None, typer.Option(
         "--yaml-out", help="Write the nav2 amcl parameter snippet (YAML).")] = None,
     truth: TruthListOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
-    format: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     method: Annotated[str, typer.Option("--method", help="exact | midpoint | euler (logs)")] = "exact",
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw each α's profile likelihood with its interval into this file (.png, .svg "
@@ -83,6 +57,9 @@ def fit_amcl_command(
     force: Annotated[bool, typer.Option(
         "--force", help="Replace an existing --yaml-out or --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
     """Maximum-likelihood nav2 AMCL motion-model alphas, with profile-likelihood intervals,
     from AMCL's own differential or omni model between its update thresholds."""
@@ -92,9 +69,8 @@ def fit_amcl_command(
 
     if not 0 < level < 1:
         raise InputError(f"--level must be in (0, 1), got {level}")
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
-    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    options = log_opts
+    base = truth_base
     per_file = truth_options_per_log(base, list(truth or []), len(odometry))
     with reported_warnings() as warned:
         out = fit_amcl_files(odometry, per_file, robot_path=robot, log_options=options, model=model,

@@ -11,43 +11,33 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthListOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
-    truth_options,
+    with_truth_options,
 )
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["fit_noise_command", "print_fit"]
 
 
 @app.command("fit-noise")
+@with_log_options
+@with_truth_options
 def fit_noise_command(
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML); its [noise] names the models.")],
     log: Annotated[list[Path], typer.Option("--log", help="A log with ground truth; repeat it.")],
@@ -74,28 +64,15 @@ def fit_noise_command(
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
     truth: TruthListOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
-    format: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw each fitted parameter's profile likelihood with its interval and the "
                        "in-sample coverage (white only beside white + bias) into this file (.png, .svg "
                        "or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --out or --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
     """Maximum-likelihood white and bias noise variances from logs with ground truth, with
     profile-likelihood intervals and warnings where the data cannot identify them."""
@@ -109,9 +86,8 @@ def fit_noise_command(
         raise InputError(f"--trim must be a probability in (0.5, 1], got {trim}")
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
-    base = truth_options(None, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap)
+    options = log_opts
+    base = truth_base
     per_log = truth_options_per_log(base, list(truth or []), len(log))
     fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
     with reported_warnings() as warned, progress_bar(json_out) as progress:

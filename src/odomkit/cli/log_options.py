@@ -22,12 +22,13 @@ from typing import Annotated, Any
 
 import typer
 
+from odomkit.cli.shared_flags import Flag, with_flags
 from odomkit.workflows.logs import LOG_FORMATS, LogOptions
 
 __all__ = [
     "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "JointsOption",
-    "log_options", "PeriodOption", "reported_warnings", "TimeUnitOption", "TopicOption", "TruthTopicOption",
-    "with_warnings", "WrapBitsOption",
+    "LOG_FLAGS", "log_options", "PeriodOption", "reported_warnings", "TimeUnitOption", "TopicOption",
+    "TruthTopicOption", "with_log_options", "with_warnings", "WrapBitsOption",
 ]
 
 FormatOption = Annotated[str, typer.Option(
@@ -73,6 +74,19 @@ def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: i
     joint_names = tuple(name.strip() for name in joints.split(",")) if joints is not None else ()
     return LogOptions(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
                       topics, joint_names, bag_time, truth_topic)
+
+
+#: The log flags every command that reads a log takes, in the order of their help.
+LOG_FLAGS: tuple[Flag, ...] = (
+    ("format", FormatOption, "auto"), ("columns", ColumnsOption, None),
+    ("cumulative", CumulativeOption, False), ("wrap_bits", WrapBitsOption, None),
+    ("period", PeriodOption, None), ("time_unit", TimeUnitOption, "s"), ("decimate", DecimateOption, 1),
+    ("topic", TopicOption, None), ("joints", JointsOption, None), ("bag_time", BagTimeOption, False),
+    ("truth_topic", TruthTopicOption, None),
+)
+#: Decorator: the command takes :data:`LOG_FLAGS` and is called with ``log_opts``, the
+#: parsed :class:`~odomkit.workflows.logs.LogOptions` (:func:`odomkit.cli.shared_flags.with_flags`).
+with_log_options = with_flags(LOG_FLAGS, "log_opts", lambda values: log_options(**values))
 
 
 @contextmanager

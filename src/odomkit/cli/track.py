@@ -2,41 +2,30 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.cli.progress import progress_bar
 from odomkit.cli.truth_options import (
-    MaxGapOption,
-    TruthColumnsOption,
-    TruthFormatOption,
     TruthOption,
-    TruthSigmaOption,
-    TruthTimeUnitOption,
     parse_initial_cov,
-    truth_options,
+    with_truth_options,
 )
 from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["parse_pose", "track"]
 
@@ -57,21 +46,12 @@ def parse_pose(text: str | None, degrees: bool = False) -> tuple[float, float, f
 
 
 @app.command()
+@with_log_options
+@with_truth_options
 def track(
     log: Annotated[Path, typer.Argument(help="The log file.")],
     robot: Annotated[Path, typer.Option(help="Robot file (TOML).")],
-    format: FormatOption = "auto",
     method: Annotated[str, typer.Option(help="exact | midpoint | euler")] = "exact",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     initial_pose: Annotated[str | None, typer.Option(
         help="x,y,theta [m, m, rad]; default: first ground-truth pose or the origin")] = None,
     theta0_deg: Annotated[bool, typer.Option(help="Read theta of --initial-pose in degrees.")] = False,
@@ -79,11 +59,6 @@ def track(
         help="Initial covariance: var_x,var_y,var_theta [m², m², rad²] or 9 numbers (3x3 row by "
              "row); default: the truth's start uncertainty, else zero.")] = None,
     truth: TruthOption = None,
-    truth_format: TruthFormatOption = "auto",
-    truth_columns: TruthColumnsOption = None,
-    truth_time_unit: TruthTimeUnitOption = "s",
-    truth_sigma: TruthSigmaOption = 0.0,
-    max_gap: MaxGapOption = 0.5,
     covariance: Annotated[bool, typer.Option(help="Propagate the robot file's noise.")] = True,
     engine: Annotated[str | None, typer.Option(
         help="Covariance engine: recursion (step recursion, the default) | transition (Kelly).",
@@ -106,18 +81,20 @@ def track(
                        "(.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, typer.Option(help="Replace existing output files.")] = False,
     json: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
+    truth_base: TruthOptions,
 ) -> None:
     """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     from odomkit.workflows.track import run_track
 
-    options = log_options(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
+    options = log_opts
     with reported_warnings() as warned, progress_bar(json) as progress:
         result = run_track(
             log, robot, method=method,  # type: ignore[arg-type]
             log_options=options, pose0=parse_pose(initial_pose, theta0_deg),
             cov0=parse_initial_cov(initial_cov),
-            truth=truth_options(truth, truth_format, truth_columns, truth_time_unit, truth_sigma, max_gap),
+            truth=replace(truth_base, path=truth),
             with_covariance=covariance, engine=engine, out=out, tum=tum, kitti=kitti, overwrite=force,
             bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
             progress=progress, plot=plot,

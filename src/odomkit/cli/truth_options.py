@@ -10,14 +10,16 @@ from typing import TYPE_CHECKING, Annotated
 
 import typer
 
+from odomkit.cli.shared_flags import Flag, with_flags
 from odomkit.errors import InputError
 
 if TYPE_CHECKING:
     from odomkit.workflows.truth import TruthOptions
 
 __all__ = [
-    "MaxGapOption", "parse_initial_cov", "truth_options", "TruthColumnsOption", "TruthFormatOption",
-    "TruthListOption", "TruthOption", "TruthSigmaOption", "TruthTimeUnitOption",
+    "MaxGapOption", "parse_initial_cov", "TRUTH_FLAGS", "truth_options", "TruthColumnsOption",
+    "TruthFormatOption", "TruthListOption", "TruthOption", "TruthSigmaOption", "TruthTimeUnitOption",
+    "with_truth_options",
 ]
 
 _TRUTH_HELP = ("Ground-truth file: TUM (t x y z qx qy qz qw), KITTI pose rows with the time first, "
@@ -49,6 +51,21 @@ def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: 
     if not (math.isfinite(max_gap) and max_gap >= 0):
         raise InputError(f"--max-gap must be a non-negative number of seconds, got {max_gap!r}")
     return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None)
+
+
+#: The truth flags besides ``--truth`` itself (one file, or one per log, as the command
+#: needs), in the order of their help.
+TRUTH_FLAGS: tuple[Flag, ...] = (
+    ("truth_format", TruthFormatOption, "auto"), ("truth_columns", TruthColumnsOption, None),
+    ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, 0.0),
+    ("max_gap", MaxGapOption, 0.5),
+)
+#: Decorator: the command takes :data:`TRUTH_FLAGS` and is called with ``truth_base``, the
+#: parsed :class:`~odomkit.workflows.truth.TruthOptions` without a path
+#: (:func:`odomkit.cli.shared_flags.with_flags`).
+with_truth_options = with_flags(TRUTH_FLAGS, "truth_base", lambda values: truth_options(
+    None, values["truth_format"], values["truth_columns"], values["truth_time_unit"],
+    values["truth_sigma"], values["max_gap"]))
 
 
 def parse_initial_cov(text: str | None) -> list[list[float]] | None:

@@ -15,29 +15,21 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
 from odomkit.cli.application import app
 from odomkit.cli.log_options import (
-    BagTimeOption,
-    ColumnsOption,
-    CumulativeOption,
-    DecimateOption,
-    FormatOption,
-    JointsOption,
-    PeriodOption,
-    TimeUnitOption,
-    TopicOption,
-    TruthTopicOption,
-    WrapBitsOption,
-    log_options,
     reported_warnings,
+    with_log_options,
     with_warnings,
 )
 from odomkit.cli.output import print_json
 from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.workflows.logs import LogOptions
 
 __all__ = ["umbmark_command"]
 
@@ -79,6 +71,7 @@ def _print_text(out: dict[str, Any]) -> None:
 
 
 @app.command("umbmark")
+@with_log_options
 def umbmark_command(
     errors_csv: Annotated[list[Path] | None, typer.Argument(
         help="CSV with columns direction,x,y (cw/ccw, return errors [m]).")] = None,
@@ -91,30 +84,20 @@ def umbmark_command(
     runs: Annotated[list[Path] | None, typer.Option(
         "--runs", help="Logs with ground truth (calibrate from logs).")] = None,
     robot: Annotated[Path | None, typer.Option("--robot", help="Robot file (TOML).")] = None,
-    fmt: FormatOption = "auto",
-    columns: ColumnsOption = None,
-    cumulative: CumulativeOption = False,
-    wrap_bits: WrapBitsOption = None,
-    period: PeriodOption = None,
-    time_unit: TimeUnitOption = "s",
-    decimate: DecimateOption = 1,
-    topic: TopicOption = None,
-    joints: JointsOption = None,
-    bag_time: BagTimeOption = False,
-    truth_topic: TruthTopicOption = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw the return errors, their centres of gravity and E_max,syst (with --runs: "
                        "before and after the correction) into this file (.png, .svg or .pdf; needs the "
                        "plot extra).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace an existing --plot file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
+    *,
+    log_opts: LogOptions,
 ) -> None:
     """UMBmark (Borenstein–Feng): E_max,syst and the corrections E_d, E_b, c_L, c_R, b."""
     from odomkit.workflows import umbmark as workflow
 
     positional = list(errors_csv or [])
-    options = log_options(fmt, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                          topic, joints, bag_time, truth_topic)
+    options = log_opts
     if not (math.isfinite(side) and side > 0):
         raise InputError(f"--side must be a positive length in metres, got {side!r} "
                          "(it is required)")
