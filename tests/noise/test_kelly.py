@@ -96,3 +96,26 @@ def test_sampled_compass_variance_and_sample_count():
         compass_sample_count(0.25, 0.1, 2)
     with pytest.raises(ModelError, match="compass_period"):
         noise.sample_variance(0.0)
+
+
+@pytest.mark.parametrize(("robot_type", "grows"), [("unicycle", False), ("gyro", True)])
+def test_yaw_rate_noise_while_standing_grows_for_a_gyro_not_for_a_velocity_command(robot_type, grows):
+    """A gyro drifts while the vehicle stands; a unicycle's commanded (or reported) body
+    velocity of zero moves nothing, so its heading variance stays (issue 11)."""
+    from odomkit.integrate import dead_reckon
+    from odomkit.kinematics import BodySteps
+    from odomkit.propagate.recursion import track_covariance
+    from odomkit.robot import ROBOT_TYPES
+
+    n = 300
+    dd = np.full(n, 0.01)
+    dth = np.full(n, 0.005)
+    dd[100:250] = dth[100:250] = 0.0
+    robot = ROBOT_TYPES[robot_type]()
+    steps = BodySteps(dd, dth, np.full(n, 0.1), {"speed": dd / 0.1, "yaw_rate": dth / 0.1}, robot)
+    cov = track_covariance(steps, dead_reckon(dd, dth), (SpeedNoise(1e-4), GyroNoise(1e-3)), np.zeros((3, 3)))
+    assert bool(cov[250, 2, 2] > cov[100, 2, 2] * 1.5) is grows
+    if not grows:
+        np.testing.assert_array_equal(cov[250], cov[100])
+        factor = GyroNoise(1e-3).input_factor(steps, 0, n)
+        assert not np.any(factor[100:250]) and np.all(factor[:100, 1, 0] > 0)

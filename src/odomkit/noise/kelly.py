@@ -97,8 +97,8 @@ class GyroNoise(NoiseModel):
         require_non_negative(self)
 
     def input_variances(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
-        """σ_gg·|Δt| of each step [rad²], (n, 1)."""
-        return (self.psd_gyro * np.abs(np.asarray(steps.dt[a:b], dtype=float)))[:, None]
+        """σ_gg·|Δt| of each step [rad²], (n, 1) (:meth:`noisy_time`)."""
+        return (self.psd_gyro * self.noisy_time(steps, a, b))[:, None]
 
     def input_jacobian(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """The integrated-rate error enters Δθ alone: [[0], [1]], (n, 2, 1)."""
@@ -106,7 +106,23 @@ class GyroNoise(NoiseModel):
 
     def input_cov(self, steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
         """:func:`speed_gyro_input_cov` with no speed noise."""
-        return speed_gyro_input_cov(steps.dd[a:b], steps.dt[a:b], None, self)
+        return speed_gyro_input_cov(steps.dd[a:b], self.noisy_time(steps, a, b), None, self)
+
+    @staticmethod
+    def noisy_time(steps: BodySteps, a: int, b: int) -> NDArray[np.float64]:
+        """|Δt| of steps a … b−1 [s] over which the yaw-rate noise acts, (n,).
+
+        A gyro drifts whether or not the vehicle moves, so its noise acts all the time. A
+        unicycle's yaw rate is a body velocity, commanded (``cmd_vel``) or reported by the
+        base (``odom``): a step with zero speed and zero yaw rate is a vehicle standing
+        still, which gathers no heading error (as a tricycle's wheel that reads no travel,
+        issue 11), so its Δt does not count.
+        """
+        dt = np.abs(np.asarray(steps.dt[a:b], dtype=float))
+        if steps.robot.type_name == "unicycle":
+            moving = (np.asarray(steps.dd[a:b]) != 0) | (np.asarray(steps.dtheta[a:b]) != 0)
+            dt = np.where(moving, dt, 0.0)
+        return dt
 
 
 @register
