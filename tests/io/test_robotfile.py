@@ -115,3 +115,24 @@ def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
             read_robot(robot_file(tmp_path, text))
     with pytest.raises(InputError, match="unknown field"):
         read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nm_per_tick = 0.1\nwheel_base = 1\n'))
+
+
+def test_encoder_resolution_rad_reads_wheel_positions_in_radians(tmp_path):
+    """A JointState wheel position is in radians: with encoder_resolution = "rad" a wheel
+    radius r gives r metres per radian (one turn, 2π rad, is 2πr metres); a plain number
+    still means ticks per revolution, and another word is refused by name."""
+    import math
+
+    from odomkit.errors import InputError
+    from odomkit.io.robotfile import read_robot
+
+    def robot(extra):
+        path = tmp_path / "r.toml"
+        path.write_text(f'[robot]\ntype = "diff"\nwheel_base = 0.3\nwheel_radius = 0.05\n{extra}\n')
+        return read_robot(path)[0]
+
+    r = robot('encoder_resolution = "rad"')
+    assert r.m_per_tick_left == r.m_per_tick_right == pytest.approx(0.05, rel=1e-15)
+    assert robot("encoder_resolution = 4096").m_per_tick_left == pytest.approx(2 * math.pi * 0.05 / 4096)
+    with pytest.raises(InputError, match='ticks per revolution or "rad"'):
+        robot('encoder_resolution = "deg"')

@@ -38,6 +38,7 @@ A unicycle (body velocities ``speed``, ``yaw_rate``): ``c_scale``, ``yaw_rate_bi
 
 from __future__ import annotations
 
+import math
 import tomllib
 from dataclasses import fields
 from pathlib import Path
@@ -139,8 +140,20 @@ class _WheelSizes:
             return value
         self.from_diameter = True
         diameter = 2.0 * value if key.startswith("wheel_radius") else value
-        return metres_per_tick(diameter, self.f.number("encoder_resolution", 1.0),
-                               self.f.number("gear_ratio", 1.0))
+        return metres_per_tick(diameter, self.resolution(), self.f.number("gear_ratio", 1.0))
+
+    def resolution(self) -> float:
+        """``encoder_resolution``: ticks per revolution, or ``"rad"`` for a wheel position in
+        radians (a ROS ``JointState``: 2π "ticks" per revolution, so that ``wheel_radius``
+        alone gives metres; without it a radian would be read as a whole revolution)."""
+        if self.f.table.get("encoder_resolution") == "rad":
+            self.f.used.add("encoder_resolution")
+            return 2.0 * math.pi
+        if isinstance(self.f.table.get("encoder_resolution"), str):
+            raise InputError("[robot] encoder_resolution must be a number of ticks per revolution or "
+                             f"\"rad\" (positions in radians), got {self.f.table['encoder_resolution']!r}",
+                             source=self.f.source)
+        return self.f.number("encoder_resolution", 1.0)
 
     def optional_scale(self, side: str | None, wheel: str) -> float:
         """:meth:`scale`, or 1.0 when the file gives no size (a log in metres needs none)."""
