@@ -433,7 +433,7 @@ def fit_noise(
     if trim is not None and np.isfinite(ll_hat):
         kept = np.ones(everything.n_windows, dtype=bool)
         for _ in range(_TRIM_ROUNDS):
-            inside = _inside(everything, v_hat, trim)
+            inside = everything.inside(v_hat, trim)
             if np.array_equal(inside, kept):
                 break
             kept = inside
@@ -518,17 +518,6 @@ def _solve(lik: WindowLikelihood, v0: NDArray[np.float64], free: NDArray[np.intp
             best = cand
     assert best is not None
     return prob, best[0], best[1]
-
-
-def _inside(lik: WindowLikelihood, v: NDArray[np.float64], level: float) -> NDArray[np.bool_]:
-    """Whether each window end lies inside the ``level`` ellipse of its marginal covariance
-    at ``v`` (over its observed components: x, y and θ where the truth has a heading)."""
-    cov = lik.window_covariance(v)
-    hidden = ~lik.observed[:, 2]
-    cov[hidden, 2, :] = cov[hidden, :, 2] = 0.0
-    cov[hidden, 2, 2] = 1.0
-    d2 = np.einsum("wa,wa->w", lik.error, np.linalg.solve(cov, lik.error[..., None])[..., 0])
-    return d2 <= chi2.ppf(level, lik.observed.sum(axis=1))
 
 
 def _two_sided(quad: float, dof: int) -> float:

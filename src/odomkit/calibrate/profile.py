@@ -246,16 +246,8 @@ def noise_profiles(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], r
     trim = fit.trim
     if trim is not None and fit.trimmed:
         # A trimmed fit's likelihood holds the windows inside its ``trim`` ellipse at the
-        # fit (the fixed point of its trimming): eᵀΣ⁻¹e over the observed components below
-        # the χ² quantile of their number.
-        from scipy.stats import chi2
-
-        cov = lik.window_covariance(v_hat)
-        hidden = ~lik.observed[:, 2]
-        cov[hidden, 2, :] = cov[hidden, :, 2] = 0.0
-        cov[hidden, 2, 2] = 1.0
-        d2 = np.einsum("wa,wa->w", lik.error, np.linalg.solve(cov, lik.error[..., None])[..., 0])
-        keep = np.split(d2 <= chi2.ppf(trim, lik.observed.sum(axis=1)), lik.starts[1:])
+        # fit (the fixed point of its trimming).
+        keep = np.split(lik.inside(v_hat, trim), lik.starts[1:])
         lik = WindowLikelihood([b.select(k) for b, k in zip(used, keep, strict=True) if k.any()])
     free = [j for j, p in enumerate(params) if p.free]
 

@@ -161,6 +161,20 @@ class WindowLikelihood:
         return (fixed + np.einsum("j,wjab->wab", v[:self.q], white)
                 + np.einsum("wac,c,wbc->wab", sens, col, sens))
 
+    def inside(self, v: ArrayLike, level: float) -> NDArray[np.bool_]:
+        """Whether each window end lies inside the ``level`` ellipse of its marginal
+        covariance at ``v`` (over its observed components: x, y and θ where the truth has a
+        heading), shape (W,): the rule of a trimmed fit
+        (:func:`odomkit.calibrate.fit_noise.fit_noise`, ``trim``)."""
+        from scipy.stats import chi2
+
+        cov = self.window_covariance(v)
+        hidden = ~self.observed[:, 2]
+        cov[hidden, 2, :] = cov[hidden, :, 2] = 0.0
+        cov[hidden, 2, 2] = 1.0
+        d2 = np.einsum("wa,wa->w", self.error, np.linalg.solve(cov, self.error[..., None])[..., 0])
+        return np.asarray(d2 <= chi2.ppf(level, self.observed.sum(axis=1)))
+
     def __call__(self, v: ArrayLike, gradient: bool = True,
                  information: bool = False) -> LikelihoodValue:
         """log L at variance parameters ``v`` (q white then p bias, all ≥ 0), with its
