@@ -41,17 +41,10 @@ from odomkit.evaluate import coverage, nees, nees_summary
 from odomkit.io.halmstad import read_snowhite
 from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot
-from odomkit.kinematics import body_steps
 from odomkit.log import OdometryLog
 from odomkit.noise import LateralSlipNoise, ParameterUncertainty, SpeedNoise, TricycleNoise, WheelNoise
-from odomkit.truth import truth_at, truth_from_log
-from odomkit.windows import (
-    WindowBasis,
-    cumulative_travel,
-    parse_window,
-    split_windows,
-    window_covariance_basis,
-)
+from odomkit.truth import truth_from_log
+from odomkit.windows import log_window_basis, parse_window
 
 REPO = Path(__file__).resolve().parents[1]
 LEVELS = ("0.5", "0.9", "0.95", "0.99")
@@ -75,30 +68,18 @@ def runs_of(folders):
 
 
 def bases(runs, robot, models, window):
-    """(kind, WindowBasis) of every run with at least one window (its name in ``source``)."""
-    spec = parse_window(window)
-    out = []
-    for kind, log in runs:
-        truth = truth_from_log(log)
-        samples = truth_at(truth, log.t)
-        travel = cumulative_travel(body_steps(robot, log))
-        windows, _ = split_windows(log.t, travel, spec, valid=samples.valid)
-        if windows:
-            basis = window_covariance_basis(log, robot, models, samples.poses, samples.valid, windows,
-                                            truth=truth)
-            out.append((kind, basis, Path(log.source).stem))
-    return out
+    """(kind, WindowBasis, name) of every run with at least one window of length ``window``."""
+    return merged(runs, robot, models, (window,))
 
 
 def merged(runs, robot, models, windows):
     """(kind, one WindowBasis of every length, name) per run: ``fit-noise --window A --window B``."""
-    per = [bases(runs, robot, models, w) for w in windows]
-    names = [n for _, _, n in per[0]] + [n for p in per[1:] for _, _, n in p if n not in
-                                         {m for _, _, m in per[0]}]
+    specs = [parse_window(w) for w in windows]
     out = []
-    for name in names:
-        found = [(k, b) for p in per for k, b, n in p if n == name]
-        out.append((found[0][0], WindowBasis.merge([b for _, b in found]), name))
+    for kind, log in runs:
+        basis, _ = log_window_basis(log, robot, models, truth_from_log(log), specs)
+        if basis is not None:
+            out.append((kind, basis, Path(log.source).stem))
     return out
 
 

@@ -30,6 +30,7 @@ from odomkit.windows import (
     Window,
     WindowSpec,
     cumulative_travel,
+    log_window_basis,
     parse_window,
     split_windows,
     window_covariance_basis,
@@ -247,3 +248,30 @@ def test_windows_need_valid_truth_and_report_nan_positions():
     windows = [Window(0, 100, 5.0, 1.0)]
     with pytest.raises(InputError, match="row 100 is NaN"):
         window_errors(log, DiffDrive(0.3), WheelNoise(0, 0), bad, np.ones(200, bool), windows)
+
+
+def test_log_window_basis_is_each_length_cut_by_hand_and_merged():
+    """One log, windows of 10 s and 30 s: the same windows, errors and covariances as
+    cutting each length with split_windows and building its basis, in that order; None
+    (and the count of windows left standing) when no length fits."""
+
+
+    log = _curvy_log(n=2400)
+    robot = DiffDrive(0.3)
+    models = (WheelNoise(0.0, 0.0), ParameterUncertainty())
+    gt = dead_reckon_log(log, robot).poses
+    truth = Truth(log.t, gt[:, :2], gt[:, 2])
+    specs = [WindowSpec(10.0, "s"), WindowSpec(30.0, "s")]
+    basis, skipped = log_window_basis(log, robot, models, truth, specs)
+    travel = cumulative_travel(body_steps(robot, log))
+    valid = np.ones(len(log), bool)
+    by_hand = [window_covariance_basis(log, robot, models, gt, valid,
+                                       split_windows(log.t, travel, s, valid=valid)[0], truth=truth)
+               for s in specs]
+    assert basis is not None and skipped == 0
+    assert basis.windows == by_hand[0].windows + by_hand[1].windows
+    v = np.array([1e-6, 2e-6, 1e-6, 1e-6, 1e-6])
+    np.testing.assert_array_equal(basis.covariance(v),
+                                  np.concatenate([b.covariance(v) for b in by_hand]))
+    none, _ = log_window_basis(log, robot, models, truth, [WindowSpec(1000.0, "s")])
+    assert none is None

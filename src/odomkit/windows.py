@@ -27,6 +27,7 @@ sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -52,6 +53,7 @@ __all__ = [
     "WindowErrors",
     "WindowSpec",
     "cumulative_travel",
+    "log_window_basis",
     "parse_window",
     "split_windows",
     "window_covariance_basis",
@@ -561,3 +563,42 @@ def window_covariance_basis(
     return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights,
                        tuple(name for name, _ in white_units), tuple(bias_names), turning,
                        prep.dropped)
+
+
+def log_window_basis(
+    log: OdometryLog,
+    robot: Robot,
+    models: NoiseArg,
+    truth: Truth,
+    specs: Sequence[WindowSpec | None],
+    *,
+    min_travel: float = 0.05,
+    max_gap: float | None = 0.5,
+    method: str = "exact",
+) -> tuple[WindowBasis | None, int]:
+    """One log's windows of every length in ``specs`` as one basis, for fitting variances.
+
+    The truth is sampled at the log's rows (:func:`odomkit.truth.truth_at`), each length's
+    windows are cut over the rows where it is valid (:func:`split_windows`) and turned
+    into bases (:func:`window_covariance_basis`), and the lengths are merged
+    (:meth:`WindowBasis.merge`: they share the log's bias draw).
+
+    Returns
+    -------
+    basis : WindowBasis or None
+        None when no length has a window in this log.
+    skipped : int
+        Windows left out for travelling less than ``min_travel`` [m], all lengths.
+    """
+    from odomkit.truth import truth_at
+
+    samples = truth_at(truth, log.t, max_gap)
+    travel = cumulative_travel(body_steps(robot, log))
+    parts, skipped = [], 0
+    for spec in specs:
+        windows, left = split_windows(log.t, travel, spec, min_travel, valid=samples.valid)
+        skipped += left
+        if windows:
+            parts.append(window_covariance_basis(log, robot, models, samples.poses, samples.valid, windows,
+                                                 truth=truth, method=method))
+    return (WindowBasis.merge(parts) if parts else None), skipped

@@ -32,24 +32,18 @@ from odomkit.io.optiodom import OptiOdomExperiment, read_experiment
 from odomkit.io.robotfile import read_robot, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.io.trackio import write_track_csv, write_tum
-from odomkit.kinematics import body_steps
 from odomkit.path import Spin, Straight
 from odomkit.propagate.predict import predict
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
-from odomkit.truth import truth_at, truth_from_log
-from odomkit.windows import (
-    WindowBasis,
-    cumulative_travel,
-    parse_window,
-    split_windows,
-    window_covariance_basis,
-)
+from odomkit.truth import truth_from_log
+from odomkit.windows import log_window_basis, parse_window
 from odomkit.workflows.predict import add_ros_pose_covariance
 
 if TYPE_CHECKING:
     from odomkit.noise import NoiseModel
     from odomkit.track import Track
+    from odomkit.windows import WindowBasis
     from odomkit.workflows.demo_report import DemoData
 
 __all__ = ["FIT", "FIT_WINDOW", "HELD_OUT", "SCORE_WINDOWS", "noise_honesty", "run_demo"]
@@ -84,16 +78,9 @@ def _window_bases(experiments: Sequence[OptiOdomExperiment], calibrated: DiffDri
         for log in experiment.runs:
             truth = truth_from_log(log)
             assert truth is not None  # OptiOdom runs carry OptiTrack poses
-            samples = truth_at(truth, log.t)
-            travel = cumulative_travel(body_steps(robot, log))
-            parts = []
-            for spec in specs:
-                windows, _ = split_windows(log.t, travel, spec, valid=samples.valid)
-                if windows:
-                    parts.append(window_covariance_basis(log, robot, models, samples.poses,
-                                                         samples.valid, windows, truth=truth))
-            if parts:
-                out.append(WindowBasis.merge(parts))
+            basis, _ = log_window_basis(log, robot, models, truth, specs)
+            if basis is not None:
+                out.append(basis)
     return out
 
 

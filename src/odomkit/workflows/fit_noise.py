@@ -79,7 +79,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
 
     from odomkit.kinematics import body_steps
     from odomkit.truth import truth_at
-    from odomkit.windows import WindowBasis, cumulative_travel, split_windows, window_covariance_basis
+    from odomkit.windows import cumulative_travel, log_window_basis
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -89,20 +89,15 @@ def prepare_log(task: LogTask) -> PreparedLog:
     if truth is None:
         raise InputError("the log has no ground truth: pass --truth FILE for it, or use a log "
                          "with gt_* columns", source=name)
+    basis, skipped = log_window_basis(log, task.robot, task.models, truth, task.specs,
+                                      min_travel=task.min_travel, max_gap=task.truth.max_gap,
+                                      method=task.method)
+    if basis is not None:
+        return PreparedLog(name, basis, len(log), skipped, None)
+    # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
-    steps = body_steps(task.robot, log)
-    travel = cumulative_travel(steps)
-    # One basis per window length, merged: the log's windows of every length share its bias.
-    parts, skipped, spec = [], 0, task.specs[0]
-    for each in task.specs:
-        windows, left = split_windows(log.t, travel, each, task.min_travel, valid=samples.valid)
-        skipped += left
-        if windows:
-            parts.append(window_covariance_basis(log, task.robot, task.models, samples.poses,
-                                                 samples.valid, windows, truth=truth,
-                                                 method=task.method))
-    if parts:
-        return PreparedLog(name, WindowBasis.merge(parts), len(log), skipped, None)
+    travel = cumulative_travel(body_steps(task.robot, log))
+    spec = task.specs[0]
     rows = np.flatnonzero(samples.valid)
     span = float(log.t[rows[-1]] - log.t[rows[0]]) if rows.size else 0.0
     moved = float(travel[rows[-1]] - travel[rows[0]]) if rows.size else 0.0
