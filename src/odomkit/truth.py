@@ -46,6 +46,11 @@ class Truth:
         Standard deviation of each truth position per axis [m] (``--truth-sigma``).
     source : str
         Where the truth came from (used in messages).
+    heading_sigma : float
+        Standard deviation of each truth heading [rad] (``--truth-heading-sigma``; a motion
+        capture's rigid-body orientation noise). A window that starts from the truth
+        heading carries it as start variance, and an end compared with the truth heading
+        adds it; ignored for position-only truth.
     """
 
     t: NDArray[np.float64]
@@ -53,6 +58,7 @@ class Truth:
     theta: NDArray[np.float64] | None = None
     sigma: float = 0.0
     source: str = "<memory>"
+    heading_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         error = partial(InputError, source=self.source)
@@ -68,6 +74,7 @@ class Truth:
         if t.size > 1 and not np.all(np.diff(t) > 0):
             raise error("truth times must be strictly increasing")
         validate.non_negative(self.sigma, "truth sigma", unit="m", error=error)
+        validate.non_negative(self.heading_sigma, "truth heading sigma", unit="rad", error=error)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])
@@ -248,9 +255,10 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
                span: float = 1.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The truth pose at ``time`` to start dead reckoning from, and its covariance.
 
-    The covariance is diag(σ², σ², var_θ): σ = ``truth.sigma`` and var_θ = 0 when the
-    truth measures heading; otherwise θ is :func:`heading_from_positions` (plus π when
-    ``reverse``, a robot backing up) and var_θ its variance.
+    The covariance is diag(σ², σ², var_θ): σ = ``truth.sigma`` and var_θ =
+    ``truth.heading_sigma``² when the truth measures heading; otherwise θ is
+    :func:`heading_from_positions` (plus π when ``reverse``, a robot backing up) and var_θ
+    its variance.
 
     Parameters
     ----------
@@ -282,7 +290,7 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
                          f"({truth.t[0]:.6g}..{truth.t[-1]:.6g} s): there is no truth pose to start from; "
                          "give --initial-pose", source=truth.source)
     pose = sample.poses[0].copy()
-    cov = np.diag([truth.sigma**2, truth.sigma**2, 0.0])
+    cov = np.diag([truth.sigma**2, truth.sigma**2, truth.heading_sigma**2])
     if truth.theta is None:
         fit = heading_from_positions(truth, time, span)
         if fit is None:

@@ -15,9 +15,10 @@ With e = truth − odometry at the window end, to first order
     Cov(e) = Φ P_start Φᵀ + R_end + Σ_j v_j B_j,
 
 where P_start is the start pose's covariance (the truth's own noise ``truth.sigma``² on
-x and y; where the truth has no heading, the variance of the heading fitted to the truth
-positions, :func:`odomkit.truth.heading_from_positions`), Φ its transition to the window
-end (the engines carry it), R_end = diag(σ², σ², 0) the truth's noise at the end, and
+x and y and ``truth.heading_sigma``² on θ; where the truth has no heading, the variance of
+the heading fitted to the truth positions, :func:`odomkit.truth.heading_from_positions`),
+Φ its transition to the window end (the engines carry it), R_end = diag(σ², σ², σθ²) the
+truth's noise at the end (σθ where the truth has heading), and
 B_j the covariance that unit variance in noise parameter j alone gives
 (:meth:`odomkit.noise.NoiseModel.variance_parameters`). The recursion
 P_{k+1} = F P Fᵀ + G Q Gᵀ is linear in (P_0, Q) and a bias adds S diag(σ²) Sᵀ, so the
@@ -48,6 +49,7 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
 
 __all__ = [
+    "TRUTH_NOISE",
     "Window",
     "WindowBasis",
     "WindowErrors",
@@ -59,6 +61,10 @@ __all__ = [
     "window_covariance_basis",
     "window_errors",
 ]
+
+#: The white columns of the truth's own noise in a :class:`WindowBasis` fitted with
+#: ``truth_columns``: (model index −1, field), the truth's position σ [m] and heading σ [rad].
+TRUTH_NOISE: tuple[tuple[int, str], ...] = ((-1, "truth_sigma"), (-1, "truth_heading_sigma"))
 
 
 @dataclass(frozen=True)
@@ -243,7 +249,8 @@ class _Prepared:
     poses: list[NDArray[np.float64]]
     start_cov: NDArray[np.float64]
     error: NDArray[np.float64]
-    end_noise: float  # truth σ² [m²] added to x and y at each window end
+    end_noise: NDArray[np.float64]  # (3,): the truth's σ², σ², σθ² added at each window end
+    heading_from_truth: NDArray[np.bool_]  # (W,): the start heading is the truth's own
     dropped: int
     method: str
 
@@ -273,18 +280,22 @@ def _start_heading(truth: Truth | None, time: float, reversing: bool, source: st
 
 def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid: ArrayLike,
              windows: list[Window], truth: Truth | None, method: str,
-             steps: BodySteps | None = None) -> _Prepared:
+             steps: BodySteps | None = None, own_noise: bool = True) -> _Prepared:
+    """The kept windows; ``own_noise`` False leaves the truth's own noise (``sigma``,
+    ``heading_sigma``) out of the start covariances and ``end_noise`` (a fit of it)."""
     n = len(log)
     gt = validate.shape(truth_poses, "truth poses", (n, 3), error=InputError)
     ok = np.asarray(truth_valid, dtype=bool)
     if ok.shape != (n,):
         raise InputError(f"truth_valid must have shape ({n},), got {ok.shape}")
     steps = body_steps(robot, log) if steps is None else steps
-    sigma2 = 0.0 if truth is None else float(truth.sigma) ** 2
+    sigma2 = 0.0 if truth is None or not own_noise else float(truth.sigma) ** 2
+    heading2 = (0.0 if truth is None or not own_noise or not truth.has_heading
+                else float(truth.heading_sigma) ** 2)
     kept: list[Window] = []
     parts: list[BodySteps] = []
     tracks: list[NDArray[np.float64]] = []
-    starts, errors = [], []
+    starts, errors, from_truth = [], [], []
     dropped = 0
     for w in windows:
         a, b = w.start, w.end
@@ -298,9 +309,12 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         cov0 = np.zeros((3, 3))
         cov0[0, 0] = cov0[1, 1] = sigma2
         pose0 = gt[a].copy()
+        own_heading = False
         if robot.measures_heading:
             pose0[2] = part.inputs["heading"][0]  # the measured heading (see dead_reckon_log)
-        elif not np.isfinite(pose0[2]):
+        elif np.isfinite(pose0[2]):
+            cov0[2, 2], own_heading = heading2, True
+        else:
             ahead = part.dd[: max(1, int(np.searchsorted(np.cumsum(part.dt), 0.5)))]
             fitted = _start_heading(truth, float(log.t[a]), float(np.sum(ahead)) < 0, log.source)
             if fitted is None:
@@ -315,9 +329,12 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         tracks.append(poses)
         starts.append(cov0)
         errors.append(err)
+        from_truth.append(own_heading)
     start = np.array(starts).reshape(-1, 3, 3)
     error = np.array(errors).reshape(-1, 3)
-    return _Prepared(kept, parts, tracks, start, error, sigma2, dropped, method)
+    end_noise = np.array([sigma2, sigma2, heading2])
+    return _Prepared(kept, parts, tracks, start, error, end_noise, np.array(from_truth, dtype=bool),
+                     dropped, method)
 
 
 def _end_covariance(part: BodySteps, poses: NDArray[np.float64], noise: NoiseArg,
@@ -345,7 +362,8 @@ def window_errors(
     """Dead-reckon each window from the truth at its start and score its end.
 
     Each window starts at the truth pose of its first row with covariance
-    diag(σ², σ², 0), σ = ``truth.sigma`` (zero without ``truth``); where the truth has no
+    diag(σ², σ², σθ²), σ = ``truth.sigma`` and σθ = ``truth.heading_sigma`` (zero without
+    ``truth``), and its end gets the same truth noise; where the truth has no
     heading (θ NaN in ``truth_poses``), the start heading is fitted to the truth positions
     (:func:`odomkit.truth.heading_from_positions`, turned by π while reversing) and its
     variance enters the start covariance; a window where that fails is dropped and
@@ -387,9 +405,7 @@ def window_errors(
     NoiseSet.of(noise).check_robot(robot)
     covs = np.empty((len(prep.windows), 3, 3))
     for i, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
-        covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method)
-        covs[i, 0, 0] += prep.end_noise
-        covs[i, 1, 1] += prep.end_noise
+        covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method) + np.diag(prep.end_noise)
     ends = np.array([w.end for w in prep.windows], dtype=np.int64)
     return WindowErrors(prep.windows, prep.error, covs, prep.start_cov, ends, prep.dropped)
 
@@ -415,7 +431,8 @@ class WindowBasis:
         The part that no parameter scales: start covariance carried to the end plus the
         truth's noise at the end.
     white : ndarray, shape (W, q, 3, 3)
-        Covariance per unit variance of each white parameter (``white_names``).
+        Covariance per unit variance of each white parameter (``white_names``; the last two
+        are the truth's own noise, :data:`TRUTH_NOISE`, when it is fitted).
     sens : ndarray, shape (W, 3, c)
         Sensitivity of each window end to the c bias columns (each model's bias
         parameters, :meth:`odomkit.noise.NoiseModel.bias_jacobian`).
@@ -492,6 +509,7 @@ def window_covariance_basis(
     *,
     truth: Truth | None = None,
     method: str = "exact",
+    truth_columns: bool = False,
 ) -> WindowBasis:
     """Per-parameter covariance bases of the window ends, for fitting variances.
 
@@ -508,6 +526,15 @@ def window_covariance_basis(
     models : noise model, sequence of models or NoiseSet
         Every variance parameter of every model that applies to ``robot`` gets a basis
         (their current values do not matter).
+    truth_columns : bool
+        Fit the truth's own noise too: the truth's ``sigma`` and ``heading_sigma`` leave
+        ``fixed`` and become the last two white columns, named :data:`TRUTH_NOISE`. A
+        window's truth noise enters at its start (carried to the end: a start position
+        error moves the end by the same amount, since dead reckoning's increments do not
+        depend on the position, so that column is exactly diag(2, 2, 0); a start heading
+        error swings the end about the start) and at its end. The heading column is zero
+        where the start heading is not the truth's (position-only truth, a compass robot's
+        measured heading) and the end heading is not compared.
 
     Returns
     -------
@@ -518,7 +545,7 @@ def window_covariance_basis(
 
     noise = NoiseSet.of(models)
     noise.check_robot(robot)
-    prep = _prepare(log, robot, truth_poses, truth_valid, windows, truth, method)
+    prep = _prepare(log, robot, truth_poses, truth_valid, windows, truth, method, own_noise=not truth_columns)
     step_map = noise.step_map(method)
     white_units: list[tuple[tuple[int, str], NoiseModel]] = []
     bias_names: list[tuple[int, str]] = []
@@ -542,16 +569,23 @@ def window_covariance_basis(
         weights[r:r + block.shape[0], c:c + block.shape[1]] = block
         r, c = r + block.shape[0], c + block.shape[1]
     n_win = len(prep.windows)
+    n_truth = len(TRUTH_NOISE) if truth_columns else 0
     fixed = np.zeros((n_win, 3, 3))
-    white = np.zeros((n_win, len(white_units), 3, 3))
+    white = np.zeros((n_win, len(white_units) + n_truth, 3, 3))
     sens = np.zeros((n_win, 3, n_cols))
+    heading_seen = truth is not None and truth.has_heading
     for w, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
         if np.any(prep.start_cov[w]):
             fixed[w] = _end_covariance(part, poses, (), prep.start_cov[w], method)
-        fixed[w, 0, 0] += prep.end_noise
-        fixed[w, 1, 1] += prep.end_noise
+        fixed[w] += np.diag(prep.end_noise)
         for j, (_, unit) in enumerate(white_units):
             white[w, j] = _end_covariance(part, poses, unit, np.zeros((3, 3)), method)
+        if truth_columns:
+            white[w, -2] = np.diag([2.0, 2.0, 0.0])
+            if prep.heading_from_truth[w]:
+                white[w, -1] = _end_covariance(part, poses, (), np.diag([0.0, 0.0, 1.0]), method)
+            if heading_seen:
+                white[w, -1, 2, 2] += 1.0
         if n_cols and len(part):
             K = np.concatenate([m.bias_jacobian(part, 0, len(part)) for m in bias_models], axis=-1)
             start = np.zeros((3, n_cols))
@@ -560,9 +594,9 @@ def window_covariance_basis(
             sens[w] = bias_sensitivity_chunk(step_terms(poses[:-1, 2], part.dd, part.dtheta, step_map),
                                              K, start, robot.measures_heading)[-1]
     turning = np.array([float(np.sum(np.abs(part.dtheta))) for part in prep.steps])
-    return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights,
-                       tuple(name for name, _ in white_units), tuple(bias_names), turning,
-                       prep.dropped)
+    names = tuple(name for name, _ in white_units) + (TRUTH_NOISE if truth_columns else ())
+    return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights, names, tuple(bias_names),
+                       turning, prep.dropped)
 
 
 def log_window_basis(
@@ -575,13 +609,14 @@ def log_window_basis(
     min_travel: float = 0.05,
     max_gap: float | None = 0.5,
     method: str = "exact",
+    truth_columns: bool = False,
 ) -> tuple[WindowBasis | None, int]:
     """One log's windows of every length in ``specs`` as one basis, for fitting variances.
 
     The truth is sampled at the log's rows (:func:`odomkit.truth.truth_at`), each length's
     windows are cut over the rows where it is valid (:func:`split_windows`) and turned
-    into bases (:func:`window_covariance_basis`), and the lengths are merged
-    (:meth:`WindowBasis.merge`: they share the log's bias draw).
+    into bases (:func:`window_covariance_basis`, with ``truth_columns``), and the lengths
+    are merged (:meth:`WindowBasis.merge`: they share the log's bias draw).
 
     Returns
     -------
@@ -600,5 +635,5 @@ def log_window_basis(
         skipped += left
         if windows:
             parts.append(window_covariance_basis(log, robot, models, samples.poses, samples.valid, windows,
-                                                 truth=truth, method=method))
+                                                 truth=truth, method=method, truth_columns=truth_columns))
     return (WindowBasis.merge(parts) if parts else None), skipped

@@ -19,6 +19,7 @@ UNITS: dict[str, tuple[str, ...]] = {
     # log and truth options
     "--period": ("s",),
     "--truth-sigma": ("m",),
+    "--truth-heading-sigma": ("rad",),
     "--max-gap": ("s",),
     # poses and covariances
     "--initial-pose": ("m, m, rad",),

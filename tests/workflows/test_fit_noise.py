@@ -15,7 +15,7 @@ import pytest
 
 from odomkit.data import builtin_data_path
 from odomkit.io.optiodom import read_run
-from odomkit.io.robotfile import read_robot
+from odomkit.io.robotfile import read_robot, read_truth_noise
 from odomkit.noise import ParameterUncertainty, WheelNoise
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
@@ -39,7 +39,7 @@ def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path
                 "coverage_in_sample", "per_log", "outputs"):
         assert key in result, key
     assert set(result["parameters"]) == {"k_left", "k_right", "sigma_wheel_base", "sigma_scale_left",
-                                         "sigma_scale_right"}
+                                         "sigma_scale_right", "truth_sigma", "truth_heading_sigma"}
     for key, value in result["parameters"].items():
         lo, hi = result["interval95"][key]
         assert lo <= value <= hi
@@ -54,6 +54,43 @@ def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path
     assert params.sigma_scale_right == result["parameters"]["sigma_scale_right"]
     assert params.mode == "bias"
     assert robot.wheel_base == pytest.approx(0.2)
+    # The truth's own noise, fitted, is the robot file's [truth] (not a [noise] model).
+    assert read_truth_noise(out) == {"sigma": result["parameters"]["truth_sigma"],
+                                     "heading_sigma": result["parameters"]["truth_heading_sigma"]}
+    assert result["truth_noise"] == {"truth_sigma": result["parameters"]["truth_sigma"],
+                                     "truth_heading_sigma": result["parameters"]["truth_heading_sigma"]}
+
+
+def test_truth_noise_given_on_the_command_line_is_held_not_fitted(run_cli, tmp_path):
+    result, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-sigma", "0.002")
+    assert "truth_sigma" not in result["parameters"] and "truth_heading_sigma" in result["parameters"]
+    assert result["truth_noise"]["truth_sigma"] == 0.002
+    assert read_truth_noise(out)["sigma"] == 0.002
+    both, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-sigma", "0",
+                   "--truth-heading-sigma", "0", name="b.toml")
+    assert not {"truth_sigma", "truth_heading_sigma"} & set(both["parameters"])
+    # Held at zero the robot's own noise must explain the whole error: it comes out larger.
+    assert both["parameters"]["k_left"] ** 2 + both["parameters"]["k_right"] ** 2 > (
+        result["parameters"]["k_left"] ** 2 + result["parameters"]["k_right"] ** 2)
+
+
+def test_evaluate_adds_the_robot_files_truth_noise_unless_flags_say_otherwise(run_cli, tmp_path):
+    _, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s")
+    noise = read_truth_noise(out)
+    assert noise["sigma"] > 0
+
+    def evaluate(*flags):
+        code, stdout, stderr = run_cli("evaluate", *RUNS[3:], "--robot", out, "--window", "10s", *flags,
+                                       "--json")
+        assert code == 0, stderr
+        return json.loads(stdout)
+
+    default = evaluate()
+    explicit = evaluate("--truth-sigma", repr(noise["sigma"]),
+                        "--truth-heading-sigma", repr(noise["heading_sigma"]))
+    without = evaluate("--truth-sigma", "0", "--truth-heading-sigma", "0")
+    assert default["nees_position_mean"] == explicit["nees_position_mean"]
+    assert without["nees_position_mean"] > default["nees_position_mean"]
 
 
 def test_the_result_does_not_depend_on_the_number_of_workers(run_cli, tmp_path):

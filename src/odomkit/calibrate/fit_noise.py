@@ -23,7 +23,7 @@ distribution, Bonferroni-corrected).
 
 from __future__ import annotations
 
-from collections.abc import Collection, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
@@ -37,6 +37,7 @@ from odomkit.errors import ModelError
 from odomkit.evaluate import coverage
 from odomkit.noise import NOISE_MODELS, NoiseModel, NoiseSet
 from odomkit.noise.base import variance_power
+from odomkit.windows import TRUTH_NOISE
 
 if TYPE_CHECKING:
     from odomkit.robot import Robot
@@ -107,9 +108,14 @@ class NoiseParameter:
     kind: str
     free: bool
 
+    @property
+    def power(self) -> int:
+        """2 when the value is a standard deviation (the variance its square), else 1."""
+        return 2 if self.kind == "truth" else variance_power(self.name)
+
     def to_value(self, variance: float) -> float:
         """The model-unit value (σ, k or the variance itself) of a variance."""
-        return float(np.sqrt(variance)) if variance_power(self.name) == 2 else float(variance)
+        return float(np.sqrt(variance)) if self.power == 2 else float(variance)
 
 
 def _zero_model(cls: type[NoiseModel]) -> NoiseModel | None:
@@ -188,6 +194,27 @@ def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collecti
     return tuple(out)
 
 
+def fit_parameters(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], robot: Robot,
+                   kinds: Collection[str], fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
+    """The parameters of a fit on ``bases``: :func:`noise_parameters`, and, where the bases
+    carry the truth's own noise (:data:`odomkit.windows.TRUTH_NOISE`, ``truth_columns``),
+    ``truth_sigma`` [m] and ``truth_heading_sigma`` [rad] between the white and the bias
+    ones (the bases' column order), kind ``"truth"``: free unless named in ``fixed`` or
+    their columns are zero in every window (no truth heading anywhere)."""
+    params = noise_parameters(models, robot, kinds, fixed)
+    used = [b for b in bases if len(b.windows)]
+    if not used or used[0].white_names[-len(TRUTH_NOISE):] != TRUTH_NOISE:
+        return params
+    q = len(used[0].white_names)
+    truth = []
+    for k, (_, name) in enumerate(TRUTH_NOISE):
+        column = q - len(TRUTH_NOISE) + k
+        seen = any(np.any(b.white[:, column]) for b in used)
+        truth.append(NoiseParameter(name, -1, name, "truth", seen and name not in fixed))
+    n_white = sum(p.kind == "white" for p in params)
+    return params[:n_white] + tuple(truth) + params[n_white:]
+
+
 @dataclass(frozen=True)
 class NoiseFit:
     """Result of :func:`fit_noise` (values in each model's own units).
@@ -195,7 +222,10 @@ class NoiseFit:
     ``parameters`` and ``interval`` hold the free parameters by key (interval upper bound
     ``inf`` when the data cannot bound it); ``variances`` every parameter's variance;
     ``models`` the fitted noise models; ``per_log`` each log's windows, eᵀΣ⁻¹e, its
-    degrees of freedom and two-sided p-value.
+    degrees of freedom and two-sided p-value; ``truth_noise`` the truth's own noise
+    {``truth_sigma`` [m], ``truth_heading_sigma`` [rad]}, fitted or held, where the fit
+    had it (None otherwise): the honesty test adds it to every window end
+    (``odomkit evaluate``), the robot's own covariance does not.
     """
 
     parameters: dict[str, float]
@@ -214,6 +244,8 @@ class NoiseFit:
     cross_validation: dict[str, object] | None = None
     trimmed: int = 0
     trim: float | None = None
+    truth_noise: dict[str, float] | None = None
+    truth_held: tuple[str, ...] = ()
 
     def to_dict(self) -> dict[str, object]:
         out: dict[str, object] = {
@@ -224,7 +256,7 @@ class NoiseFit:
             "windows": self.windows, "logs": self.logs, "log_likelihood": self.log_likelihood,
             "coverage_in_sample": self.coverage_in_sample, "correlation": self.correlation,
             "warnings": self.warnings, "per_log": self.per_log,
-            "trim": self.trim, "windows_trimmed": self.trimmed,
+            "trim": self.trim, "windows_trimmed": self.trimmed, "truth_noise": self.truth_noise,
         }
         if self.cross_validation is not None:
             out["cross_validation"] = self.cross_validation
@@ -376,6 +408,7 @@ def fit_noise(
     log_names: Sequence[str] | None = None,
     cross_validate: bool = False,
     trim: float | None = None,
+    truth_held: Mapping[str, float] | None = None,
 ) -> NoiseFit:
     """Maximum-likelihood variances of ``models`` from the window bases of several logs.
 
@@ -406,6 +439,11 @@ def fit_noise(
         inflate a Gaussian fit until most windows over-cover. The left-out windows are
         counted (``trimmed``), named in a warning, and still scored in
         ``coverage_in_sample``. None: every window (``odomkit fit-noise`` uses :data:`DEFAULT_TRIM`).
+    truth_held : mapping, optional
+        Where the bases carry the truth's own noise (``truth_columns``): those of
+        ``truth_sigma`` [m] and ``truth_heading_sigma`` [rad] held at the given value (the
+        user knows them, e.g. a GPS's σ); the others are fitted. Without truth columns the
+        truth's noise is the bases' fixed part and this is ignored.
 
     Returns
     -------
@@ -415,7 +453,8 @@ def fit_noise(
         raise ModelError(f"level must be in (0, 1), got {level}")
     if trim is not None and not 0.5 < trim < 1:
         raise ModelError(f"trim must be in (0.5, 1), got {trim}")
-    params = noise_parameters(models, robot, kinds, fixed)
+    held = dict(truth_held or {})
+    params = fit_parameters(bases, models, robot, kinds, set(fixed) | set(held))
     names = list(log_names) if log_names is not None else [f"log {i}" for i in range(len(bases))]
     used = [i for i, b in enumerate(bases) if len(b.windows)]
     everything = WindowLikelihood([bases[i] for i in used])
@@ -424,7 +463,8 @@ def fit_noise(
     free = np.array([k for k, p in enumerate(params) if p.free], dtype=np.intp)
     if free.size == 0:
         raise ModelError("nothing to fit: no free noise parameter of the asked kinds")
-    v0 = np.array([models[p.model].variance_parameters()[p.name] for p in params])
+    v0 = np.array([held.get(p.name, 0.0) ** 2 if p.kind == "truth"
+                   else models[p.model].variance_parameters()[p.name] for p in params])
     lik = everything
     prob, v_hat, ll_hat = _solve(lik, v0, free, None)
     all_used = list(used)
@@ -498,6 +538,8 @@ def fit_noise(
         coverage_in_sample=coverage(everything.error[:, :2],
                                     everything.window_covariance(v_hat)[:, :2, :2]),
         trimmed=n_trimmed, trim=trim,
+        truth_noise={p.key: params[k].to_value(v_hat[k]) for k, p in enumerate(params) if p.kind == "truth"}
+        or None, truth_held=tuple(held),
         correlation={keys[a]: {keys[b]: float(corr[x, y]) for y, b in enumerate(informed)}
                      for x, a in enumerate(informed)},
         per_log=per_log, warnings=warnings, cross_validation=cv,

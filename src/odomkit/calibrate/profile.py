@@ -233,11 +233,10 @@ def noise_profiles(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], r
     list of Profile
         In the order of ``fit.parameters``; values in the models' own units.
     """
-    from odomkit.calibrate.fit_noise import noise_parameters
+    from odomkit.calibrate.fit_noise import fit_parameters
     from odomkit.calibrate.window_likelihood import WindowLikelihood
-    from odomkit.noise.base import variance_power
 
-    params = noise_parameters(models, robot, kinds, fixed)
+    params = fit_parameters(bases, models, robot, kinds, set(fixed) | set(fit.truth_held))
     if {p.key for p in params if p.free} != set(fit.parameters):
         raise ModelError("the fit's parameters are not those of these models, kinds and fixed names")
     used = [b for b in bases if len(b.windows)]
@@ -260,7 +259,7 @@ def noise_profiles(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], r
     out = []
     for j in free:
         p = params[j]
-        power = variance_power(p.name)
+        power = p.power
         grid = profile_grid(fit.parameters[p.key], fit.interval[p.key], points)
         ll = profile_log_likelihood(loglik, v_hat, j, grid**power, free=free)
         out.append(Profile(p.key, grid, ll, fit.parameters[p.key], fit.log_likelihood,

@@ -1,6 +1,6 @@
 """The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
 and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
---max-gap``, parsed into :class:`odomkit.workflows.truth.TruthOptions`."""
+--truth-heading-sigma --max-gap``, parsed into :class:`odomkit.workflows.truth.TruthOptions`."""
 
 from __future__ import annotations
 
@@ -18,7 +18,8 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MaxGapOption", "parse_initial_cov", "TRUTH_FLAGS", "truth_options", "TruthColumnsOption",
-    "TruthFormatOption", "TruthListOption", "TruthOption", "TruthSigmaOption", "TruthTimeUnitOption",
+    "TruthFormatOption", "TruthHeadingSigmaOption", "TruthListOption", "TruthOption", "TruthSigmaOption",
+    "TruthTimeUnitOption",
     "with_truth_options",
 ]
 
@@ -34,38 +35,44 @@ TruthColumnsOption = Annotated[str | None, typer.Option(
     "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw).")]
 TruthTimeUnitOption = Annotated[str, typer.Option(
     "--truth-time-unit", help="Unit of the truth's time column: s | ms | us | ns.")]
-TruthSigmaOption = Annotated[float, typer.Option(
-    "--truth-sigma", help="Standard deviation of the truth positions per axis [m].")]
+TruthSigmaOption = Annotated[float | None, typer.Option(
+    "--truth-sigma", help="Standard deviation of the truth positions per axis [m]; default 0, or "
+    "the robot file's [truth] sigma where a robot's covariance is scored; fit-noise fits it if not given.")]
+TruthHeadingSigmaOption = Annotated[float | None, typer.Option(
+    "--truth-heading-sigma", help="Standard deviation of the truth headings [rad]; default as "
+    "--truth-sigma's.")]
 MaxGapOption = Annotated[float, typer.Option(
     "--max-gap", help="Rows inside a truth gap longer than this [s] (and than twice the "
                       "truth's median spacing) are left out and counted (0: no limit).")]
 
 
-def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float,
-                  max_gap: float) -> TruthOptions:
-    """The parsed truth options (``--max-gap 0`` means no limit)."""
+def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float | None,
+                  max_gap: float, heading_sigma: float | None = None) -> TruthOptions:
+    """The parsed truth options (``--max-gap 0`` means no limit; a noise not given is None)."""
     from odomkit.workflows.truth import TruthOptions
 
-    if not (math.isfinite(sigma) and sigma >= 0):
-        raise InputError(f"--truth-sigma must be a non-negative number of metres, got {sigma!r}")
+    for flag, value, unit in (("--truth-sigma", sigma, "metres"), ("--truth-heading-sigma", heading_sigma,
+                                                                   "radians")):
+        if value is not None and not (math.isfinite(value) and value >= 0):
+            raise InputError(f"{flag} must be a non-negative number of {unit}, got {value!r}")
     if not (math.isfinite(max_gap) and max_gap >= 0):
         raise InputError(f"--max-gap must be a non-negative number of seconds, got {max_gap!r}")
-    return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None)
+    return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma)
 
 
 #: The truth flags besides ``--truth`` itself (one file, or one per log, as the command
 #: needs), in the order of their help.
 TRUTH_FLAGS: tuple[Flag, ...] = (
     ("truth_format", TruthFormatOption, "auto"), ("truth_columns", TruthColumnsOption, None),
-    ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, 0.0),
-    ("max_gap", MaxGapOption, 0.5),
+    ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, None),
+    ("truth_heading_sigma", TruthHeadingSigmaOption, None), ("max_gap", MaxGapOption, 0.5),
 )
 #: Decorator: the command takes :data:`TRUTH_FLAGS` and is called with ``truth_base``, the
 #: parsed :class:`~odomkit.workflows.truth.TruthOptions` without a path
 #: (:func:`odomkit.cli.shared_flags.with_flags`).
 with_truth_options = with_flags(TRUTH_FLAGS, "truth_base", lambda values: truth_options(
     None, values["truth_format"], values["truth_columns"], values["truth_time_unit"],
-    values["truth_sigma"], values["max_gap"]))
+    values["truth_sigma"], values["max_gap"], values["truth_heading_sigma"]))
 
 
 def parse_initial_cov(text: str | None) -> list[list[float]] | None:

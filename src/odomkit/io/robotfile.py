@@ -20,6 +20,10 @@ Example (all lengths in metres, angles in radians)::
     sigma_wheel_base = 0.002
     mode = "bias"
 
+    [truth]                     # optional; written by fit-noise: the noise of the truth
+    sigma = 0.001               #    it fitted against [m], [rad]; evaluate and report add
+    heading_sigma = 0.006       #    it to each scored window end (not the robot's own)
+
 A car (rear-axle reference, speed measured at one wheel, front steering angle)::
 
     [robot]
@@ -40,6 +44,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import fields
 from pathlib import Path
 from typing import Any
@@ -64,7 +69,7 @@ from odomkit.robot import (
     robot_type_name,
 )
 
-__all__ = ["read_robot", "robot_to_dict", "write_robot"]
+__all__ = ["TRUTH_KEYS", "read_robot", "read_truth_noise", "robot_to_dict", "write_robot"]
 
 
 class _Fields:
@@ -259,6 +264,13 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
     return tuple(models)
 
 
+#: The ``[truth]`` table's keys: the noise of the ground truth a robot's noise was fitted
+#: against (``odomkit fit-noise`` writes them), σ of a truth position per axis [m] and of a
+#: truth heading [rad]. Not the robot's: ``evaluate`` and ``report`` add them to each scored
+#: window end when no ``--truth-sigma``/``--truth-heading-sigma`` is given.
+TRUTH_KEYS = ("sigma", "heading_sigma")
+
+
 def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     """Read a robot file.
 
@@ -268,6 +280,28 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     noise : tuple of noise models (empty when the file has no [noise] table)
     """
     path = Path(path)
+    doc = _document(path)
+    try:
+        robot = _robot_from_table(doc["robot"], str(path))
+        noise = _noise_from_table(doc.get("noise", {}), str(path))
+    except ModelError as exc:
+        raise InputError(str(exc), source=str(path)) from None
+    return robot, noise
+
+
+def read_truth_noise(path: str | Path) -> dict[str, float]:
+    """A robot file's ``[truth]`` table (:data:`TRUTH_KEYS`), empty when it has none."""
+    f = _Fields(_document(Path(path)).get("truth", {}), "truth", str(path))
+    out = {key: f.number(key) for key in TRUTH_KEYS if f.has(key)}
+    f.check_unused()
+    for key, value in out.items():
+        if value < 0:
+            raise InputError(f"[truth] {key} must be >= 0, got {value!r}", source=str(path))
+    return out
+
+
+def _document(path: Path) -> dict[str, Any]:
+    """The checked TOML document of a robot file."""
     if not path.is_file():
         raise InputError("no such robot file", source=str(path))
     # TOML is UTF-8 text by definition: a compressed or otherwise encoded file is refused.
@@ -278,22 +312,20 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
         raise InputError(f"not valid TOML ({exc})", source=str(path)) from None
     if "robot" not in doc or not isinstance(doc["robot"], dict):
         raise InputError("needs a [robot] table", source=str(path))
-    if "noise" in doc and not isinstance(doc["noise"], dict):
-        raise InputError(f"[noise] must be a table, got {doc['noise']!r}", source=str(path))
-    unknown = sorted(set(doc) - {"robot", "noise"})
+    for name in ("noise", "truth"):
+        if name in doc and not isinstance(doc[name], dict):
+            raise InputError(f"[{name}] must be a table, got {doc[name]!r}", source=str(path))
+    unknown = sorted(set(doc) - {"robot", "noise", "truth"})
     if unknown:
-        raise InputError(f"unknown table(s) {', '.join(unknown)}; expected [robot] and [noise]",
+        raise InputError(f"unknown table(s) {', '.join(unknown)}; expected [robot], [noise] and [truth]",
                          source=str(path))
-    try:
-        robot = _robot_from_table(doc["robot"], str(path))
-        noise = _noise_from_table(doc.get("noise", {}), str(path))
-    except ModelError as exc:
-        raise InputError(str(exc), source=str(path)) from None
-    return robot, noise
+    return doc
 
 
-def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = ()) -> dict[str, Any]:
-    """The TOML document of a robot (and noise), as written by :func:`write_robot`."""
+def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
+                  truth_noise: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """The TOML document of a robot (and noise, and the truth's noise: :data:`TRUTH_KEYS`),
+    as written by :func:`write_robot`."""
     from dataclasses import asdict
 
     table: dict[str, Any] = {"type": robot_type_name(robot)}
@@ -307,13 +339,15 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = ()) -> dict[str,
             else:
                 noise_table.update(model.to_dict())
         doc["noise"] = noise_table
+    if truth_noise:
+        doc["truth"] = {key: float(truth_noise[key]) for key in TRUTH_KEYS if key in truth_noise}
     return doc
 
 
 def write_robot(path: str | Path, robot: Robot, noise: tuple[NoiseModel, ...] = (),
-                overwrite: bool = False) -> Path:
+                overwrite: bool = False, truth_noise: Mapping[str, float] | None = None) -> Path:
     """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
     path = Path(path)
     refuse_overwrite(path, overwrite=overwrite)
-    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise)), encoding="utf-8")
+    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth_noise)), encoding="utf-8")
     return path

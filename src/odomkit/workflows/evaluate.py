@@ -233,6 +233,7 @@ def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequ
     from odomkit.truth import truth_at
 
     track = _read_estimate(path)
+    opts = opts.resolved()
     if opts.path is not None:
         found = _load(opts, None)
         samples = truth_at(found, track.t, opts.max_gap)
@@ -243,7 +244,7 @@ def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequ
         raise InputError("no truth: give --truth, or a track written with truth (gt_* columns)",
                          source=str(path))
     return _score_rows(str(path), track.poses, track.cov, ref, valid, align=align,
-                       truth_sigma=opts.sigma, rpe_distances=rpe_distances,
+                       truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                        min_travel=min_travel, honesty_from_rows=True, t=track.t)
 
 
@@ -321,8 +322,11 @@ def evaluate_logs(
         name = "window ends" if kinds == {"white"} else f"window ends ({both})"
         covers = {name: out["coverage"]}
         if kinds > {"white"}:  # the white models alone, for comparison
+            from odomkit.workflows.truth import resolved_truth
+
             white = [m for m in noise if m.kind == "white"]
-            alone = _white_only(logs, robot, white, truth, log_options, window, min_travel, method)
+            alone = _white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, window,
+                                min_travel, method)
             covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
                                                           np.concatenate([a.honesty_cov for a in alone]))
         out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"]))}
@@ -402,11 +406,13 @@ def score_logs(
     from odomkit.io.robotfile import read_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions, load_log
+    from odomkit.workflows.truth import resolved_truth
 
     robot, noise = read_robot(robot_path)
     if not noise:
         raise InputError("the robot file has no [noise] table: the honesty test scores a predicted "
                          "covariance", source=str(robot_path))
+    truth = resolved_truth(robot_path, truth)
     noise_arg = noise if len(noise) > 1 else noise[0]
     spec = parse_window(window) if window else None
     scored = []
@@ -444,7 +450,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                       None, log.source, log.meta)
     track = dead_reckon_log(sub, robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
     whole = _score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
-                         align=align, truth_sigma=opts.sigma, rpe_distances=rpe_distances,
+                         align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                          min_travel=0.0, honesty_from_rows=False, t=track.t)
     notes = list(whole.warnings)
     if first != rows[0]:

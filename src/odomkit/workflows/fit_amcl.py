@@ -117,7 +117,7 @@ def _updates(odom: OdometryPoses, truth: Truth, opts: TruthOptions, model: str, 
     ok = samples.valid[:-1] & samples.valid[1:]
     start, end = rows[:-1][ok], rows[1:][ok]
     data = amcl_data(odom.poses[start], odom.poses[end], samples.poses[:-1][ok], samples.poses[1:][ok],
-                     model, opts.sigma)
+                     model, opts.sigma or 0.0)
     return data, int(rows.size - 1), int(np.count_nonzero(~ok))
 
 

@@ -89,9 +89,10 @@ def prepare_log(task: LogTask) -> PreparedLog:
     if truth is None:
         raise InputError("the log has no ground truth: pass --truth FILE for it, or use a log "
                          "with gt_* columns", source=name)
+    # The truth's own noise is fitted with the rest (held where the user gave it).
     basis, skipped = log_window_basis(log, task.robot, task.models, truth, task.specs,
                                       min_travel=task.min_travel, max_gap=task.truth.max_gap,
-                                      method=task.method)
+                                      method=task.method, truth_columns=True)
     if basis is not None:
         return PreparedLog(name, basis, len(log), skipped, None)
     # Why there is no window (the failure path only: sampled again for the message).
@@ -200,6 +201,10 @@ def fit_noise_files(
         :meth:`odomkit.windows.WindowBasis.merge`); None: each log is one window.
     kinds : which models' variances are fitted ("white", "bias").
     fixed : parameter names held at the robot file's value.
+        The truth's own noise (``truth_sigma`` [m], ``truth_heading_sigma`` [rad]; a floor
+        that does not grow with the window) is fitted too, unless ``truths`` give it
+        (``--truth-sigma``, ``--truth-heading-sigma``: then held), and written to the
+        robot file's ``[truth]`` table, which the honesty test adds to each window end.
     workers : processes for reading logs and computing bases; None: one per core when
         the logs are large (:data:`PARALLEL_ROWS`), else this process.
     scheduler : a Dask scheduler address: run those tasks on its cluster instead.
@@ -263,16 +268,20 @@ def fit_noise_files(
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
+    held = truths[0].held  # the truth-noise flags are shared by every log
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                         level=level, log_names=[p.name for p in used], cross_validate=cross_validate,
-                        trim=trim)
+                        trim=trim, truth_held=held)
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
                                    "variances": list(fit.variances.values()),
                                    "log_likelihood": fit.log_likelihood,
                                    "lower bounds": [lo for lo, _ in fit.interval.values()]})
-    written = write_robot(out, robot, fit.models, overwrite=overwrite)
+    truth_noise = fit.truth_noise or {}
+    written = write_robot(out, robot, fit.models, overwrite=overwrite,
+                          truth_noise={"sigma": truth_noise.get("truth_sigma", 0.0),
+                                       "heading_sigma": truth_noise.get("truth_heading_sigma", 0.0)})
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)
     result.update({
@@ -297,7 +306,7 @@ _NOISE_UNITS = {"k_left": "m^½", "k_right": "m^½", "alpha_ss": "m", "psd_gyro"
                "sigma_scale_left": "relative", "sigma_scale_right": "relative",
                "sigma_steering_offset": "rad",
                "sigma_yaw_rate_offset": "rad/s", "sigma_yaw_rate_scale": "relative",
-               "sigma_heading_offset": "rad"}
+               "sigma_heading_offset": "rad", "truth_sigma": "m", "truth_heading_sigma": "rad"}
 
 
 def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence[NoiseModel],
@@ -318,7 +327,9 @@ def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence
     if "bias" in kinds and "white" in kinds:
         white = tuple(m if m.kind != "bias"
                       else m.from_variances({n: 0.0 for n in m.variance_parameters(robot)}) for m in models)
-        alone = fit_noise(bases, white, robot, kinds=("white",), fixed=fixed, level=level, trim=trim)
+        held = {k: (fit.truth_noise or {})[k] for k in fit.truth_held}
+        alone = fit_noise(bases, white, robot, kinds=("white",), fixed=fixed, level=level, trim=trim,
+                          truth_held=held)
         coverages["white only (refitted, bias zero)"] = alone.coverage_in_sample
     if fit.cross_validation is not None:
         coverages["leave-one-log-out"] = fit.cross_validation["coverage"]  # type: ignore[assignment]

@@ -3,6 +3,7 @@ a truth file, or the log's own ``gt_*`` columns."""
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -13,7 +14,7 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.truth import Truth
 
-__all__ = ["load_truth", "TruthOptions", "truth_options_per_log"]
+__all__ = ["load_truth", "resolved_truth", "TruthOptions", "truth_options_per_log"]
 
 
 @dataclass(frozen=True)
@@ -21,32 +22,61 @@ class TruthOptions:
     """How to read the truth (see ``odomkit evaluate --help``).
 
     ``path`` None means the log's own ground truth. ``sigma`` [m] is the truth's own
-    position noise per axis, ``max_gap`` [s] the longest gap between fixes to interpolate
-    across (None: no limit).
+    position noise per axis and ``heading_sigma`` [rad] its heading noise: None when not
+    given, which is zero, or the robot file's ``[truth]`` values (those ``fit-noise``
+    fitted) where a command scores a robot file's covariance (:meth:`resolved`), and
+    fitted by ``fit-noise``. ``max_gap`` [s] is the longest gap between fixes to
+    interpolate across (None: no limit).
     """
 
     path: Path | None = None
     format: str = "auto"
     columns: str | None = None
     time_unit: str = "s"
-    sigma: float = 0.0
+    sigma: float | None = None
     max_gap: float | None = 0.5
+    heading_sigma: float | None = None
+
+    def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
+        """These options with each truth noise not given taken from ``defaults`` (a robot
+        file's ``[truth]``: ``sigma``, ``heading_sigma``), else zero."""
+        found = defaults or {}
+        return replace(self, sigma=self.sigma if self.sigma is not None else found.get("sigma", 0.0),
+                       heading_sigma=(self.heading_sigma if self.heading_sigma is not None
+                                      else found.get("heading_sigma", 0.0)))
+
+    @property
+    def held(self) -> dict[str, float]:
+        """The truth noise the user gave, by :func:`odomkit.calibrate.fit_noise.fit_noise`'s
+        names (``truth_sigma``, ``truth_heading_sigma``): ``fit-noise`` fits the others."""
+        given = {"truth_sigma": self.sigma, "truth_heading_sigma": self.heading_sigma}
+        return {k: float(v) for k, v in given.items() if v is not None}
 
 
 def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth | None:
     """The truth file of ``options``, else the log's own ground truth, else None."""
     from odomkit.io.truth import read_truth
-    from odomkit.truth import Truth, truth_from_log
+    from odomkit.truth import truth_from_log
 
-    if options.path is not None:
-        return read_truth(options.path, options.format, options.columns, options.time_unit,
-                          options.sigma)
-    if log is None:
+    sigma, heading_sigma = options.sigma or 0.0, options.heading_sigma or 0.0
+    found = (read_truth(options.path, options.format, options.columns, options.time_unit, sigma)
+             if options.path is not None else None if log is None else truth_from_log(log))
+    if found is None:
         return None
-    truth = truth_from_log(log)
-    if truth is None:
-        return None
-    return Truth(truth.t, truth.xy, truth.theta, options.sigma, truth.source) if options.sigma else truth
+    truth: Truth = found
+    if (sigma, heading_sigma) == (truth.sigma, truth.heading_sigma):
+        return truth
+    return replace(truth, sigma=sigma, heading_sigma=heading_sigma)
+
+
+def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
+    """``options`` with each truth noise not given taken from the robot file's ``[truth]``
+    (the noise of the truth its noise was fitted against), else zero: for scoring that
+    robot's covariance against a truth (:meth:`TruthOptions.resolved`)."""
+    from odomkit.io.robotfile import read_truth_noise
+
+    defaults = read_truth_noise(robot_path)
+    return [o.resolved(defaults) for o in options]
 
 
 def truth_options_per_log(options: TruthOptions, paths: list[Path], logs: int) -> list[TruthOptions]:
