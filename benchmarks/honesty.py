@@ -67,17 +67,18 @@ def runs_of(folders):
     return [(kind, log) for kind, folder in folders for log in read_experiment(folder).runs]
 
 
-def bases(runs, robot, models, window):
+def bases(runs, robot, models, window, truth_noise=False):
     """(kind, WindowBasis, name) of every run with at least one window of length ``window``."""
-    return merged(runs, robot, models, (window,))
+    return merged(runs, robot, models, (window,), truth_noise)
 
 
-def merged(runs, robot, models, windows):
-    """(kind, one WindowBasis of every length, name) per run: ``fit-noise --window A --window B``."""
+def merged(runs, robot, models, windows, truth_noise=False):
+    """(kind, one WindowBasis of every length, name) per run: ``fit-noise --window A --window B``
+    (``truth_noise``: with the truth's own noise as parameters, as fit-noise fits it)."""
     specs = [parse_window(w) for w in windows]
     out = []
     for kind, log in runs:
-        basis, _ = log_window_basis(log, robot, models, truth_from_log(log), specs)
+        basis, _ = log_window_basis(log, robot, models, truth_from_log(log), specs, truth_columns=truth_noise)
         if basis is not None:
             out.append((kind, basis, Path(log.source).stem))
     return out
@@ -135,8 +136,8 @@ def table(title, variants, fit_runs, held_runs, robot, breakdown=True):
           "| NEES (bounds) | targets met at 10 s / 30 s |")
     print("|---|---|---|---|---|---|---|---|---|---|")
     found, warned = {}, []
-    for name, models, kinds, fixed, fit_windows, trim in variants:
-        held = {w: bases(held_runs, robot, models, w) for w in WINDOWS}
+    for name, models, kinds, fixed, fit_windows, trim, truth_noise in variants:
+        held = {w: bases(held_runs, robot, models, w, truth_noise) for w in WINDOWS}
         for fw in fit_windows:
             if kinds is None:  # the robot file's guess, not fitted
                 params = noise_parameters(models, robot, ())
@@ -144,8 +145,8 @@ def table(title, variants, fit_runs, held_runs, robot, breakdown=True):
                 shown, notes, seconds = values({p.key: p.to_value(x) for p, x in zip(params, v, strict=True)
                                                 if x > 0}), [], 0.0
             else:
-                fb = merged(fit_runs, robot, models, WINDOWS) if fw == BOTH else bases(fit_runs, robot,
-                                                                                       models, fw)
+                fb = (merged(fit_runs, robot, models, WINDOWS, truth_noise) if fw == BOTH
+                      else bases(fit_runs, robot, models, fw, truth_noise))
                 started = time.perf_counter()
                 fit = fit_noise([b for _, b, _ in fb], models, robot, kinds=kinds, fixed=fixed,
                                 log_names=[n for _, _, n in fb], trim=trim)
@@ -231,28 +232,32 @@ def optiodom(root: Path) -> None:
         variants = []
         if guess:
             variants.append(("guessed k (robot file)", (*guess, ParameterUncertainty()), None, (), ("10s",),
-                             None))
+                             None, False))
         variants += model_variants(white, platform)
         table(f"### {platform}", variants, fit_runs, held_runs, robot)
         # The other way round: a split is one draw; experiments differ (the fit half's squares
         # err twice as much as the held-out ones), so the same model may pass one way only.
         robot = calibrate(held_runs, nominal)
         table(f"### {platform}, the other way round: fitted on the held-out half, scored on the fit half",
-              model_variants(white, platform)[-2:], held_runs, fit_runs, robot, breakdown=False)
+              model_variants(white, platform)[-3:], held_runs, fit_runs, robot, breakdown=False)
 
 
 def model_variants(white, platform="diff"):
     """The fitted variants of a table: the vehicle's own white noise alone (fitted on each
     window length, and on both), then with fit-noise's default slip (along and across the
     track for a differential drive, across for a steered one), untrimmed and trimmed, then
-    with bias."""
+    with bias, then with the truth's own noise fitted too (fit-noise's defaults)."""
     bias = ParameterUncertainty()
     slip = (SpeedNoise(0.0), LateralSlipNoise(0.0)) if platform == "diff" else (LateralSlipNoise(0.0),)
-    return [("white (vehicle's own)", (white, bias), ("white",), {"sigma_dt"}, (*WINDOWS, BOTH), None),
-            ("white + slip", (white, *slip, bias), ("white",), {"sigma_dt"}, (BOTH,), None),
-            ("white + slip, trimmed", (white, *slip, bias), ("white",), {"sigma_dt"}, (BOTH,), DEFAULT_TRIM),
-            ("white + slip + bias, trimmed", (white, *slip, bias), ("white", "bias"), {"sigma_dt"}, (BOTH,),
-             DEFAULT_TRIM)]
+    both = ("white", "bias")
+    return [("white (vehicle's own)", (white, bias), ("white",), {"sigma_dt"}, (*WINDOWS, BOTH), None, False),
+            ("white + slip", (white, *slip, bias), ("white",), {"sigma_dt"}, (BOTH,), None, False),
+            ("white + slip, trimmed", (white, *slip, bias), ("white",), {"sigma_dt"}, (BOTH,), DEFAULT_TRIM,
+             False),
+            ("white + slip + bias, trimmed", (white, *slip, bias), both, {"sigma_dt"}, (BOTH,), DEFAULT_TRIM,
+             False),
+            ("white + slip + bias + truth noise, trimmed (fit-noise's defaults)", (white, *slip, bias), both,
+             {"sigma_dt"}, (BOTH,), DEFAULT_TRIM, True)]
 
 
 def snowhite(root: Path) -> None:
@@ -268,7 +273,7 @@ def snowhite(root: Path) -> None:
     print(f"\n## Snowhite: fit on rows 0–{half} ({log.t[half]:.1f} s), scored on rows {half}–{len(log) - 1}")
     robot = calibrate(first, robot)
     table("### Snowhite", [("guessed (examples/snowhite.toml)", (*guess, ParameterUncertainty()), None, (),
-                            ("10s",), None), *model_variants(TricycleNoise(0.0, 0.0), "tricyc")],
+                            ("10s",), None, False), *model_variants(TricycleNoise(0.0, 0.0), "tricyc")],
           first, second, robot, breakdown=False)
 
 

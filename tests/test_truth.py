@@ -137,3 +137,25 @@ def test_a_gap_is_never_shorter_than_twice_the_truth_spacing():
     s = truth_at(tr, [0.5, 10.25, 25.0, 35.5], max_gap=0.5)
     assert s.valid.tolist() == [True, True, False, True]
     assert s.in_gaps == 1 and s.poses[1, 0] == 10.25
+
+
+def test_start_pose_carries_the_truth_heading_sigma_only_where_the_truth_has_heading():
+    """Issue 11: diag(σ², σ², σθ²) from a truth with heading; a position-only truth's start
+    heading variance is the fit's alone, whatever heading_sigma says."""
+    t = np.arange(0.0, 3.0, 0.05)
+    xy = np.column_stack((2 * t, 1 - t))
+    pose, cov = start_pose(Truth(t, xy, 0.3 * t, sigma=0.01, heading_sigma=0.004), 1.0)
+    np.testing.assert_allclose(pose, [2.0, 0.0, 0.3])
+    np.testing.assert_array_equal(cov, np.diag([1e-4, 1e-4, 0.004**2]))
+    _, fitted = start_pose(Truth(t, xy, None, sigma=0.01), 1.0)
+    _, ignored = start_pose(Truth(t, xy, None, sigma=0.01, heading_sigma=0.5), 1.0)
+    np.testing.assert_array_equal(ignored, fitted)
+    # The fitted heading's own variance (heading_from_positions), not 0.5².
+    assert ignored[2, 2] == heading_from_positions(Truth(t, xy, None, sigma=0.01), 1.0)[1]
+
+
+@pytest.mark.parametrize("value", [-1.0, np.nan, np.inf])
+def test_a_negative_or_non_finite_truth_heading_sigma_is_refused_by_name(value):
+    with pytest.raises(InputError, match="truth heading sigma"):
+        Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), heading_sigma=value)
+    assert Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), heading_sigma=0.0).heading_sigma == 0.0

@@ -275,3 +275,153 @@ def test_log_window_basis_is_each_length_cut_by_hand_and_merged():
                                   np.concatenate([b.covariance(v) for b in by_hand]))
     none, _ = log_window_basis(log, robot, models, truth, [WindowSpec(1000.0, "s")])
     assert none is None
+
+
+# --- Issue 11: the truth's own noise (Truth.sigma, Truth.heading_sigma, truth_columns) -----------
+
+
+def _truth_noise_case(kind):
+    """A turning log, its robot, zero-noise models (no robot noise) and the perfect odometry's
+    track as the truth (so that every window error is the truth's own noise)."""
+    n = 800
+    t = np.arange(n) * 0.05
+    if kind == "diff":
+        log, robot, models = _curvy_log(n, seed=2), DiffDrive(0.3), (WheelNoise(0.0, 0.0),)
+    else:
+        log = OdometryLog(t, {"dist": np.full(n, 0.01), "steer": 0.3 * np.sin(t / 3)})
+        robot, models = Tricycle(0.15), (TricycleNoise(0.0, 0.0, 0.0),)
+    return log, robot, models, dead_reckon_log(log, robot).poses
+
+
+def _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, draws, seed):
+    """Second moments of the window-end errors over ``draws`` noisy truths: each truth row
+    moved by N(0, σ²) per axis and N(0, σθ²) in heading, each window dead-reckoned (perfect
+    odometry) from its noisy start and compared with its noisy end. (W, 3, 3)"""
+    rng = np.random.default_rng(seed)
+    steps = body_steps(robot, log)
+    rows = sorted({w.start for w in windows} | {w.end for w in windows})
+    errors = np.empty((draws, len(windows), 3))
+    for k in range(draws):
+        noisy = {r: poses[r] + rng.normal(0.0, [sigma, sigma, heading_sigma]) for r in rows}
+        for i, w in enumerate(windows):
+            end = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], noisy[w.start])[-1]
+            errors[k, i] = noisy[w.end] - end
+    errors[..., 2] = (errors[..., 2] + np.pi) % (2 * np.pi) - np.pi
+    return np.einsum("kwa,kwb->wab", errors, errors) / draws
+
+
+@pytest.mark.parametrize("kind", ["diff", "tricycle"])
+def test_the_truths_own_noise_matches_monte_carlo(kind):
+    """Issue 11: window_errors' covariance under Truth(sigma, heading_sigma) with no robot
+    noise is the spread of dead reckoning from a noisy truth start to a noisy truth end;
+    so are the basis's fixed part and σ²·col(−2) + σθ²·col(−1) of its truth columns.
+    Tolerance: 5 standard errors of a sample second moment, sqrt((ΣiiΣjj + Σij²)/n)."""
+    log, robot, models, poses = _truth_noise_case(kind)
+    sigma, heading_sigma, draws = 0.004, 0.006, 4000
+    windows, _ = split_windows(log.t, cumulative_travel(body_steps(robot, log)), WindowSpec(8.0, "s"))
+    assert len(windows) >= 4
+    ok = np.ones(len(log), bool)
+    truth = Truth(log.t, poses[:, :2], poses[:, 2], sigma=sigma, heading_sigma=heading_sigma)
+    predicted = window_errors(log, robot, models, poses, ok, windows, truth=truth).cov
+    sample = _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, draws, 11)
+    d = np.sqrt(np.einsum("wii->wi", predicted))
+    tol = 5 * np.sqrt((d[:, :, None] ** 2 * d[:, None, :] ** 2 + predicted**2) / draws)
+    assert np.all(np.abs(sample - predicted) <= tol), np.max(np.abs(sample - predicted) / tol)
+    # The check can fail: without the start heading's swing about the start (σθ² only on
+    # θ at both ends) the covariance is far outside the same tolerance.
+    swingless = np.diag([2 * sigma**2, 2 * sigma**2, 2 * heading_sigma**2])
+    assert np.max(np.abs(sample - swingless) / tol) > 3
+    # The basis's fixed part (no robot noise) and its truth columns say the same.
+    basis = window_covariance_basis(log, robot, models, poses, ok, windows, truth=truth)
+    scale = np.abs(predicted).max()
+    np.testing.assert_allclose(basis.fixed / scale, predicted / scale, rtol=0, atol=1e-12)
+    columns = window_covariance_basis(log, robot, models, poses, ok, windows, truth=truth, truth_columns=True)
+    assert not columns.fixed.any()
+    own = sigma**2 * columns.white[:, -2] + heading_sigma**2 * columns.white[:, -1]
+    np.testing.assert_allclose(own / scale, predicted / scale, rtol=0, atol=1e-12)
+
+
+def _truth_columns_case(case):
+    """(log, robot, models, truth poses, Truth with σ and σθ, the same Truth without noise)."""
+    sigma, heading_sigma = 0.003, 0.004
+    if case == "compass":
+        log, robot, models = _models_and_log("compass")
+        poses = dead_reckon_log(log, robot).poses + 0.01
+        xy, theta = poses[:, :2], poses[:, 2]
+    else:
+        log, robot, models = _models_and_log("diff")
+        poses = dead_reckon_log(log, robot).poses + 0.01
+        xy, theta = poses[:, :2], poses[:, 2]
+        if case == "position_only":
+            # Fixes with 2 mm of noise, σ = 1 mm below it: the start heading fitted to them
+            # takes its variance from their residual (heading_from_positions), not from σ.
+            sigma = 0.001
+            xy = xy + np.random.default_rng(8).normal(0.0, 0.002, xy.shape)
+            poses = np.column_stack((xy, np.full(len(log), np.nan)))
+            theta = None
+    noisy = Truth(log.t, xy, theta, sigma=sigma, heading_sigma=heading_sigma)
+    return log, robot, models, poses, noisy, Truth(log.t, xy, theta)
+
+
+@pytest.mark.parametrize("case", ["diff", "position_only", "compass"])
+def test_truth_columns_take_the_truths_noise_out_of_fixed_and_add_back_up(case):
+    """Issue 11: with truth_columns the truth's σ and σθ leave ``fixed`` (it is a noiseless
+    truth's), become the last two white columns (TRUTH_NOISE), and v with σ², σθ² in them
+    gives the covariance of truth_columns=False (and of the engines) to rounding. The
+    position column is diag(2, 2, 0); the heading column is, with perfect odometry's
+    end − start (Δx, Δy), u uᵀ for u = (−Δy, Δx, 1) (a start heading error swings the end
+    about the start) plus 1 on θθ (the end heading) where the start heading is the truth's,
+    only the end's 1 where it is measured (compass), zero without truth heading."""
+    from odomkit.windows import TRUTH_NOISE
+
+    log, robot, models, poses, noisy, clean = _truth_columns_case(case)
+    ok = np.ones(len(log), bool)
+    windows, _ = split_windows(log.t, cumulative_travel(body_steps(robot, log)), WindowSpec(8.0, "s"))
+    cols = window_covariance_basis(log, robot, models, poses, ok, windows, truth=noisy, truth_columns=True)
+    plain = window_covariance_basis(log, robot, models, poses, ok, windows, truth=noisy)
+    noiseless = window_covariance_basis(log, robot, models, poses, ok, windows, truth=clean)
+    assert TRUTH_NOISE == ((-1, "truth_sigma"), (-1, "truth_heading_sigma"))
+    assert cols.white_names == plain.white_names + TRUTH_NOISE and cols.bias_names == plain.bias_names
+    np.testing.assert_allclose(cols.fixed, noiseless.fixed, rtol=1e-12, atol=1e-300)
+    if case != "position_only":
+        assert not cols.fixed.any()
+    np.testing.assert_array_equal(cols.white[:, :-2], plain.white)
+    np.testing.assert_array_equal(cols.sens, plain.sens)
+    position = np.broadcast_to(np.diag([2.0, 2.0, 0.0]), (len(cols.windows), 3, 3))
+    np.testing.assert_array_equal(cols.white[:, -2], position)
+    heading = cols.white[:, -1]
+    if case == "diff":
+        steps = body_steps(robot, log)
+        for w, col in zip(cols.windows, heading, strict=True):
+            end = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], poses[w.start])[-1]
+            u = np.array([-(end[1] - poses[w.start, 1]), end[0] - poses[w.start, 0], 1.0])
+            np.testing.assert_allclose(col, np.outer(u, u) + np.diag([0.0, 0.0, 1.0]), rtol=1e-9, atol=1e-12)
+    elif case == "compass":
+        np.testing.assert_array_equal(heading, np.broadcast_to(np.diag([0.0, 0.0, 1.0]), heading.shape))
+    else:
+        assert not heading.any()
+    robot_v = [models[i].variance_parameters(robot)[name] for i, name in plain.white_names]
+    bias_v = [models[i].variance_parameters(robot)[name] for i, name in plain.bias_names]
+    v = np.array(robot_v + [noisy.sigma**2, noisy.heading_sigma**2] + bias_v)
+    expected = plain.covariance(np.array(robot_v + bias_v))
+    direct = window_errors(log, robot, models, poses, ok, windows, truth=noisy).cov
+    scale = np.abs(direct).max(axis=(1, 2))[:, None, None]
+    np.testing.assert_allclose(cols.covariance(v) / scale, expected / scale, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(cols.covariance(v) / scale, direct / scale, rtol=0, atol=1e-12)
+    # The truth's noise matters here (the check can fail): v without it falls short.
+    v[len(robot_v):len(robot_v) + 2] = 0.0
+    assert np.max(np.abs(cols.covariance(v) - direct) / scale) > 1e-3
+
+
+def test_the_truth_heading_column_has_its_end_part_wherever_the_end_heading_is_compared():
+    """The heading column's 1 on θθ at the end belongs to every window whose end heading is
+    compared (its θ error is finite), also when the truth comes as poses alone (truth=None,
+    as the synthetic fits pass it): the same poses with or without the Truth object give
+    the same columns."""
+    log, robot, models, poses, _, clean = _truth_columns_case("diff")
+    ok = np.ones(len(log), bool)
+    windows, _ = split_windows(log.t, log.t, WindowSpec(8.0, "s"))
+    given = window_covariance_basis(log, robot, models, poses, ok, windows, truth=clean, truth_columns=True)
+    bare = window_covariance_basis(log, robot, models, poses, ok, windows, truth_columns=True)
+    assert np.all(np.isfinite(bare.error[:, 2]))
+    np.testing.assert_array_equal(bare.white[:, -2:], given.white[:, -2:])

@@ -351,3 +351,106 @@ def test_merged_window_lengths_add_their_likelihoods_without_bias():
     assert len(merged.windows) == len(short[0].windows) + len(long_[0].windows)
     same = merged.select(np.ones(len(merged.windows), bool))
     np.testing.assert_array_equal(same.covariance(v), merged.covariance(v))
+
+
+# --- Issue 11: the truth's own noise fitted beside the robot's ----------------------------------
+
+TRUTH_TRUE = {"k_left": 0.001, "k_right": 0.0015, "truth_sigma": 0.003, "truth_heading_sigma": 0.005}
+
+
+def truth_noise_bases(seed, *, n_logs=6, n=1200, true=TRUTH_TRUE, bias=False, truth_columns=True,
+                      truth_sigma=0.0, truth_heading_sigma=0.0):
+    """Logs of a differential drive with white wheel noise k²|d| (and, with ``bias``, one
+    draw per log of the wheel base and scales, TRUE's σ), whose truth is the true track
+    with the truth's own noise added to every fix: N(0, σ²) per axis, N(0, σθ²) in heading.
+
+    Each 8 s window starts one row after the previous one ends, so that no two windows
+    share a truth fix: a shared fix's noise enters one window's end and the next one's
+    start with opposite signs, a correlation the window likelihood (independent windows)
+    does not model. ``truth_sigma``, ``truth_heading_sigma``: the Truth's stated noise."""
+    from odomkit.windows import Window
+
+    rng = np.random.default_rng(seed)
+    models = (WheelNoise(0, 0), ParameterUncertainty()) if bias else (WheelNoise(0, 0),)
+    bases = []
+    for _ in range(n_logs):
+        t = np.arange(n) * 0.05
+        phase = rng.uniform(0, 6, 2)
+        dl = 0.01 + 0.008 * np.sin(t / 2 + phase[0])
+        dr = 0.01 + 0.008 * np.sin(t / 3 + phase[1])
+        eps = (rng.normal(0, [TRUE["sigma_wheel_base"], TRUE["sigma_scale_left"], TRUE["sigma_scale_right"]])
+               if bias else np.zeros(3))
+        true_l = dl * (1 + eps[1]) + rng.standard_normal(n) * true["k_left"] * np.sqrt(np.abs(dl))
+        true_r = dr * (1 + eps[2]) + rng.standard_normal(n) * true["k_right"] * np.sqrt(np.abs(dr))
+        dd, dth = diff_body_steps(true_l[1:], true_r[1:], ROBOT.wheel_base + eps[0])
+        gt = dead_reckon(dd, dth)
+        own = [true["truth_sigma"], true["truth_sigma"], true["truth_heading_sigma"]]
+        gt += rng.normal(0.0, own, gt.shape)
+        log = OdometryLog(t, {"dist_left": dl, "dist_right": dr})
+        cut, _ = split_windows(t, t, WindowSpec(8.0, "s"))
+        windows = [Window(w.start + (w.start > 0), w.end, w.duration, w.travel) for w in cut]
+        truth = Truth(t, gt[:, :2], gt[:, 2], sigma=truth_sigma, heading_sigma=truth_heading_sigma)
+        bases.append(window_covariance_basis(log, ROBOT, models, gt, np.ones(n, bool), windows, truth=truth,
+                                             truth_columns=truth_columns))
+    return bases, models
+
+
+def _truth_noise_hits(seeds, kinds, true, **kwargs):
+    """How many of the seeds' fits hold each true value within its interval."""
+    hits = dict.fromkeys(true, 0)
+    for seed in seeds:
+        bases, models = truth_noise_bases(seed, true=true, **kwargs)
+        fit = fit_noise(bases, models, ROBOT, kinds=kinds)
+        assert set(fit.parameters) == set(true)
+        assert set(fit.truth_noise) == {"truth_sigma", "truth_heading_sigma"}
+        for key in hits:
+            lo, hi = fit.interval[key]
+            hits[key] += lo <= true[key] <= hi
+    return hits
+
+
+def test_robot_and_truth_noise_are_fitted_back_within_their_intervals_in_40_seeds():
+    """Issue 11: a truth with σ = 3 mm and σθ = 5 mrad of its own and wheels with white
+    noise: each 95 % interval, robot's and truth's, holds the true value in ≥ 90 % of 40
+    seeds."""
+    hits = _truth_noise_hits(range(40), ("white",), TRUTH_TRUE)
+    assert min(hits.values()) >= 36, hits
+
+
+@pytest.mark.slow
+def test_robot_white_bias_and_truth_noise_are_fitted_back_in_50_seeds():
+    true = {**TRUE, "truth_sigma": 0.003, "truth_heading_sigma": 0.005}
+    hits = _truth_noise_hits(range(50), ("white", "bias"), true, bias=True)
+    assert min(hits.values()) >= 45, hits
+
+
+def test_the_truth_noise_fit_is_the_truth_noise_kept_fixed_where_both_are_held():
+    """Holding both truth parameters at S and H is the fit of bases that carry S and H in
+    their fixed part (truth_columns=False with Truth(sigma=S, heading_sigma=H)): the same
+    robot noise, interval and likelihood. Holding one: it leaves ``parameters``, keeps its
+    value in ``truth_noise``, and the likelihood lies between the two fits'."""
+    s, h = TRUTH_TRUE["truth_sigma"], TRUTH_TRUE["truth_heading_sigma"]
+    cols, models = truth_noise_bases(21)
+    plain, _ = truth_noise_bases(21, truth_columns=False, truth_sigma=s, truth_heading_sigma=h)
+    both = fit_noise(cols, models, ROBOT, truth_held={"truth_sigma": s, "truth_heading_sigma": h})
+    reference = fit_noise(plain, models, ROBOT)
+    assert reference.truth_noise is None and reference.truth_held == ()
+    assert set(both.parameters) == set(reference.parameters) == {"k_left", "k_right"}
+    for key in ("k_left", "k_right"):
+        assert both.parameters[key] == pytest.approx(reference.parameters[key], rel=1e-4)
+        np.testing.assert_allclose(both.interval[key], reference.interval[key], rtol=1e-3)
+    assert both.log_likelihood == pytest.approx(reference.log_likelihood, abs=1e-6)
+    assert both.truth_noise == pytest.approx({"truth_sigma": s, "truth_heading_sigma": h}, rel=1e-12)
+    assert set(both.truth_held) == {"truth_sigma", "truth_heading_sigma"}
+
+    one = fit_noise(cols, models, ROBOT, truth_held={"truth_sigma": s})
+    assert one.truth_held == ("truth_sigma",)
+    assert "truth_sigma" not in one.parameters and "truth_sigma" not in one.interval
+    assert set(one.parameters) == {"k_left", "k_right", "truth_heading_sigma"}
+    assert one.truth_noise["truth_sigma"] == pytest.approx(s, rel=1e-12)
+    assert one.variances["truth_sigma"] == pytest.approx(s**2, rel=1e-12)
+    assert one.truth_noise["truth_heading_sigma"] == pytest.approx(one.parameters["truth_heading_sigma"])
+    assert one.to_dict()["truth_noise"] == one.truth_noise
+    free = fit_noise(cols, models, ROBOT)
+    assert free.truth_held == () and set(free.parameters) == set(TRUTH_TRUE)
+    assert both.log_likelihood - 1e-6 <= one.log_likelihood <= free.log_likelihood + 1e-6

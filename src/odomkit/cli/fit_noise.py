@@ -4,7 +4,8 @@
 
     odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
         [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
-        [--trim 0.999] [--cross-validate] [--truth-sigma S] [--workers N | --scheduler ADDR]
+        [--trim 0.999] [--cross-validate] [--truth-sigma S] [--truth-heading-sigma S]
+        [--workers N | --scheduler ADDR]
         [--force] [--json]
 """
 
@@ -115,6 +116,11 @@ def print_fit(out: dict[str, Any]) -> None:
         lo, hi = out[key][name]
         print(f"  {name:20s} {out['kinds'][name]:5s} {value:.6g}   ({100 * out['level']:g} % "
               f"profile interval {lo:.6g} .. {hi:.6g})")
+    truth = out.get("truth_noise")
+    if truth:
+        print(f"the truth's own noise (robot file [truth]: sigma {truth['truth_sigma']:.3g} m, heading_sigma "
+              f"{truth['truth_heading_sigma']:.3g} rad) is not the robot's: evaluate and report add it to "
+              "each window end")
     cov = out["coverage_in_sample"]
     print("in-sample coverage of the 50/90/95/99 % ellipses: "
           + " / ".join(f"{cov[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
