@@ -51,6 +51,11 @@ class Truth:
         capture's rigid-body orientation noise). A window that starts from the truth
         heading carries it as start variance, and an end compared with the truth heading
         adds it; ignored for position-only truth.
+    time_sigma : float
+        Standard deviation of each fix's time against the log's clock [s]
+        (``--truth-time-sigma``; jitter and latency between two clocks): a fix δ off is off
+        by the pose rate times δ, so it adds (rate·σ)² where the robot moves and nothing
+        where it stands (:mod:`odomkit.windows`).
     """
 
     t: NDArray[np.float64]
@@ -59,6 +64,7 @@ class Truth:
     sigma: float = 0.0
     source: str = "<memory>"
     heading_sigma: float = 0.0
+    time_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         error = partial(InputError, source=self.source)
@@ -75,6 +81,7 @@ class Truth:
             raise error("truth times must be strictly increasing")
         validate.non_negative(self.sigma, "truth sigma", unit="m", error=error)
         validate.non_negative(self.heading_sigma, "truth heading sigma", unit="rad", error=error)
+        validate.non_negative(self.time_sigma, "truth time sigma", unit="s", error=error)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])

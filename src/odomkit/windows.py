@@ -63,8 +63,10 @@ __all__ = [
 ]
 
 #: The white columns of the truth's own noise in a :class:`WindowBasis` fitted with
-#: ``truth_columns``: (model index −1, field), the truth's position σ [m] and heading σ [rad].
-TRUTH_NOISE: tuple[tuple[int, str], ...] = ((-1, "truth_sigma"), (-1, "truth_heading_sigma"))
+#: ``truth_columns``: (model index −1, field), the truth's position σ [m], heading σ [rad]
+#: and time σ [s] (its fixes' disagreement with the log's clock).
+TRUTH_NOISE: tuple[tuple[int, str], ...] = ((-1, "truth_sigma"), (-1, "truth_heading_sigma"),
+                                            (-1, "truth_time_sigma"))
 
 
 @dataclass(frozen=True)
@@ -249,10 +251,30 @@ class _Prepared:
     poses: list[NDArray[np.float64]]
     start_cov: NDArray[np.float64]
     error: NDArray[np.float64]
-    end_noise: NDArray[np.float64]  # (3,): the truth's σ², σ², σθ² added at each window end
+    end_cov: NDArray[np.float64]  # (W, 3, 3): the truth's own noise at each window end
     heading_from_truth: NDArray[np.bool_]  # (W,): the start heading is the truth's own
+    start_rate: NDArray[np.float64]  # (W, 3): d(pose)/dt where the window starts [m/s, rad/s]
+    end_rate: NDArray[np.float64]  # (W, 3): and where it ends
     dropped: int
     method: str
+
+
+#: Span [s] over which a window's start and end pose rates are taken from its own dead
+#: reckoning (at least one step): long enough to average encoder quantisation, short
+#: enough to follow a stop.
+RATE_SPAN = 0.2
+
+
+def _pose_rates(part: BodySteps, poses: NDArray[np.float64]
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """d(x, y, θ)/dt at a window's start and end, (3,) each, from its dead-reckoned poses
+    over :data:`RATE_SPAN` (a truth fix δ seconds off the log's clock is off by rate·δ)."""
+    dt = np.asarray(part.dt, dtype=float)
+    m = max(1, min(len(dt), int(np.searchsorted(np.cumsum(dt), RATE_SPAN)) + 1))
+    head, tail = float(np.sum(dt[:m])), float(np.sum(dt[-m:]))
+    start = (poses[m] - poses[0]) / head if head > 0 else np.zeros(3)
+    end = (poses[-1] - poses[-1 - m]) / tail if tail > 0 else np.zeros(3)
+    return start, end
 
 
 def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:
@@ -282,7 +304,8 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
              windows: list[Window], truth: Truth | None, method: str,
              steps: BodySteps | None = None, own_noise: bool = True) -> _Prepared:
     """The kept windows; ``own_noise`` False leaves the truth's own noise (``sigma``,
-    ``heading_sigma``) out of the start covariances and ``end_noise`` (a fit of it)."""
+    ``heading_sigma``, ``time_sigma``) out of the start covariances and ``end_cov`` (a fit
+    of it)."""
     n = len(log)
     gt = validate.shape(truth_poses, "truth poses", (n, 3), error=InputError)
     ok = np.asarray(truth_valid, dtype=bool)
@@ -292,10 +315,11 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
     sigma2 = 0.0 if truth is None or not own_noise else float(truth.sigma) ** 2
     heading2 = (0.0 if truth is None or not own_noise or not truth.has_heading
                 else float(truth.heading_sigma) ** 2)
+    time2 = 0.0 if truth is None or not own_noise else float(truth.time_sigma) ** 2
     kept: list[Window] = []
     parts: list[BodySteps] = []
     tracks: list[NDArray[np.float64]] = []
-    starts, errors, from_truth = [], [], []
+    starts, errors, from_truth, rates = [], [], [], []
     dropped = 0
     for w in windows:
         a, b = w.start, w.end
@@ -324,17 +348,24 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         poses = dead_reckon(part.dd, part.dtheta, pose0, method)  # type: ignore[arg-type]
         err = gt[b] - poses[-1]
         err[2] = wrap_angle(err[2])
+        rate_a, rate_b = _pose_rates(part, poses)
+        if robot.measures_heading:
+            rate_a[2] = 0.0  # the start heading is the log's own, on the log's clock
+        cov0 += time2 * np.outer(rate_a, rate_a)
         kept.append(w)
         parts.append(part)
         tracks.append(poses)
         starts.append(cov0)
         errors.append(err)
         from_truth.append(own_heading)
+        rates.append((rate_a, rate_b))
     start = np.array(starts).reshape(-1, 3, 3)
     error = np.array(errors).reshape(-1, 3)
-    end_noise = np.array([sigma2, sigma2, heading2])
-    return _Prepared(kept, parts, tracks, start, error, end_noise, np.array(from_truth, dtype=bool),
-                     dropped, method)
+    rate = np.array(rates).reshape(-1, 2, 3)
+    end_cov = np.diag([sigma2, sigma2, heading2])[None] + time2 * np.einsum("wa,wb->wab", rate[:, 1],
+                                                                              rate[:, 1])
+    return _Prepared(kept, parts, tracks, start, error, end_cov, np.array(from_truth, dtype=bool),
+                     rate[:, 0], rate[:, 1], dropped, method)
 
 
 def _end_covariance(part: BodySteps, poses: NDArray[np.float64], noise: NoiseArg,
@@ -405,7 +436,7 @@ def window_errors(
     NoiseSet.of(noise).check_robot(robot)
     covs = np.empty((len(prep.windows), 3, 3))
     for i, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
-        covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method) + np.diag(prep.end_noise)
+        covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method) + prep.end_cov[i]
     ends = np.array([w.end for w in prep.windows], dtype=np.int64)
     return WindowErrors(prep.windows, prep.error, covs, prep.start_cov, ends, prep.dropped)
 
@@ -431,7 +462,7 @@ class WindowBasis:
         The part that no parameter scales: start covariance carried to the end plus the
         truth's noise at the end.
     white : ndarray, shape (W, q, 3, 3)
-        Covariance per unit variance of each white parameter (``white_names``; the last two
+        Covariance per unit variance of each white parameter (``white_names``; the last three
         are the truth's own noise, :data:`TRUTH_NOISE`, when it is fitted).
     sens : ndarray, shape (W, 3, c)
         Sensitivity of each window end to the c bias columns (each model's bias
@@ -527,14 +558,17 @@ def window_covariance_basis(
         Every variance parameter of every model that applies to ``robot`` gets a basis
         (their current values do not matter).
     truth_columns : bool
-        Fit the truth's own noise too: the truth's ``sigma`` and ``heading_sigma`` leave
-        ``fixed`` and become the last two white columns, named :data:`TRUTH_NOISE`. A
-        window's truth noise enters at its start (carried to the end: a start position
-        error moves the end by the same amount, since dead reckoning's increments do not
-        depend on the position, so that column is exactly diag(2, 2, 0); a start heading
-        error swings the end about the start) and at its end. The heading column is zero
-        where the start heading is not the truth's (position-only truth, a compass robot's
-        measured heading) and the end heading is not compared.
+        Fit the truth's own noise too: the truth's ``sigma``, ``heading_sigma`` and
+        ``time_sigma`` leave ``fixed`` and become the last three white columns, named
+        :data:`TRUTH_NOISE`. A window's truth noise enters at its start (carried to the
+        end: a start position error moves the end by the same amount, since dead
+        reckoning's increments do not depend on the position, so that column is exactly
+        diag(2, 2, 0); a start heading error swings the end about the start) and at its
+        end. The heading column is zero where the start heading is not the truth's
+        (position-only truth, a compass robot's measured heading) and the end heading is
+        not compared. A fix δ seconds off the log's clock is off by the pose rate times δ
+        (u = d(x, y, θ)/dt from the window's own dead reckoning, :data:`RATE_SPAN`): the
+        time column is Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ, zero where the robot stands.
 
     Returns
     -------
@@ -573,19 +607,21 @@ def window_covariance_basis(
     fixed = np.zeros((n_win, 3, 3))
     white = np.zeros((n_win, len(white_units) + n_truth, 3, 3))
     sens = np.zeros((n_win, 3, n_cols))
-    heading_seen = truth is not None and truth.has_heading
     for w, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
         if np.any(prep.start_cov[w]):
             fixed[w] = _end_covariance(part, poses, (), prep.start_cov[w], method)
-        fixed[w] += np.diag(prep.end_noise)
+        fixed[w] += prep.end_cov[w]
         for j, (_, unit) in enumerate(white_units):
             white[w, j] = _end_covariance(part, poses, unit, np.zeros((3, 3)), method)
         if truth_columns:
-            white[w, -2] = np.diag([2.0, 2.0, 0.0])
+            white[w, -3] = np.diag([2.0, 2.0, 0.0])
             if prep.heading_from_truth[w]:
-                white[w, -1] = _end_covariance(part, poses, (), np.diag([0.0, 0.0, 1.0]), method)
-            if heading_seen:
-                white[w, -1, 2, 2] += 1.0
+                white[w, -2] = _end_covariance(part, poses, (), np.diag([0.0, 0.0, 1.0]), method)
+            if np.isfinite(prep.error[w, 2]):  # the end heading is compared
+                white[w, -2, 2, 2] += 1.0
+            rate_a, rate_b = prep.start_rate[w], prep.end_rate[w]
+            white[w, -1] = (_end_covariance(part, poses, (), np.outer(rate_a, rate_a), method)
+                            + np.outer(rate_b, rate_b))
         if n_cols and len(part):
             K = np.concatenate([m.bias_jacobian(part, 0, len(part)) for m in bias_models], axis=-1)
             start = np.zeros((3, n_cols))

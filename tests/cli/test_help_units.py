@@ -20,6 +20,7 @@ UNITS: dict[str, tuple[str, ...]] = {
     "--period": ("s",),
     "--truth-sigma": ("m",),
     "--truth-heading-sigma": ("rad",),
+    "--truth-time-sigma": ("s",),
     "--max-gap": ("s",),
     # poses and covariances
     "--initial-pose": ("m, m, rad",),

@@ -77,7 +77,7 @@ def test_fitted_noise_is_fit_noise_on_the_fit_half_only(demo, tmp_path):
         warnings.simplefilter("ignore")
         # The demo holds the truth's own noise at zero (see FIT_WINDOW).
         result = fit_noise_files(out / "calibrated_robot.toml", runs,
-                                 [TruthOptions(sigma=0.0, heading_sigma=0.0)] * len(runs),
+                                 [TruthOptions(sigma=0.0, heading_sigma=0.0, time_sigma=0.0)] * len(runs),
                                  tmp_path / "refit.toml", window=FIT_WINDOW, kinds=("white", "bias"),
                                  trim=None)
     fitted = summary["noise_honesty"]["models"]["white+bias"]["parameters"]

@@ -51,6 +51,7 @@ __all__ = [
     "NoiseFit",
     "NoiseParameter",
     "fit_noise",
+    "fit_parameters",
     "noise_parameters",
     "models_to_fit",
 ]
@@ -198,9 +199,10 @@ def fit_parameters(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], r
                    kinds: Collection[str], fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
     """The parameters of a fit on ``bases``: :func:`noise_parameters`, and, where the bases
     carry the truth's own noise (:data:`odomkit.windows.TRUTH_NOISE`, ``truth_columns``),
-    ``truth_sigma`` [m] and ``truth_heading_sigma`` [rad] between the white and the bias
-    ones (the bases' column order), kind ``"truth"``: free unless named in ``fixed`` or
-    their columns are zero in every window (no truth heading anywhere)."""
+    ``truth_sigma`` [m], ``truth_heading_sigma`` [rad] and ``truth_time_sigma`` [s]
+    between the white and the bias ones (the bases' column order), kind ``"truth"``: free
+    unless named in ``fixed`` or their columns are zero in every window (no truth heading
+    anywhere; a robot that never moves at a window's ends)."""
     params = noise_parameters(models, robot, kinds, fixed)
     used = [b for b in bases if len(b.windows)]
     if not used or used[0].white_names[-len(TRUTH_NOISE):] != TRUTH_NOISE:
@@ -223,7 +225,8 @@ class NoiseFit:
     ``inf`` when the data cannot bound it); ``variances`` every parameter's variance;
     ``models`` the fitted noise models; ``per_log`` each log's windows, eᵀΣ⁻¹e, its
     degrees of freedom and two-sided p-value; ``truth_noise`` the truth's own noise
-    {``truth_sigma`` [m], ``truth_heading_sigma`` [rad]}, fitted or held, where the fit
+    {``truth_sigma`` [m], ``truth_heading_sigma`` [rad], ``truth_time_sigma`` [s]}, fitted
+    or held, where the fit
     had it (None otherwise): the honesty test adds it to every window end
     (``odomkit evaluate``), the robot's own covariance does not.
     """
@@ -441,9 +444,10 @@ def fit_noise(
         ``coverage_in_sample``. None: every window (``odomkit fit-noise`` uses :data:`DEFAULT_TRIM`).
     truth_held : mapping, optional
         Where the bases carry the truth's own noise (``truth_columns``): those of
-        ``truth_sigma`` [m] and ``truth_heading_sigma`` [rad] held at the given value (the
-        user knows them, e.g. a GPS's σ); the others are fitted. Without truth columns the
-        truth's noise is the bases' fixed part and this is ignored.
+        ``truth_sigma`` [m], ``truth_heading_sigma`` [rad] and ``truth_time_sigma`` [s]
+        held at the given value (the user knows them, e.g. a GPS's σ); the others are
+        fitted. Without truth columns the truth's noise is the bases' fixed part and this
+        must be empty.
 
     Returns
     -------
@@ -454,6 +458,12 @@ def fit_noise(
     if trim is not None and not 0.5 < trim < 1:
         raise ModelError(f"trim must be in (0.5, 1), got {trim}")
     held = dict(truth_held or {})
+    names_of_truth = [name for _, name in TRUTH_NOISE]
+    if set(held) - set(names_of_truth):
+        raise ModelError(f"truth_held names {sorted(set(held) - set(names_of_truth))}; expected some of "
+                         f"{names_of_truth}")
+    if held and not any(b.white_names[-len(TRUTH_NOISE):] == TRUTH_NOISE for b in bases if len(b.windows)):
+        raise ModelError("truth_held needs bases with the truth's noise as columns (truth_columns=True)")
     params = fit_parameters(bases, models, robot, kinds, set(fixed) | set(held))
     names = list(log_names) if log_names is not None else [f"log {i}" for i in range(len(bases))]
     used = [i for i, b in enumerate(bases) if len(b.windows)]

@@ -4,7 +4,7 @@
 
     odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
         [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
-        [--trim 0.999] [--cross-validate] [--truth-sigma S] [--truth-heading-sigma S]
+        [--trim 0.999] [--cross-validate] [--truth-sigma S] [--truth-heading-sigma S] [--truth-time-sigma S]
         [--workers N | --scheduler ADDR]
         [--force] [--json]
 """
@@ -119,8 +119,8 @@ def print_fit(out: dict[str, Any]) -> None:
     truth = out.get("truth_noise")
     if truth:
         print(f"the truth's own noise (robot file [truth]: sigma {truth['truth_sigma']:.3g} m, heading_sigma "
-              f"{truth['truth_heading_sigma']:.3g} rad) is not the robot's: evaluate and report add it to "
-              "each window end")
+              f"{truth['truth_heading_sigma']:.3g} rad, time_sigma {truth['truth_time_sigma']:.3g} s) is not "
+              "the robot's: evaluate and report add it to each window end")
     cov = out["coverage_in_sample"]
     print("in-sample coverage of the 50/90/95/99 % ellipses: "
           + " / ".join(f"{cov[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))

@@ -23,6 +23,7 @@ Example (all lengths in metres, angles in radians)::
     [truth]                     # optional; written by fit-noise: the noise of the truth
     sigma = 0.001               #    it fitted against [m], [rad]; evaluate and report add
     heading_sigma = 0.006       #    it to each scored window end (not the robot's own)
+    time_sigma = 0.03
 
 A car (rear-axle reference, speed measured at one wheel, front steering angle)::
 
@@ -265,10 +266,11 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
 
 
 #: The ``[truth]`` table's keys: the noise of the ground truth a robot's noise was fitted
-#: against (``odomkit fit-noise`` writes them), σ of a truth position per axis [m] and of a
-#: truth heading [rad]. Not the robot's: ``evaluate`` and ``report`` add them to each scored
-#: window end when no ``--truth-sigma``/``--truth-heading-sigma`` is given.
-TRUTH_KEYS = ("sigma", "heading_sigma")
+#: against (``odomkit fit-noise`` writes them), σ of a truth position per axis [m], of a
+#: truth heading [rad] and of a fix's time against the log's clock [s]. Not the robot's:
+#: ``evaluate`` and ``report`` add them to each scored window end where no
+#: ``--truth-sigma``/``--truth-heading-sigma``/``--truth-time-sigma`` says otherwise.
+TRUTH_KEYS = ("sigma", "heading_sigma", "time_sigma")
 
 
 def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:

@@ -201,9 +201,10 @@ def fit_noise_files(
         :meth:`odomkit.windows.WindowBasis.merge`); None: each log is one window.
     kinds : which models' variances are fitted ("white", "bias").
     fixed : parameter names held at the robot file's value.
-        The truth's own noise (``truth_sigma`` [m], ``truth_heading_sigma`` [rad]; a floor
-        that does not grow with the window) is fitted too, unless ``truths`` give it
-        (``--truth-sigma``, ``--truth-heading-sigma``: then held), and written to the
+        The truth's own noise (``truth_sigma`` [m], ``truth_heading_sigma`` [rad],
+        ``truth_time_sigma`` [s]; a floor that does not grow with the window) is fitted
+        too, unless ``truths`` give it (``--truth-sigma``, ``--truth-heading-sigma``,
+        ``--truth-time-sigma``: then held), and written to the
         robot file's ``[truth]`` table, which the honesty test adds to each window end.
     workers : processes for reading logs and computing bases; None: one per core when
         the logs are large (:data:`PARALLEL_ROWS`), else this process.
@@ -222,7 +223,7 @@ def fit_noise_files(
     """
     from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
     from odomkit.io.files import check_outputs
-    from odomkit.io.robotfile import read_robot, write_robot
+    from odomkit.io.robotfile import TRUTH_KEYS, read_robot, write_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.results import check_result, numeric_guard
@@ -280,8 +281,7 @@ def fit_noise_files(
                                    "lower bounds": [lo for lo, _ in fit.interval.values()]})
     truth_noise = fit.truth_noise or {}
     written = write_robot(out, robot, fit.models, overwrite=overwrite,
-                          truth_noise={"sigma": truth_noise.get("truth_sigma", 0.0),
-                                       "heading_sigma": truth_noise.get("truth_heading_sigma", 0.0)})
+                          truth_noise={key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_KEYS})
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)
     result.update({
@@ -306,7 +306,8 @@ _NOISE_UNITS = {"k_left": "m^½", "k_right": "m^½", "alpha_ss": "m", "psd_gyro"
                "sigma_scale_left": "relative", "sigma_scale_right": "relative",
                "sigma_steering_offset": "rad",
                "sigma_yaw_rate_offset": "rad/s", "sigma_yaw_rate_scale": "relative",
-               "sigma_heading_offset": "rad", "truth_sigma": "m", "truth_heading_sigma": "rad"}
+               "sigma_heading_offset": "rad", "truth_sigma": "m", "truth_heading_sigma": "rad",
+               "truth_time_sigma": "s"}
 
 
 def _noise_plot(plot: str | Path, bases: Sequence[WindowBasis], models: Sequence[NoiseModel],

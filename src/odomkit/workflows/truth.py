@@ -22,7 +22,8 @@ class TruthOptions:
     """How to read the truth (see ``odomkit evaluate --help``).
 
     ``path`` None means the log's own ground truth. ``sigma`` [m] is the truth's own
-    position noise per axis and ``heading_sigma`` [rad] its heading noise: None when not
+    position noise per axis, ``heading_sigma`` [rad] its heading noise and ``time_sigma``
+    [s] its fixes' time against the log's clock: None when not
     given, which is zero, or the robot file's ``[truth]`` values (those ``fit-noise``
     fitted) where a command scores a robot file's covariance (:meth:`resolved`), and
     fitted by ``fit-noise``. ``max_gap`` [s] is the longest gap between fixes to
@@ -36,20 +37,25 @@ class TruthOptions:
     sigma: float | None = None
     max_gap: float | None = 0.5
     heading_sigma: float | None = None
+    time_sigma: float | None = None
 
     def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
         """These options with each truth noise not given taken from ``defaults`` (a robot
-        file's ``[truth]``: ``sigma``, ``heading_sigma``), else zero."""
+        file's ``[truth]``: ``sigma``, ``heading_sigma``, ``time_sigma``), else zero."""
         found = defaults or {}
-        return replace(self, sigma=self.sigma if self.sigma is not None else found.get("sigma", 0.0),
-                       heading_sigma=(self.heading_sigma if self.heading_sigma is not None
-                                      else found.get("heading_sigma", 0.0)))
+        def pick(given: float | None, key: str) -> float:
+            return found.get(key, 0.0) if given is None else given
+
+        return replace(self, sigma=pick(self.sigma, "sigma"),
+                       heading_sigma=pick(self.heading_sigma, "heading_sigma"),
+                       time_sigma=pick(self.time_sigma, "time_sigma"))
 
     @property
     def held(self) -> dict[str, float]:
         """The truth noise the user gave, by :func:`odomkit.calibrate.fit_noise.fit_noise`'s
         names (``truth_sigma``, ``truth_heading_sigma``): ``fit-noise`` fits the others."""
-        given = {"truth_sigma": self.sigma, "truth_heading_sigma": self.heading_sigma}
+        given = {"truth_sigma": self.sigma, "truth_heading_sigma": self.heading_sigma,
+                 "truth_time_sigma": self.time_sigma}
         return {k: float(v) for k, v in given.items() if v is not None}
 
 
@@ -59,14 +65,15 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     from odomkit.truth import truth_from_log
 
     sigma, heading_sigma = options.sigma or 0.0, options.heading_sigma or 0.0
+    time_sigma = options.time_sigma or 0.0
     found = (read_truth(options.path, options.format, options.columns, options.time_unit, sigma)
              if options.path is not None else None if log is None else truth_from_log(log))
     if found is None:
         return None
     truth: Truth = found
-    if (sigma, heading_sigma) == (truth.sigma, truth.heading_sigma):
+    if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
-    return replace(truth, sigma=sigma, heading_sigma=heading_sigma)
+    return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
 
 
 def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
