@@ -23,7 +23,7 @@ distribution, Bonferroni-corrected).
 
 from __future__ import annotations
 
-from collections.abc import Collection, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
@@ -348,9 +348,24 @@ def _scales(lik: WindowLikelihood, free: NDArray[np.intp]) -> NDArray[np.float64
     return scale
 
 
+class _Irregular(Exception):
+    """The profile likelihood of a parameter does not behave: it does not reach the fit's own
+    value near the fit, or its bracket does not cross the interval's level."""
+
+
+def _crossing(gap: Callable[[float], float], lo_x: float, hi_x: float) -> float:
+    """Where ``gap`` changes sign between lo_x and hi_x, by bisection on log v."""
+    try:
+        return float(np.exp(brentq(lambda y: gap(float(np.exp(y))), np.log(lo_x), np.log(hi_x), xtol=1e-4)))
+    except ValueError:  # no sign change: the profile is not what the fit assumed
+        raise _Irregular from None
+
+
 def _profile_interval(prob: _Problem, v_hat: NDArray[np.float64], ll_hat: float, j: int,
                       crit: float) -> tuple[float, float]:
-    """Profile-likelihood interval of v_j (variances)."""
+    """Profile-likelihood interval of v_j (variances); :class:`_Irregular` where the
+    profile does not reach the fit's own log-likelihood at the fit (the fit sits on a
+    spike of the likelihood that the profile's own maximisation does not find again)."""
     others = np.array([i for i in prob.free if i != j], dtype=np.intp)
     target = ll_hat - 0.5 * crit
 
@@ -362,13 +377,14 @@ def _profile_interval(prob: _Problem, v_hat: NDArray[np.float64], ll_hat: float,
 
     s = prob.scale[j]
     start = v_hat[j] if v_hat[j] > 0 else s * 1e-6
+    if not gap(start) >= 0:
+        raise _Irregular
     # Upper bound: grow by ×10 until outside, then bisect on log v.
     lo_x, hi_x, upper = start, start, float("inf")
     while hi_x < s * _FLAT:
         lo_x, hi_x = hi_x, hi_x * 10.0
         if gap(hi_x) < 0:
-            upper = float(np.exp(brentq(lambda y: gap(float(np.exp(y))), np.log(lo_x),
-                                        np.log(hi_x), xtol=1e-4)))
+            upper = _crossing(gap, lo_x, hi_x)
             break
     if v_hat[j] == 0 or gap(0.0) >= 0:
         return 0.0, upper
@@ -380,9 +396,7 @@ def _profile_interval(prob: _Problem, v_hat: NDArray[np.float64], ll_hat: float,
         hi_x = lo_x
         if hi_x < v_hat[j] * 1e-12:
             return 0.0, upper
-    lower = float(np.exp(brentq(lambda y: gap(float(np.exp(y))), np.log(lo_x), np.log(hi_x),
-                                xtol=1e-4)))
-    return lower, upper
+    return _crossing(gap, lo_x, hi_x), upper
 
 
 def _correlation(prob: _Problem, v_hat: NDArray[np.float64], idx: NDArray[np.intp]
@@ -504,9 +518,21 @@ def fit_noise(
                          f"{float(np.max(np.abs(lik.error))):.3g}); check the units of the log and "
                          "the truth")
     crit = float(chi2.ppf(level, 1))
-    intervals = {int(j): _profile_interval(prob, v_hat, ll_hat, int(j), crit) for j in free}
+    intervals: dict[int, tuple[float, float]] = {}
+    irregular = []
+    for j in free:
+        try:
+            intervals[int(j)] = _profile_interval(prob, v_hat, ll_hat, int(j), crit)
+        except _Irregular:
+            intervals[int(j)] = (0.0, float("inf"))
+            irregular.append(params[int(j)].key)
     warnings: list[str] = []
-    flat = [j for j in free if not np.isfinite(intervals[int(j)][1])]
+    if irregular:
+        warnings.append(f"no profile-likelihood interval for {', '.join(irregular)}: the likelihood is not "
+                        "regular there (a spike or ridge; too few windows per log for the bias and truth "
+                        "terms?), shown as 0 .. inf; fit more logs, longer ones, or hold some terms (--fix, "
+                        "--truth-sigma)")
+    flat = [j for j in free if not np.isfinite(intervals[int(j)][1]) and params[int(j)].key not in irregular]
     for j in flat:
         v_hat[j] = v0[j]  # the data say nothing: keep the robot file's value
     cov = lik.window_covariance(v_hat)
