@@ -155,7 +155,16 @@ def test_start_pose_carries_the_truth_heading_sigma_only_where_the_truth_has_hea
 
 
 @pytest.mark.parametrize("value", [-1.0, np.nan, np.inf])
-def test_a_negative_or_non_finite_truth_heading_sigma_is_refused_by_name(value):
-    with pytest.raises(InputError, match="truth heading sigma"):
-        Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), heading_sigma=value)
-    assert Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), heading_sigma=0.0).heading_sigma == 0.0
+@pytest.mark.parametrize(("field", "name"), [("heading_sigma", "truth heading sigma"),
+                                             ("time_sigma", "truth time sigma")])
+def test_a_negative_or_non_finite_truth_heading_or_time_sigma_is_refused_by_name(value, field, name):
+    with pytest.raises(InputError, match=name):
+        Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), **{field: value})
+    assert getattr(Truth(np.array([0.0, 1.0]), np.zeros((2, 2)), np.zeros(2), **{field: 0.0}), field) == 0.0
+
+
+def test_the_truths_time_sigma_is_zero_unless_given():
+    """Issue 11: a fix's time against the log's clock [s]; no jitter by default."""
+    truth = Truth(np.array([0.0, 1.0]), np.zeros((2, 2)))
+    assert truth.time_sigma == 0.0
+    assert Truth(truth.t, truth.xy, time_sigma=0.03).time_sigma == 0.03

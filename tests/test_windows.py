@@ -8,6 +8,8 @@ finite differences of the odometry for the bias sensitivities.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -277,32 +279,45 @@ def test_log_window_basis_is_each_length_cut_by_hand_and_merged():
     assert none is None
 
 
-# --- Issue 11: the truth's own noise (Truth.sigma, Truth.heading_sigma, truth_columns) -----------
+# --- Issue 11: the truth's own noise (Truth.sigma, heading_sigma, time_sigma, truth_columns) -----
 
 
 def _truth_noise_case(kind):
-    """A turning log, its robot, zero-noise models (no robot noise) and the perfect odometry's
+    """A log that turns gently (0.05 … 0.16 rad/s) at a speed that varies (0.14 … 0.26 m/s)
+    over seconds, its robot, zero-noise models (no robot noise) and the perfect odometry's
     track as the truth (so that every window error is the truth's own noise)."""
-    n = 800
+    n = 1000
     t = np.arange(n) * 0.05
+    dist = 0.01 + 0.003 * np.sin(t / 6 + 1)  # [m] per 0.05 s step
     if kind == "diff":
-        log, robot, models = _curvy_log(n, seed=2), DiffDrive(0.3), (WheelNoise(0.0, 0.0),)
+        turn = 0.0008 + 0.0004 * np.sin(t / 8 + 2)
+        log = OdometryLog(t, {"dist_left": dist - turn, "dist_right": dist + turn})
+        robot, models = DiffDrive(0.3), (WheelNoise(0.0, 0.0),)
     else:
-        log = OdometryLog(t, {"dist": np.full(n, 0.01), "steer": 0.3 * np.sin(t / 3)})
+        log = OdometryLog(t, {"dist": dist, "steer": 0.08 + 0.04 * np.sin(t / 8)})
         robot, models = Tricycle(0.15), (TricycleNoise(0.0, 0.0, 0.0),)
     return log, robot, models, dead_reckon_log(log, robot).poses
 
 
-def _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, draws, seed):
-    """Second moments of the window-end errors over ``draws`` noisy truths: each truth row
-    moved by N(0, σ²) per axis and N(0, σθ²) in heading, each window dead-reckoned (perfect
-    odometry) from its noisy start and compared with its noisy end. (W, 3, 3)"""
+def _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, time_sigma, draws,
+                                   seed, shift_heading=False):
+    """Second moments of the window-end errors over ``draws`` noisy truths: each truth row r
+    has the perfect track's position at t_r + δ_r, δ_r ~ N(0, σt²) (x and y interpolated
+    linearly between the log's rows), and its heading at t_r (``shift_heading``: at
+    t_r + δ_r too, interpolated alike), moved by N(0, σ²) per axis and N(0, σθ²) in
+    heading; each window is dead-reckoned (perfect odometry) from its noisy start and
+    compared with its noisy end. (W, 3, 3)"""
     rng = np.random.default_rng(seed)
     steps = body_steps(robot, log)
-    rows = sorted({w.start for w in windows} | {w.end for w in windows})
+    rows = np.array(sorted({w.start for w in windows} | {w.end for w in windows}))
     errors = np.empty((draws, len(windows), 3))
     for k in range(draws):
-        noisy = {r: poses[r] + rng.normal(0.0, [sigma, sigma, heading_sigma]) for r in rows}
+        when = log.t[rows] + rng.normal(0.0, time_sigma, rows.size)
+        fixes = np.column_stack([np.interp(when, log.t, poses[:, j]) for j in range(3)])
+        if not shift_heading:
+            fixes[:, 2] = poses[rows, 2]
+        fixes += rng.normal(0.0, [sigma, sigma, heading_sigma], fixes.shape)
+        noisy = dict(zip(rows.tolist(), fixes, strict=True))
         for i, w in enumerate(windows):
             end = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], noisy[w.start])[-1]
             errors[k, i] = noisy[w.end] - end
@@ -310,68 +325,117 @@ def _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_si
     return np.einsum("kwa,kwb->wab", errors, errors) / draws
 
 
+@pytest.mark.parametrize("time_sigma", [0.0, 0.05])
 @pytest.mark.parametrize("kind", ["diff", "tricycle"])
-def test_the_truths_own_noise_matches_monte_carlo(kind):
-    """Issue 11: window_errors' covariance under Truth(sigma, heading_sigma) with no robot
-    noise is the spread of dead reckoning from a noisy truth start to a noisy truth end;
-    so are the basis's fixed part and σ²·col(−2) + σθ²·col(−1) of its truth columns.
-    Tolerance: 5 standard errors of a sample second moment, sqrt((ΣiiΣjj + Σij²)/n)."""
+def test_the_truths_own_noise_matches_monte_carlo(kind, time_sigma):
+    """Issue 11: window_errors' covariance under Truth(sigma, heading_sigma, time_sigma)
+    with no robot noise is the spread of dead reckoning from a noisy truth start to a noisy
+    truth end, the fixes' positions also taken σt off the log's clock; so are the basis's
+    fixed part and σ²·col(−3) + σθ²·col(−2) + σt²·col(−1) of its truth columns.
+
+    The heading's share of a clock offset (ω·δ) is deliberately not modelled
+    (windows._pose_rates says why), so the Monte Carlo shifts only the positions and keeps
+    each fix's heading at its row's time. That share is not negligible on this log (ω·σt
+    up to 8 mrad beside σθ = 6 mrad: shifting the heading too puts the θ components up to
+    16 tolerances off), so nothing here claims it is.
+
+    Tolerance: 5 standard errors of a sample second moment, sqrt((ΣiiΣjj + Σij²)/n). The
+    model takes the velocity over the 0.2 s after a window's start and before its end
+    (RATE_SPAN), the Monte Carlo shifts each fix about its own time: the two differ by
+    0.1 s of the velocity's change, a bias under a third of the tolerance on this log
+    (checked against 40 000 draws). The first window starts at row 0, where a shift back
+    would leave the log: it is left out."""
     log, robot, models, poses = _truth_noise_case(kind)
     sigma, heading_sigma, draws = 0.004, 0.006, 4000
     windows, _ = split_windows(log.t, cumulative_travel(body_steps(robot, log)), WindowSpec(8.0, "s"))
+    windows = windows[1:]
     assert len(windows) >= 4
     ok = np.ones(len(log), bool)
-    truth = Truth(log.t, poses[:, :2], poses[:, 2], sigma=sigma, heading_sigma=heading_sigma)
+    truth = Truth(log.t, poses[:, :2], poses[:, 2], sigma=sigma, heading_sigma=heading_sigma,
+                  time_sigma=time_sigma)
     predicted = window_errors(log, robot, models, poses, ok, windows, truth=truth).cov
-    sample = _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, draws, 11)
+    sample = _monte_carlo_window_covariance(log, robot, poses, windows, sigma, heading_sigma, time_sigma,
+                                            draws, 11)
     d = np.sqrt(np.einsum("wii->wi", predicted))
     tol = 5 * np.sqrt((d[:, :, None] ** 2 * d[:, None, :] ** 2 + predicted**2) / draws)
     assert np.all(np.abs(sample - predicted) <= tol), np.max(np.abs(sample - predicted) / tol)
-    # The check can fail: without the start heading's swing about the start (σθ² only on
-    # θ at both ends) the covariance is far outside the same tolerance.
-    swingless = np.diag([2 * sigma**2, 2 * sigma**2, 2 * heading_sigma**2])
-    assert np.max(np.abs(sample - swingless) / tol) > 3
+    # The check can fail: without the time term, or without the start heading's swing
+    # about the start (σθ² only on θ at both ends), the covariance is far outside the
+    # same tolerance.
+    if time_sigma:
+        timeless = window_errors(log, robot, models, poses, ok, windows,
+                                 truth=replace(truth, time_sigma=0.0)).cov
+        assert np.max(np.abs(sample - timeless) / tol) > 3
+    else:
+        swingless = np.diag([2 * sigma**2, 2 * sigma**2, 2 * heading_sigma**2])
+        assert np.max(np.abs(sample - swingless) / tol) > 3
     # The basis's fixed part (no robot noise) and its truth columns say the same.
     basis = window_covariance_basis(log, robot, models, poses, ok, windows, truth=truth)
     scale = np.abs(predicted).max()
     np.testing.assert_allclose(basis.fixed / scale, predicted / scale, rtol=0, atol=1e-12)
     columns = window_covariance_basis(log, robot, models, poses, ok, windows, truth=truth, truth_columns=True)
     assert not columns.fixed.any()
-    own = sigma**2 * columns.white[:, -2] + heading_sigma**2 * columns.white[:, -1]
+    own = (sigma**2 * columns.white[:, -3] + heading_sigma**2 * columns.white[:, -2]
+           + time_sigma**2 * columns.white[:, -1])
     np.testing.assert_allclose(own / scale, predicted / scale, rtol=0, atol=1e-12)
 
 
 def _truth_columns_case(case):
-    """(log, robot, models, truth poses, Truth with σ and σθ, the same Truth without noise)."""
-    sigma, heading_sigma = 0.003, 0.004
-    if case == "compass":
-        log, robot, models = _models_and_log("compass")
-        poses = dead_reckon_log(log, robot).poses + 0.01
-        xy, theta = poses[:, :2], poses[:, 2]
-    else:
-        log, robot, models = _models_and_log("diff")
-        poses = dead_reckon_log(log, robot).poses + 0.01
-        xy, theta = poses[:, :2], poses[:, 2]
-        if case == "position_only":
-            # Fixes with 2 mm of noise, σ = 1 mm below it: the start heading fitted to them
-            # takes its variance from their residual (heading_from_positions), not from σ.
-            sigma = 0.001
-            xy = xy + np.random.default_rng(8).normal(0.0, 0.002, xy.shape)
-            poses = np.column_stack((xy, np.full(len(log), np.nan)))
-            theta = None
-    noisy = Truth(log.t, xy, theta, sigma=sigma, heading_sigma=heading_sigma)
+    """(log, robot, models, truth poses, Truth with σ, σθ and σt, the same Truth without noise).
+
+    The log runs on a clock of 1/16 s, exact in binary, so that the velocities' span (the
+    fewest steps that reach RATE_SPAN = 0.2 s: 4 steps, 0.25 s) is the same in every
+    window with no rounding margin to rely on (a 0.05 s clock needs one:
+    test_the_time_column_does_not_depend_on_the_clocks_origin)."""
+    sigma, heading_sigma, time_sigma = 0.003, 0.004, 0.02
+    log, robot, models = _models_and_log("compass" if case == "compass" else "diff")
+    log = OdometryLog(np.arange(len(log)) / 16, log.channels)
+    poses = dead_reckon_log(log, robot).poses + 0.01
+    xy, theta = poses[:, :2], poses[:, 2]
+    if case == "position_only":
+        # Fixes with 2 mm of noise, σ = 1 mm below it: the start heading fitted to them
+        # takes its variance from their residual (heading_from_positions), not from σ.
+        sigma = 0.001
+        xy = xy + np.random.default_rng(8).normal(0.0, 0.002, xy.shape)
+        poses = np.column_stack((xy, np.full(len(log), np.nan)))
+        theta = None
+    noisy = Truth(log.t, xy, theta, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
     return log, robot, models, poses, noisy, Truth(log.t, xy, theta)
+
+
+def _time_column_by_hand(case, log, robot, poses, truth, w):
+    """Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ of window ``w`` from its own dead reckoning: u the position
+    change over the 4 steps (0.25 s of 1/16 s, the fewest that reach 0.2 s) after the start
+    and before the end divided by their time, its θ zero (the heading's share of a clock
+    offset is left out: windows._pose_rates); a start pose error (dx, dy, dθ) reaches the
+    end as (dx − dθ·Δy, dy + dθ·Δx, dθ), Δ = end − start, so with dθ = 0 it is u_a itself."""
+    from odomkit.truth import heading_from_positions
+
+    steps = body_steps(robot, log)
+    start = poses[w.start].copy()
+    if case == "compass":
+        start[2] = steps.inputs["heading"][w.start]
+    elif case == "position_only":
+        start[2] = heading_from_positions(truth, float(log.t[w.start]))[0]
+    track = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], start)
+    u_a = (track[4] - track[0]) / (log.t[w.start + 4] - log.t[w.start])
+    u_b = (track[-1] - track[-5]) / (log.t[w.end] - log.t[w.end - 4])
+    u_a[2] = u_b[2] = 0.0
+    dx, dy = track[-1, :2] - track[0, :2]
+    carried = u_a + u_a[2] * np.array([-dy, dx, 0.0])
+    return np.outer(carried, carried) + np.outer(u_b, u_b)
 
 
 @pytest.mark.parametrize("case", ["diff", "position_only", "compass"])
 def test_truth_columns_take_the_truths_noise_out_of_fixed_and_add_back_up(case):
-    """Issue 11: with truth_columns the truth's σ and σθ leave ``fixed`` (it is a noiseless
-    truth's), become the last two white columns (TRUTH_NOISE), and v with σ², σθ² in them
-    gives the covariance of truth_columns=False (and of the engines) to rounding. The
-    position column is diag(2, 2, 0); the heading column is, with perfect odometry's
-    end − start (Δx, Δy), u uᵀ for u = (−Δy, Δx, 1) (a start heading error swings the end
-    about the start) plus 1 on θθ (the end heading) where the start heading is the truth's,
-    only the end's 1 where it is measured (compass), zero without truth heading."""
+    """Issue 11: with truth_columns the truth's σ, σθ and σt leave ``fixed`` (it is a
+    noiseless truth's), become the last three white columns (TRUTH_NOISE), and v with σ²,
+    σθ², σt² in them gives the covariance of truth_columns=False (and of the engines) to
+    rounding. The position column is diag(2, 2, 0); the heading column is, with perfect
+    odometry's end − start (Δx, Δy), u uᵀ for u = (−Δy, Δx, 1) (a start heading error
+    swings the end about the start) plus 1 on θθ (the end heading) where the start heading
+    is the truth's, only the end's 1 where it is measured (compass), zero without truth
+    heading; the time column is the velocity's at both ends (_time_column_by_hand)."""
     from odomkit.windows import TRUTH_NOISE
 
     log, robot, models, poses, noisy, clean = _truth_columns_case(case)
@@ -380,16 +444,16 @@ def test_truth_columns_take_the_truths_noise_out_of_fixed_and_add_back_up(case):
     cols = window_covariance_basis(log, robot, models, poses, ok, windows, truth=noisy, truth_columns=True)
     plain = window_covariance_basis(log, robot, models, poses, ok, windows, truth=noisy)
     noiseless = window_covariance_basis(log, robot, models, poses, ok, windows, truth=clean)
-    assert TRUTH_NOISE == ((-1, "truth_sigma"), (-1, "truth_heading_sigma"))
+    assert TRUTH_NOISE == ((-1, "truth_sigma"), (-1, "truth_heading_sigma"), (-1, "truth_time_sigma"))
     assert cols.white_names == plain.white_names + TRUTH_NOISE and cols.bias_names == plain.bias_names
     np.testing.assert_allclose(cols.fixed, noiseless.fixed, rtol=1e-12, atol=1e-300)
     if case != "position_only":
         assert not cols.fixed.any()
-    np.testing.assert_array_equal(cols.white[:, :-2], plain.white)
+    np.testing.assert_array_equal(cols.white[:, :-3], plain.white)
     np.testing.assert_array_equal(cols.sens, plain.sens)
     position = np.broadcast_to(np.diag([2.0, 2.0, 0.0]), (len(cols.windows), 3, 3))
-    np.testing.assert_array_equal(cols.white[:, -2], position)
-    heading = cols.white[:, -1]
+    np.testing.assert_array_equal(cols.white[:, -3], position)
+    heading = cols.white[:, -2]
     if case == "diff":
         steps = body_steps(robot, log)
         for w, col in zip(cols.windows, heading, strict=True):
@@ -400,16 +464,22 @@ def test_truth_columns_take_the_truths_noise_out_of_fixed_and_add_back_up(case):
         np.testing.assert_array_equal(heading, np.broadcast_to(np.diag([0.0, 0.0, 1.0]), heading.shape))
     else:
         assert not heading.any()
+    for w, col in zip(cols.windows, cols.white[:, -1], strict=True):
+        by_hand = _time_column_by_hand(case, log, robot, poses, noisy, w)
+        np.testing.assert_allclose(col, by_hand, rtol=1e-9, atol=1e-12 * np.abs(by_hand).max())
     robot_v = [models[i].variance_parameters(robot)[name] for i, name in plain.white_names]
     bias_v = [models[i].variance_parameters(robot)[name] for i, name in plain.bias_names]
-    v = np.array(robot_v + [noisy.sigma**2, noisy.heading_sigma**2] + bias_v)
+    v = np.array(robot_v + [noisy.sigma**2, noisy.heading_sigma**2, noisy.time_sigma**2] + bias_v)
     expected = plain.covariance(np.array(robot_v + bias_v))
     direct = window_errors(log, robot, models, poses, ok, windows, truth=noisy).cov
     scale = np.abs(direct).max(axis=(1, 2))[:, None, None]
     np.testing.assert_allclose(cols.covariance(v) / scale, expected / scale, rtol=0, atol=1e-12)
     np.testing.assert_allclose(cols.covariance(v) / scale, direct / scale, rtol=0, atol=1e-12)
-    # The truth's noise matters here (the check can fail): v without it falls short.
-    v[len(robot_v):len(robot_v) + 2] = 0.0
+    # The truth's noise matters here (the check can fail): v without its time part, or
+    # without any of it, falls short.
+    v[len(robot_v) + 2] = 0.0
+    assert np.max(np.abs(cols.covariance(v) - direct) / scale) > 1e-3
+    v[len(robot_v):len(robot_v) + 3] = 0.0
     assert np.max(np.abs(cols.covariance(v) - direct) / scale) > 1e-3
 
 
@@ -417,11 +487,61 @@ def test_the_truth_heading_column_has_its_end_part_wherever_the_end_heading_is_c
     """The heading column's 1 on θθ at the end belongs to every window whose end heading is
     compared (its θ error is finite), also when the truth comes as poses alone (truth=None,
     as the synthetic fits pass it): the same poses with or without the Truth object give
-    the same columns."""
+    the same truth columns (the time column's rates are the window's own dead reckoning's)."""
     log, robot, models, poses, _, clean = _truth_columns_case("diff")
     ok = np.ones(len(log), bool)
     windows, _ = split_windows(log.t, log.t, WindowSpec(8.0, "s"))
     given = window_covariance_basis(log, robot, models, poses, ok, windows, truth=clean, truth_columns=True)
     bare = window_covariance_basis(log, robot, models, poses, ok, windows, truth_columns=True)
     assert np.all(np.isfinite(bare.error[:, 2]))
-    np.testing.assert_array_equal(bare.white[:, -2:], given.white[:, -2:])
+    np.testing.assert_array_equal(bare.white[:, -3:], given.white[:, -3:])
+    assert bare.white[:, -2].any() and bare.white[:, -1].any()
+
+
+def _stop_and_go_log(n=1000, period=4.0):
+    """A differential drive that stands still within 0.5 s of every multiple of ``period``
+    and drives a smooth turning arc between (sin² speed, up to 0.2 m/s)."""
+    t = np.arange(n) * 0.05
+    phase = np.mod(t, period)
+    moving = (phase > 0.5) & (phase < period - 0.5)
+    speed = np.where(moving, 0.01 * np.sin(np.pi * (phase - 0.5) / (period - 1.0)) ** 2, 0.0)
+    return OdometryLog(t, {"dist_left": 0.8 * speed, "dist_right": 1.2 * speed})
+
+
+def test_a_robot_standing_at_both_window_ends_has_no_time_column():
+    """A fix off the log's clock is off by nothing where the robot stands (u = 0): windows
+    from stop to stop get an exactly zero time column, and Truth.time_sigma changes nothing
+    in their covariance; the same log's windows from motion to motion do get one (the check
+    can fail)."""
+    log, robot, models = _stop_and_go_log(), DiffDrive(0.3), (WheelNoise(0.001, 0.001),)
+    poses = dead_reckon_log(log, robot).poses
+    ok = np.ones(len(log), bool)
+    still, _ = split_windows(log.t, log.t, WindowSpec(4.0, "s"))
+    assert len(still) >= 10
+    basis = window_covariance_basis(log, robot, models, poses, ok, still, truth_columns=True)
+    assert not basis.white[:, -1].any()
+    assert basis.white[:, -3].any() and basis.white[:, -2].any()
+    timed = Truth(log.t, poses[:, :2], poses[:, 2], sigma=0.003, heading_sigma=0.004, time_sigma=0.05)
+    untimed = replace(timed, time_sigma=0.0)
+    np.testing.assert_array_equal(window_errors(log, robot, models, poses, ok, still, truth=timed).cov,
+                                  window_errors(log, robot, models, poses, ok, still, truth=untimed).cov)
+    moving = [Window(w.start + 40, w.end + 40, w.duration, w.travel) for w in still[:-1]]
+    shifted = window_covariance_basis(log, robot, models, poses, ok, moving, truth_columns=True)
+    assert np.all(np.einsum("wii->w", shifted.white[:, -1]) > 0.01)  # (0.2 m/s)² at each end
+
+
+def test_the_time_column_does_not_depend_on_the_clocks_origin():
+    """Moving a log's clock by a constant (a time stamp's epoch) changes no window: the
+    velocities' span, the fewest steps that reach RATE_SPAN, must not hinge on how the sum
+    of 0.05 s steps rounds (0.2 s is 4 of them; without a rounding margin 5 where the four
+    sum to 0.1999999999999993, as at row 320 of a clock from 0 but not of one from
+    1000.3 s: that window's time column moved by 2 %)."""
+    log = _curvy_log(800)
+    robot, models = DiffDrive(0.3), (WheelNoise(0.0, 0.0),)
+    poses = dead_reckon_log(log, robot).poses
+    ok = np.ones(len(log), bool)
+    windows, _ = split_windows(log.t, log.t, WindowSpec(8.0, "s"))
+    later = OdometryLog(log.t + 1000.3, log.channels)
+    here = window_covariance_basis(log, robot, models, poses, ok, windows, truth_columns=True).white[:, -1]
+    there = window_covariance_basis(later, robot, models, poses, ok, windows, truth_columns=True).white[:, -1]
+    np.testing.assert_allclose(there, here, rtol=1e-6, atol=1e-9 * np.abs(here).max())

@@ -54,8 +54,9 @@ class Truth:
     time_sigma : float
         Standard deviation of each fix's time against the log's clock [s]
         (``--truth-time-sigma``; jitter and latency between two clocks): a fix δ off is off
-        by the pose rate times δ, so it adds (rate·σ)² where the robot moves and nothing
-        where it stands (:mod:`odomkit.windows`).
+        by the velocity times δ, so it adds (v·σ)² along the track where the robot moves and
+        nothing where it stands; the heading's share ω·δ is left out on purpose
+        (:func:`odomkit.windows._pose_rates` says why).
     """
 
     t: NDArray[np.float64]

@@ -355,41 +355,59 @@ def test_merged_window_lengths_add_their_likelihoods_without_bias():
 
 # --- Issue 11: the truth's own noise fitted beside the robot's ----------------------------------
 
-TRUTH_TRUE = {"k_left": 0.001, "k_right": 0.0015, "truth_sigma": 0.003, "truth_heading_sigma": 0.005}
+TRUTH_TRUE = {"k_left": 0.001, "k_right": 0.0015, "truth_sigma": 0.003, "truth_heading_sigma": 0.005,
+              "truth_time_sigma": 0.03}
+TRUTH_NAMES = {"truth_sigma", "truth_heading_sigma", "truth_time_sigma"}
 
 
 def truth_noise_bases(seed, *, n_logs=6, n=1200, true=TRUTH_TRUE, bias=False, truth_columns=True,
-                      truth_sigma=0.0, truth_heading_sigma=0.0):
+                      truth_sigma=0.0, truth_heading_sigma=0.0, truth_time_sigma=0.0, stops=False):
     """Logs of a differential drive with white wheel noise k²|d| (and, with ``bias``, one
     draw per log of the wheel base and scales, TRUE's σ), whose truth is the true track
-    with the truth's own noise added to every fix: N(0, σ²) per axis, N(0, σθ²) in heading.
+    with the truth's own noise in every fix: its position taken at t + δ, δ ~ N(0, σt²)
+    off the log's clock (x, y interpolated between the true track's rows, simulated 1 s
+    beyond both ends of the log so that a shifted fix stays on it), its heading at t (the
+    model leaves a clock offset's heading share out: windows._pose_rates), then moved by
+    N(0, σ²) per axis and N(0, σθ²) in heading. ``stops``: the robot stands still within 0.5 s of every
+    multiple of 8 s (every window's ends).
 
     Each 8 s window starts one row after the previous one ends, so that no two windows
     share a truth fix: a shared fix's noise enters one window's end and the next one's
     start with opposite signs, a correlation the window likelihood (independent windows)
-    does not model. ``truth_sigma``, ``truth_heading_sigma``: the Truth's stated noise."""
+    does not model. ``truth_sigma``, ``truth_heading_sigma``, ``truth_time_sigma``: the
+    Truth's stated noise."""
     from odomkit.windows import Window
 
     rng = np.random.default_rng(seed)
     models = (WheelNoise(0, 0), ParameterUncertainty()) if bias else (WheelNoise(0, 0),)
+    pad = 20  # rows of the true track before and after the log
     bases = []
     for _ in range(n_logs):
-        t = np.arange(n) * 0.05
+        t_all = np.arange(-pad, n + pad) * 0.05
         phase = rng.uniform(0, 6, 2)
-        dl = 0.01 + 0.008 * np.sin(t / 2 + phase[0])
-        dr = 0.01 + 0.008 * np.sin(t / 3 + phase[1])
+        dl = 0.01 + 0.008 * np.sin(t_all / 2 + phase[0])
+        dr = 0.01 + 0.008 * np.sin(t_all / 3 + phase[1])
+        if stops:
+            cycle = np.mod(t_all, 8.0)
+            go = np.where((cycle > 0.5) & (cycle < 7.5), np.sin(np.pi * (cycle - 0.5) / 7.0) ** 2, 0.0)
+            dl, dr = dl * go, dr * go
         eps = (rng.normal(0, [TRUE["sigma_wheel_base"], TRUE["sigma_scale_left"], TRUE["sigma_scale_right"]])
                if bias else np.zeros(3))
-        true_l = dl * (1 + eps[1]) + rng.standard_normal(n) * true["k_left"] * np.sqrt(np.abs(dl))
-        true_r = dr * (1 + eps[2]) + rng.standard_normal(n) * true["k_right"] * np.sqrt(np.abs(dr))
+        true_l = dl * (1 + eps[1]) + rng.standard_normal(t_all.size) * true["k_left"] * np.sqrt(np.abs(dl))
+        true_r = dr * (1 + eps[2]) + rng.standard_normal(t_all.size) * true["k_right"] * np.sqrt(np.abs(dr))
         dd, dth = diff_body_steps(true_l[1:], true_r[1:], ROBOT.wheel_base + eps[0])
-        gt = dead_reckon(dd, dth)
+        track = dead_reckon(dd, dth)  # at t_all
+        t = t_all[pad:pad + n]
+        when = t + rng.normal(0.0, true.get("truth_time_sigma", 0.0), n)
+        gt = np.column_stack([np.interp(when, t_all, track[:, 0]), np.interp(when, t_all, track[:, 1]),
+                              track[pad:pad + n, 2]])
         own = [true["truth_sigma"], true["truth_sigma"], true["truth_heading_sigma"]]
         gt += rng.normal(0.0, own, gt.shape)
-        log = OdometryLog(t, {"dist_left": dl, "dist_right": dr})
+        log = OdometryLog(t, {"dist_left": dl[pad:pad + n], "dist_right": dr[pad:pad + n]})
         cut, _ = split_windows(t, t, WindowSpec(8.0, "s"))
         windows = [Window(w.start + (w.start > 0), w.end, w.duration, w.travel) for w in cut]
-        truth = Truth(t, gt[:, :2], gt[:, 2], sigma=truth_sigma, heading_sigma=truth_heading_sigma)
+        truth = Truth(t, gt[:, :2], gt[:, 2], sigma=truth_sigma, heading_sigma=truth_heading_sigma,
+                      time_sigma=truth_time_sigma)
         bases.append(window_covariance_basis(log, ROBOT, models, gt, np.ones(n, bool), windows, truth=truth,
                                              truth_columns=truth_columns))
     return bases, models
@@ -402,7 +420,7 @@ def _truth_noise_hits(seeds, kinds, true, **kwargs):
         bases, models = truth_noise_bases(seed, true=true, **kwargs)
         fit = fit_noise(bases, models, ROBOT, kinds=kinds)
         assert set(fit.parameters) == set(true)
-        assert set(fit.truth_noise) == {"truth_sigma", "truth_heading_sigma"}
+        assert set(fit.truth_noise) == TRUTH_NAMES
         for key in hits:
             lo, hi = fit.interval[key]
             hits[key] += lo <= true[key] <= hi
@@ -410,47 +428,102 @@ def _truth_noise_hits(seeds, kinds, true, **kwargs):
 
 
 def test_robot_and_truth_noise_are_fitted_back_within_their_intervals_in_40_seeds():
-    """Issue 11: a truth with σ = 3 mm and σθ = 5 mrad of its own and wheels with white
-    noise: each 95 % interval, robot's and truth's, holds the true value in ≥ 90 % of 40
-    seeds."""
+    """Issue 11: a truth with σ = 3 mm, σθ = 5 mrad and σt = 30 ms (its fixes' time against
+    the log's clock) of its own and wheels with white noise: the 95 % intervals, robot's and
+    truth's, hold the true values in ≥ 90 % of all parameter-seed pairs, and each
+    parameter's in ≥ 34 of 40 seeds. Over 400 seeds each parameter's coverage is 92.8–96.3 %
+    (the truth terms lowest: maximum-likelihood variances from few logs are biased low), so
+    36 of 40 for every one fails by chance in about 4 blocks of 10; 34 is about three
+    binomial standard deviations below 37."""
     hits = _truth_noise_hits(range(40), ("white",), TRUTH_TRUE)
-    assert min(hits.values()) >= 36, hits
+    assert sum(hits.values()) >= 0.9 * 40 * len(hits), hits
+    assert min(hits.values()) >= 34, hits
 
 
 @pytest.mark.slow
 def test_robot_white_bias_and_truth_noise_are_fitted_back_in_50_seeds():
-    true = {**TRUE, "truth_sigma": 0.003, "truth_heading_sigma": 0.005}
+    """White, bias and truth noise together: the 95 % intervals hold the true values in ≥ 90 %
+    of all parameter-seed pairs, and each parameter's in ≥ 40 of 50 seeds. Over 300 seeds
+    each parameter's coverage is 91–100 % (truth_sigma 93 %: maximum-likelihood variances
+    from few logs are biased low, and the intervals with them), so 45 of 50 for every one
+    would fail by chance about half the time; 40 is three binomial standard deviations
+    below 46."""
+    true = {**TRUE, "truth_sigma": 0.003, "truth_heading_sigma": 0.005, "truth_time_sigma": 0.03}
     hits = _truth_noise_hits(range(50), ("white", "bias"), true, bias=True)
-    assert min(hits.values()) >= 45, hits
+    assert sum(hits.values()) >= 0.9 * 50 * len(hits), hits
+    assert min(hits.values()) >= 40, hits
 
 
-def test_the_truth_noise_fit_is_the_truth_noise_kept_fixed_where_both_are_held():
-    """Holding both truth parameters at S and H is the fit of bases that carry S and H in
-    their fixed part (truth_columns=False with Truth(sigma=S, heading_sigma=H)): the same
-    robot noise, interval and likelihood. Holding one: it leaves ``parameters``, keeps its
-    value in ``truth_noise``, and the likelihood lies between the two fits'."""
-    s, h = TRUTH_TRUE["truth_sigma"], TRUTH_TRUE["truth_heading_sigma"]
+def test_the_truth_noise_fit_is_the_truth_noise_kept_fixed_where_all_are_held():
+    """Holding the three truth parameters at S, H and T is the fit of bases that carry them
+    in their fixed part (truth_columns=False with Truth(sigma=S, heading_sigma=H,
+    time_sigma=T)): the same robot noise, interval and likelihood. Holding one: it leaves
+    ``parameters``, keeps its value in ``truth_noise``, and the likelihood lies between
+    the two fits'."""
+    s, h, d = (TRUTH_TRUE[k] for k in ("truth_sigma", "truth_heading_sigma", "truth_time_sigma"))
+    held = {"truth_sigma": s, "truth_heading_sigma": h, "truth_time_sigma": d}
     cols, models = truth_noise_bases(21)
-    plain, _ = truth_noise_bases(21, truth_columns=False, truth_sigma=s, truth_heading_sigma=h)
-    both = fit_noise(cols, models, ROBOT, truth_held={"truth_sigma": s, "truth_heading_sigma": h})
+    plain, _ = truth_noise_bases(21, truth_columns=False, truth_sigma=s, truth_heading_sigma=h,
+                                 truth_time_sigma=d)
+    every = fit_noise(cols, models, ROBOT, truth_held=held)
     reference = fit_noise(plain, models, ROBOT)
     assert reference.truth_noise is None and reference.truth_held == ()
-    assert set(both.parameters) == set(reference.parameters) == {"k_left", "k_right"}
+    assert set(every.parameters) == set(reference.parameters) == {"k_left", "k_right"}
     for key in ("k_left", "k_right"):
-        assert both.parameters[key] == pytest.approx(reference.parameters[key], rel=1e-4)
-        np.testing.assert_allclose(both.interval[key], reference.interval[key], rtol=1e-3)
-    assert both.log_likelihood == pytest.approx(reference.log_likelihood, abs=1e-6)
-    assert both.truth_noise == pytest.approx({"truth_sigma": s, "truth_heading_sigma": h}, rel=1e-12)
-    assert set(both.truth_held) == {"truth_sigma", "truth_heading_sigma"}
+        assert every.parameters[key] == pytest.approx(reference.parameters[key], rel=1e-4)
+        np.testing.assert_allclose(every.interval[key], reference.interval[key], rtol=1e-3)
+    assert every.log_likelihood == pytest.approx(reference.log_likelihood, abs=1e-6)
+    assert every.truth_noise == pytest.approx(held, rel=1e-12)
+    assert set(every.truth_held) == TRUTH_NAMES
+    # The time part matters (the check can fail): held at zero the fit is another one.
+    untimed = fit_noise(cols, models, ROBOT, truth_held=dict(held, truth_time_sigma=0.0))
+    assert untimed.log_likelihood < every.log_likelihood - 10
 
     one = fit_noise(cols, models, ROBOT, truth_held={"truth_sigma": s})
     assert one.truth_held == ("truth_sigma",)
     assert "truth_sigma" not in one.parameters and "truth_sigma" not in one.interval
-    assert set(one.parameters) == {"k_left", "k_right", "truth_heading_sigma"}
+    assert set(one.parameters) == {"k_left", "k_right", "truth_heading_sigma", "truth_time_sigma"}
     assert one.truth_noise["truth_sigma"] == pytest.approx(s, rel=1e-12)
     assert one.variances["truth_sigma"] == pytest.approx(s**2, rel=1e-12)
-    assert one.truth_noise["truth_heading_sigma"] == pytest.approx(one.parameters["truth_heading_sigma"])
+    for key in ("truth_heading_sigma", "truth_time_sigma"):
+        assert one.truth_noise[key] == pytest.approx(one.parameters[key])
     assert one.to_dict()["truth_noise"] == one.truth_noise
     free = fit_noise(cols, models, ROBOT)
     assert free.truth_held == () and set(free.parameters) == set(TRUTH_TRUE)
-    assert both.log_likelihood - 1e-6 <= one.log_likelihood <= free.log_likelihood + 1e-6
+    assert every.log_likelihood - 1e-6 <= one.log_likelihood <= free.log_likelihood + 1e-6
+
+
+def test_a_robot_standing_at_every_window_end_leaves_the_truth_time_sigma_out_of_the_fit():
+    """Issue 11: where the robot stands at both ends of every window, a fix off the log's
+    clock is off by nothing: every time column is zero, so truth_time_sigma is not fitted
+    (absent from ``parameters`` and ``interval``, zero in ``truth_noise``) while the
+    others are; the same logs driven through their window ends do fit it."""
+    from odomkit.calibrate.fit_noise import fit_parameters
+
+    bases, models = truth_noise_bases(2, n_logs=4, stops=True)
+    assert all(not b.white[:, -1].any() and b.white[:, -3].any() for b in bases)
+    fit = fit_noise(bases, models, ROBOT)
+    assert set(fit.parameters) == set(fit.interval) == {"k_left", "k_right", "truth_sigma",
+                                                        "truth_heading_sigma"}
+    assert fit.truth_noise == {**fit.truth_noise, "truth_time_sigma": 0.0}
+    assert set(fit.truth_noise) == TRUTH_NAMES and fit.kinds["truth_time_sigma"] == "truth"
+    driven, _ = truth_noise_bases(2, n_logs=4)
+    assert {p.name for p in fit_parameters(driven, models, ROBOT, ("white",)) if p.free} == set(TRUTH_TRUE)
+
+
+def test_truth_held_names_only_truth_parameters_of_bases_that_carry_them():
+    """Issue 11: truth_held with a name that is not one of TRUTH_NOISE's (a typo, a robot
+    parameter), or given to bases without truth columns (where it would be ignored), is
+    refused."""
+    cols, models = truth_noise_bases(3, n_logs=2, n=400)
+    for bad in ({"truth_sigmaa": 0.003}, {"k_left": 0.001}, {"time_sigma": 0.03},
+                {"truth_sigma": 0.003, "truth_heading": 0.005}):
+        with pytest.raises(ModelError, match="truth_held"):
+            fit_noise(cols, models, ROBOT, truth_held=bad)
+    plain, _ = truth_noise_bases(3, n_logs=2, n=400, truth_columns=False)
+    for name in TRUTH_NAMES:
+        with pytest.raises(ModelError, match="truth_columns"):
+            fit_noise(plain, models, ROBOT, truth_held={name: 0.01})
+    # Nothing held is fine either way.
+    assert fit_noise(plain, models, ROBOT, truth_held={}).truth_noise is None
+    assert set(fit_noise(cols, models, ROBOT, truth_held={}).truth_noise) == TRUTH_NAMES

@@ -38,8 +38,9 @@ def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path
     for key in ("parameters", "interval95", "windows", "log_likelihood", "warnings",
                 "coverage_in_sample", "per_log", "outputs"):
         assert key in result, key
+    truth = ("truth_sigma", "truth_heading_sigma", "truth_time_sigma")
     assert set(result["parameters"]) == {"k_left", "k_right", "sigma_wheel_base", "sigma_scale_left",
-                                         "sigma_scale_right", "truth_sigma", "truth_heading_sigma"}
+                                         "sigma_scale_right", *truth}
     for key, value in result["parameters"].items():
         lo, hi = result["interval95"][key]
         assert lo <= value <= hi
@@ -56,19 +57,25 @@ def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path
     assert robot.wheel_base == pytest.approx(0.2)
     # The truth's own noise, fitted, is the robot file's [truth] (not a [noise] model).
     assert read_truth_noise(out) == {"sigma": result["parameters"]["truth_sigma"],
-                                     "heading_sigma": result["parameters"]["truth_heading_sigma"]}
-    assert result["truth_noise"] == {"truth_sigma": result["parameters"]["truth_sigma"],
-                                     "truth_heading_sigma": result["parameters"]["truth_heading_sigma"]}
+                                     "heading_sigma": result["parameters"]["truth_heading_sigma"],
+                                     "time_sigma": result["parameters"]["truth_time_sigma"]}
+    assert result["truth_noise"] == {key: result["parameters"][key] for key in truth}
 
 
 def test_truth_noise_given_on_the_command_line_is_held_not_fitted(run_cli, tmp_path):
     result, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-sigma", "0.002")
-    assert "truth_sigma" not in result["parameters"] and "truth_heading_sigma" in result["parameters"]
+    assert "truth_sigma" not in result["parameters"]
+    assert {"truth_heading_sigma", "truth_time_sigma"} <= set(result["parameters"])
     assert result["truth_noise"]["truth_sigma"] == 0.002
     assert read_truth_noise(out)["sigma"] == 0.002
+    timed, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-time-sigma", "0.004",
+                      name="t.toml")
+    assert "truth_time_sigma" not in timed["parameters"] and "truth_sigma" in timed["parameters"]
+    assert timed["truth_noise"]["truth_time_sigma"] == 0.004
+    assert read_truth_noise(out)["time_sigma"] == 0.004
     both, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-sigma", "0",
-                   "--truth-heading-sigma", "0", name="b.toml")
-    assert not {"truth_sigma", "truth_heading_sigma"} & set(both["parameters"])
+                   "--truth-heading-sigma", "0", "--truth-time-sigma", "0", name="b.toml")
+    assert not {"truth_sigma", "truth_heading_sigma", "truth_time_sigma"} & set(both["parameters"])
     # Held at zero the robot's own noise must explain the whole error: it comes out larger.
     assert both["parameters"]["k_left"] ** 2 + both["parameters"]["k_right"] ** 2 > (
         result["parameters"]["k_left"] ** 2 + result["parameters"]["k_right"] ** 2)
@@ -117,11 +124,18 @@ def test_text_logs_with_position_only_truth_files(run_cli, tmp_path):
         np.savetxt(truth_path, np.column_stack((log.t[::2] + 0.01, gt[::2, :2])), delimiter=",",
                    header="t,x,y", comments="", fmt="%.17g")
         args += ["--log", str(log_path), "--truth", str(truth_path)]
-    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s",
+    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--truth-time-sigma", "0",
                      "--columns", "t=t,ticks_left=L,ticks_right=R", "--truth-sigma", "0.001")
     assert result["windows"] > 20
+    # No truth heading: its noise cannot be fitted (not a parameter); the others are held.
     assert set(result["parameters"]) == {"k_left", "k_right"}
     assert all(0 < v < 0.1 for v in result["parameters"].values())
+    # With the truth's clock noise fitted too (the default) it is a parameter, and the
+    # window-start heading fitted to the positions is used alike.
+    free, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--columns", "t=t,ticks_left=L,ticks_right=R",
+                   "--truth-sigma", "0.001", name="free.toml")
+    assert set(free["parameters"]) == {"k_left", "k_right", "truth_time_sigma"}
+    assert free["windows"] == result["windows"] and free["log_likelihood"] >= result["log_likelihood"]
 
 
 def test_cross_validation_is_reported_when_asked(run_cli, tmp_path):
