@@ -147,7 +147,11 @@ def test_fit_noise_on_bags_equals_the_text_logs(run_cli, bags, tmp_path):
                    "--truth-topic", "/mocap", "--out", tmp_path / "a.toml", "--window", "29.98s")
     text = run_json(run_cli, "fit-noise", "--robot", ROBOT, *[a for p in RUNS[:3] for a in ("--log", p)],
                     "--out", tmp_path / "b.toml", "--window", "29.98s")
-    close(bag["parameters"], text["parameters"], rel=1e-8, abs_=1e-15)
+    # Equal to the optimiser's precision (it stops at a relative change of 1e-6 in scaled
+    # units; the bag's nanosecond stamps move the inputs in the last digits): with the
+    # truth's own noise fitted too, 8 parameters on 9 windows, that is ~1e-7, not 1e-12.
+    close(bag["parameters"], text["parameters"], rel=1e-5, abs_=1e-12)
+    assert bag["log_likelihood"] == pytest.approx(text["log_likelihood"], rel=1e-9)
     assert bag["windows"] == text["windows"] == 9
 
 
