@@ -61,7 +61,7 @@ HELD_OUT = ("231220200045", "231220200150", "030120210006")
 #: helps (benchmarks/honesty.py, README "How honest is the covariance?"). The truth's own
 #: noise is not fitted either (fit-noise ``--truth-sigma 0 --truth-heading-sigma 0``):
 #: with one window length it is hard to tell from k, and fitting it lowered the held-out
-#: 10 s figure from 0.91 to 0.82 here.
+#: 10 s figure from 0.91 to 0.87 here.
 FIT_WINDOW = ("10s",)
 SCORE_WINDOWS = ("10s", "30s")
 
