@@ -22,8 +22,8 @@ from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
-__all__ = ["heading_from_positions", "MAX_HEADING_SIGMA", "start_pose", "Truth", "truth_at", "truth_from_log",
-           "TruthSamples"]
+__all__ = ["heading_from_positions", "heading_span", "MAX_HEADING_SIGMA", "start_pose", "Truth", "truth_at",
+           "truth_from_log", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
@@ -183,10 +183,18 @@ def truth_from_log(log: OdometryLog) -> Truth | None:
     return Truth(t[keep], gt[:, :2].copy(), unwrap_angle(gt[:, 2]), source=log.source)
 
 
+def heading_span(truth: Truth, min_fixes: int = 5) -> float:
+    """The default width [s] of :func:`heading_from_positions`' window of fixes: 1 s, or
+    room for ``min_fixes`` + 1 fixes at the truth's median spacing where they are sparser (a
+    1 Hz GPS gets 6 s; a motion capture at 100 Hz keeps 1 s)."""
+    spacing = float(np.median(np.diff(truth.t))) if len(truth) > 1 else 0.0
+    return max(1.0, (max(int(min_fixes), 4) + 1) * spacing)
+
+
 def heading_from_positions(
     truth: Truth,
     time: float,
-    span: float = 1.0,
+    span: float | None = None,
     min_fixes: int = 5,
     max_residual: float | None = None,
 ) -> tuple[float, float] | None:
@@ -208,8 +216,9 @@ def heading_from_positions(
     truth : Truth
     time : float
         Time of the heading [s].
-    span : float
-        Width of the window of fixes [s].
+    span : float, optional
+        Width of the window of fixes [s]; default :func:`heading_span` (1 s, wider for
+        sparse fixes such as a 1 Hz GPS, which would otherwise never give a heading).
     min_fixes : int
         Fewest fixes to fit (at least 4, so the residual has a degree of freedom).
     max_residual : float, optional
@@ -229,7 +238,8 @@ def heading_from_positions(
     >>> round(h, 12), var < 1e-20
     (0.785398163397, True)
     """
-    span = validate.positive(span, "span", unit="s", error=InputError)
+    span = validate.positive(heading_span(truth, min_fixes) if span is None else span, "span", unit="s",
+                             error=InputError)
     min_fixes = max(int(min_fixes), 4)
     near = np.flatnonzero(np.abs(truth.t - time) <= span / 2)
     if near.size < min_fixes:
@@ -260,7 +270,7 @@ def heading_from_positions(
 
 
 def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, reverse: bool = False,
-               span: float = 1.0) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+               span: float | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The truth pose at ``time`` to start dead reckoning from, and its covariance.
 
     The covariance is diag(σ², σ², var_θ): σ = ``truth.sigma`` and var_θ =
@@ -277,8 +287,9 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
         As in :func:`truth_at`.
     reverse : bool
         The robot travels backwards at ``time`` (position-only truth only).
-    span : float
-        Width of the heading fit [s] (position-only truth only).
+    span : float, optional
+        Width of the heading fit [s] (position-only truth only; default
+        :func:`heading_span`).
 
     Returns
     -------

@@ -258,3 +258,23 @@ def test_the_cli_trim_default_is_the_library_one():
 
     default = inspect.signature(fit_noise_command).parameters["trim"].default
     assert (None if default >= 1 else default) == DEFAULT_TRIM
+
+
+def test_a_1_hz_position_only_truth_gives_windows(run_cli, tmp_path):
+    """A GPS-like truth (1 fix a second, no heading, 1 cm noise, its own clock): each window's
+    start heading is fitted to the fixes around it (over 6 s at this rate); before, the 1 s
+    heading fit saw two fixes and every window was dropped ("no windows to fit")."""
+    args = []
+    rng = np.random.default_rng(2)
+    for i, run in enumerate(RUNS[:3]):
+        log = read_run(run)
+        t = np.arange(log.t[0] + 0.3, log.t[-1], 1.0)
+        xy = np.column_stack([np.interp(t, log.t, log.ground_truth[:, k]) for k in (0, 1)])
+        path = tmp_path / f"gps{i}.csv"
+        np.savetxt(path, np.column_stack((t, xy + rng.normal(0.0, 0.01, xy.shape))), delimiter=",",
+                   header="t,x,y", comments="", fmt="%.9g")
+        args += ["--log", str(run), "--truth", str(path)]
+    result, out = _fit(run_cli, tmp_path, *args, "--window", "20s", "--truth-sigma", "0.01")
+    assert result["windows"] >= 6
+    assert "truth_heading_sigma" not in result["parameters"]  # no truth heading to fit it from
+    assert read_truth_noise(out)["sigma"] == 0.01

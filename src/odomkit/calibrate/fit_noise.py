@@ -476,7 +476,9 @@ def fit_noise(
     if set(held) - set(names_of_truth):
         raise ModelError(f"truth_held names {sorted(set(held) - set(names_of_truth))}; expected some of "
                          f"{names_of_truth}")
-    if held and not any(b.white_names[-len(TRUTH_NOISE):] == TRUTH_NOISE for b in bases if len(b.windows)):
+    with_windows = [b for b in bases if len(b.windows)]
+    if held and with_windows and not any(b.white_names[-len(TRUTH_NOISE):] == TRUTH_NOISE
+                                         for b in with_windows):
         raise ModelError("truth_held needs bases with the truth's noise as columns (truth_columns=True)")
     params = fit_parameters(bases, models, robot, kinds, set(fixed) | set(held))
     names = list(log_names) if log_names is not None else [f"log {i}" for i in range(len(bases))]

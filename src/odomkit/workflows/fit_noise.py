@@ -266,6 +266,10 @@ def fit_noise_files(
         notes.append(f"{len(left_out)} of {len(prepared)} logs left out: {shown}{more}")
     bases = [p.basis for p in used if p.basis is not None]
     dropped = sum(b.dropped for b in bases)
+    if not any(len(b.windows) for b in bases):
+        raise InputError(f"every window ({dropped}) was left out: no start heading could be fitted to the "
+                         "position-only truth around its start (too few fixes, too noisy, or the robot "
+                         "hardly moves there)", source=used[0].name)
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
