@@ -23,10 +23,9 @@ class TruthOptions:
 
     ``path`` None means the log's own ground truth. ``sigma`` [m] is the truth's own
     position noise per axis, ``heading_sigma`` [rad] its heading noise and ``time_sigma``
-    [s] its fixes' time against the log's clock: None when not
-    given, which is zero, or the robot file's ``[truth]`` values (those ``fit-noise``
-    fitted) where a command scores a robot file's covariance (:meth:`resolved`), and
-    fitted by ``fit-noise``. ``max_gap`` [s] is the longest gap between fixes to
+    [s] its fixes' time against the log's clock. None means not given: zero, or the robot
+    file's ``[truth]`` (what ``fit-noise`` fitted) where a command scores a robot file's
+    covariance (:meth:`resolved`); ``fit-noise`` fits it. ``max_gap`` [s] is the longest gap between fixes to
     interpolate across (None: no limit).
     """
 
@@ -43,6 +42,7 @@ class TruthOptions:
         """These options with each truth noise not given taken from ``defaults`` (a robot
         file's ``[truth]``: ``sigma``, ``heading_sigma``, ``time_sigma``), else zero."""
         found = defaults or {}
+
         def pick(given: float | None, key: str) -> float:
             return found.get(key, 0.0) if given is None else given
 
@@ -53,7 +53,8 @@ class TruthOptions:
     @property
     def held(self) -> dict[str, float]:
         """The truth noise the user gave, by :func:`odomkit.calibrate.fit_noise.fit_noise`'s
-        names (``truth_sigma``, ``truth_heading_sigma``): ``fit-noise`` fits the others."""
+        names (``truth_sigma``, ``truth_heading_sigma``, ``truth_time_sigma``): ``fit-noise``
+        holds these and fits the others."""
         given = {"truth_sigma": self.sigma, "truth_heading_sigma": self.heading_sigma,
                  "truth_time_sigma": self.time_sigma}
         return {k: float(v) for k, v in given.items() if v is not None}
