@@ -194,3 +194,24 @@ def test_sparse_fixes_widen_the_heading_fit_so_a_1_hz_gps_gives_a_heading():
     assert inside >= 95
     mocap = Truth(np.arange(0.0, 10.0, 0.01), np.zeros((1000, 2)))
     assert heading_span(mocap) == 1.0
+
+
+def test_a_heading_fit_through_a_glitch_is_refused_where_the_truth_states_its_noise():
+    """Issue 11: "a fit that the truth cannot support (too few fixes, large residual) drops
+    that window". With σ = 5 cm stated, 200 honest 1 Hz draws never exceed the 3σ residual
+    limit; one fix jumped by 1 m in the fit's span is refused; with no σ stated there is no
+    limit (the fit's own residual then sets the heading's variance)."""
+    from odomkit.truth import heading_from_positions
+
+    t = np.arange(0.0, 40.0, 1.0)
+    xy = np.column_stack((2.0 * t, 0.1 * t))
+    rng = np.random.default_rng(9)
+    for _ in range(200):
+        honest = xy + rng.normal(0.0, 0.05, xy.shape)
+        assert heading_from_positions(Truth(t, honest, sigma=0.05), 20.0) is not None
+    glitch = honest.copy()
+    glitch[21, 1] += 1.0
+    assert heading_from_positions(Truth(t, glitch, sigma=0.05), 20.0) is None
+    unstated = heading_from_positions(Truth(t, glitch), 20.0)
+    clean = heading_from_positions(Truth(t, honest), 20.0)
+    assert unstated is not None and clean is not None and unstated[1] > 10 * clean[1]

@@ -22,12 +22,17 @@ from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
-__all__ = ["heading_from_positions", "heading_span", "MAX_HEADING_SIGMA", "start_pose", "Truth", "truth_at",
-           "truth_from_log", "TruthSamples"]
+__all__ = ["heading_from_positions", "heading_span", "MAX_HEADING_SIGMA", "MAX_RESIDUAL_SIGMAS", "start_pose",
+           "Truth", "truth_at", "truth_from_log", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
 MAX_HEADING_SIGMA = 0.4
+#: Where the truth states its noise σ, a heading fit whose residual RMS per axis exceeds
+#: this many σ is refused: the fixes do not lie on a smooth path (a glitch, a jump, a turn
+#: too sharp for a quadratic). With the 5–7 fixes of a fit the residual has 4–8 degrees of
+#: freedom, so honest fixes exceed 3σ with a probability below 1e-6.
+MAX_RESIDUAL_SIGMAS = 3.0
 
 
 @dataclass(frozen=True)
@@ -222,7 +227,8 @@ def heading_from_positions(
     min_fixes : int
         Fewest fixes to fit (at least 4, so the residual has a degree of freedom).
     max_residual : float, optional
-        Largest residual RMS per axis [m] accepted; None for no limit.
+        Largest residual RMS per axis [m] accepted; default :data:`MAX_RESIDUAL_SIGMAS` ×
+        ``truth.sigma`` where the truth states its noise, else no limit.
 
     Returns
     -------
@@ -255,6 +261,8 @@ def heading_from_positions(
     resid = truth.xy[near] - A @ coef
     dof = near.size - 3
     s2 = float(np.sum(resid**2)) / (2 * dof)  # pooled over x and y
+    if max_residual is None and truth.sigma > 0:
+        max_residual = MAX_RESIDUAL_SIGMAS * truth.sigma
     if max_residual is not None and math.sqrt(s2) > max_residual:
         return None
     sigma2 = max(truth.sigma**2, s2)
@@ -314,7 +322,8 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
         fit = heading_from_positions(truth, time, span)
         if fit is None:
             raise InputError(f"the truth has no heading, and its positions around {time:.6g} s do not "
-                             "give one (too few fixes, or the robot hardly moves); give --initial-pose",
+                             "give one (too few fixes, fixes off a smooth path by more than 3 "
+                             "--truth-sigma, or the robot hardly moves); give --initial-pose",
                              source=truth.source)
         pose[2] = fit[0] + (math.pi if reverse else 0.0)
         cov[2, 2] = fit[1]

@@ -268,8 +268,9 @@ def fit_noise_files(
     dropped = sum(b.dropped for b in bases)
     if not any(len(b.windows) for b in bases):
         raise InputError(f"every window ({dropped}) was left out: no start heading could be fitted to the "
-                         "position-only truth around its start (too few fixes, too noisy, or the robot "
-                         "hardly moves there)", source=used[0].name)
+                         "position-only truth around its start (too few fixes, fixes off a smooth path by "
+                         "more than 3 --truth-sigma, too noisy, or the robot hardly moves there)",
+                         source=used[0].name)
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
