@@ -406,9 +406,10 @@ def _truth_columns_case(case):
 def _time_column_by_hand(case, log, robot, poses, truth, w):
     """Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ of window ``w`` from its own dead reckoning: u the position
     change over the 4 steps (0.25 s of 1/16 s, the fewest that reach 0.2 s) after the start
-    and before the end divided by their time, its θ zero (the heading's share of a clock
-    offset is left out: windows._pose_rates); a start pose error (dx, dy, dθ) reaches the
-    end as (dx − dθ·Δy, dy + dθ·Δx, dθ), Δ = end − start, so with dθ = 0 it is u_a itself."""
+    and before the end divided by their time. Its θ is zero (the heading's share of a clock
+    offset is left out: windows._pose_rates) but at a start whose heading is fitted to
+    position-only truth, where the fixes' clock turns that heading by ω·δ; a start pose error
+    (dx, dy, dθ) reaches the end as (dx − dθ·Δy, dy + dθ·Δx, dθ), Δ = end − start."""
     from odomkit.truth import heading_from_positions
 
     steps = body_steps(robot, log)
@@ -420,7 +421,9 @@ def _time_column_by_hand(case, log, robot, poses, truth, w):
     track = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], start)
     u_a = (track[4] - track[0]) / (log.t[w.start + 4] - log.t[w.start])
     u_b = (track[-1] - track[-5]) / (log.t[w.end] - log.t[w.end - 4])
-    u_a[2] = u_b[2] = 0.0
+    u_b[2] = 0.0
+    if case != "position_only":
+        u_a[2] = 0.0
     dx, dy = track[-1, :2] - track[0, :2]
     carried = u_a + u_a[2] * np.array([-dy, dx, 0.0])
     return np.outer(carried, carried) + np.outer(u_b, u_b)

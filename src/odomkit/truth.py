@@ -60,8 +60,8 @@ class Truth:
         Standard deviation of each fix's time against the log's clock [s]
         (``--truth-time-sigma``; jitter and latency between two clocks): a fix δ off is off
         by the velocity times δ, so it adds (v·σ)² along the track where the robot moves and
-        nothing where it stands; the heading's share ω·δ is left out on purpose
-        (:func:`odomkit.windows._pose_rates` says why).
+        nothing where it stands; the heading's share ω·δ counts only where a start heading
+        is fitted to position-only truth (:func:`odomkit.windows._pose_rates` says why).
     """
 
     t: NDArray[np.float64]

@@ -253,7 +253,7 @@ class _Prepared:
     error: NDArray[np.float64]
     end_cov: NDArray[np.float64]  # (W, 3, 3): the truth's own noise at each window end
     heading_from_truth: NDArray[np.bool_]  # (W,): the start heading is the truth's own
-    start_rate: NDArray[np.float64]  # (W, 3): (dx/dt, dy/dt, 0) where the window starts [m/s]
+    start_rate: NDArray[np.float64]  # (W, 3): d(pose)/dt where the window starts (_pose_rates)
     end_rate: NDArray[np.float64]  # (W, 3): and where it ends
     dropped: int
     method: str
@@ -265,17 +265,20 @@ class _Prepared:
 RATE_SPAN = 0.2
 
 
-def _pose_rates(part: BodySteps, poses: NDArray[np.float64]
+def _pose_rates(part: BodySteps, poses: NDArray[np.float64], fitted_heading: bool
                 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """(dx/dt, dy/dt, 0) at a window's start and end, (3,) each, from its dead-reckoned
-    poses over :data:`RATE_SPAN`: a truth fix δ seconds off the log's clock is off by
-    rate·δ.
+    """d(x, y, θ)/dt at a window's start and end, (3,) each, from its dead-reckoned poses
+    over :data:`RATE_SPAN`: a truth fix δ seconds off the log's clock is off by rate·δ.
 
-    The heading's share (ω·δ) is left out on purpose. It would give θ variance to the
-    windows that turn at an end and none to those that do not; a per-log bias can then
-    absorb the latter's θ errors exactly and the likelihood has a spurious spike there (seen
-    on commanded-velocity logs: every white θ variance fitted to zero and the truth's σ to
-    0.8 m). A clock offset shows in the position at speed far more than in the heading.
+    The heading's share (ω·δ) is kept only at a start whose heading was fitted to
+    position-only truth (``fitted_heading``): there the fixes' clock turns the fitted
+    heading by ω·δ, which swings the whole window (a 1 Hz GPS 0.2 s late on a car turning at
+    0.3 rad/s: 0.06 rad, 14 m across 240 m), and θ is never compared at the end. Elsewhere
+    it is left out on purpose: with the truth's heading compared at window ends it would
+    give θ variance to the windows that turn at an end and none to those that do not, a
+    per-log bias could then absorb the latter's θ errors exactly, and the likelihood had a
+    spurious spike there (seen on commanded-velocity logs: every white θ variance fitted to
+    zero and the truth's σ to 0.8 m).
     """
     dt = np.asarray(part.dt, dtype=float)
     # The steps within RATE_SPAN (less a rounding margin: 4 × 0.05 s may sum to 0.19999...).
@@ -283,7 +286,9 @@ def _pose_rates(part: BodySteps, poses: NDArray[np.float64]
     head, tail = float(np.sum(dt[:m])), float(np.sum(dt[-m:]))
     start = (poses[m] - poses[0]) / head if head > 0 else np.zeros(3)
     end = (poses[-1] - poses[-1 - m]) / tail if tail > 0 else np.zeros(3)
-    start[2] = end[2] = 0.0
+    end[2] = 0.0
+    if not fitted_heading:
+        start[2] = 0.0
     return start, end
 
 
@@ -358,7 +363,8 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         poses = dead_reckon(part.dd, part.dtheta, pose0, method)  # type: ignore[arg-type]
         err = gt[b] - poses[-1]
         err[2] = wrap_angle(err[2])
-        rate_a, rate_b = _pose_rates(part, poses)
+        fitted_heading = not (own_heading or robot.measures_heading)
+        rate_a, rate_b = _pose_rates(part, poses, fitted_heading)
         cov0 += time2 * np.outer(rate_a, rate_a)
         kept.append(w)
         parts.append(part)
@@ -574,10 +580,10 @@ def window_covariance_basis(
         diag(2, 2, 0); a start heading error swings the end about the start) and at its
         end. The heading column is zero where the start heading is not the truth's
         (position-only truth, a compass robot's measured heading) and the end heading is
-        not compared. A fix δ seconds off the log's clock is off by the velocity times δ
-        (u = (dx/dt, dy/dt, 0) from the window's own dead reckoning, :data:`RATE_SPAN`;
-        :func:`_pose_rates` says why not the heading's share): the time column is
-        Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ, zero where the robot stands.
+        not compared. A fix δ seconds off the log's clock is off by the pose rate times δ
+        (u from the window's own dead reckoning, :data:`RATE_SPAN`; its heading share only
+        at a start heading fitted to position-only truth, :func:`_pose_rates` says why):
+        the time column is Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ, zero where the robot stands.
 
     Returns
     -------
