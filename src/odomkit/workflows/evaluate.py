@@ -455,7 +455,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     notes = list(whole.warnings)
     if first != rows[0]:
         notes.append(f"{log.source}: the whole-run track starts at {log.t[first]:.6g} s, the first "
-                               "time the position-only truth gives a heading (the robot stands still before)")
+                     "time the position-only truth gives a heading (before it the robot stands still, "
+                     "or the fixes around the start are too few or stray from a smooth path)")
     # The honesty test: one window per span of the log, restarted from truth.
     valid_t = log.t[samples.valid]
     if spec is not None:
