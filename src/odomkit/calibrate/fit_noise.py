@@ -195,6 +195,11 @@ def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collecti
     return tuple(out)
 
 
+def _has_truth_columns(basis: WindowBasis) -> bool:
+    """Whether ``basis`` carries the truth's own noise as its last white columns."""
+    return basis.white_names[-len(TRUTH_NOISE):] == TRUTH_NOISE
+
+
 def fit_parameters(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], robot: Robot,
                    kinds: Collection[str], fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
     """The parameters of a fit on ``bases``: :func:`noise_parameters`, and, where the bases
@@ -205,7 +210,7 @@ def fit_parameters(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], r
     anywhere; a robot that never moves at a window's ends)."""
     params = noise_parameters(models, robot, kinds, fixed)
     used = [b for b in bases if len(b.windows)]
-    if not used or used[0].white_names[-len(TRUTH_NOISE):] != TRUTH_NOISE:
+    if not used or not _has_truth_columns(used[0]):
         return params
     q = len(used[0].white_names)
     truth = []
@@ -477,8 +482,7 @@ def fit_noise(
         raise ModelError(f"truth_held names {sorted(set(held) - set(names_of_truth))}; expected some of "
                          f"{names_of_truth}")
     with_windows = [b for b in bases if len(b.windows)]
-    if held and with_windows and not any(b.white_names[-len(TRUTH_NOISE):] == TRUTH_NOISE
-                                         for b in with_windows):
+    if held and with_windows and not any(_has_truth_columns(b) for b in with_windows):
         raise ModelError("truth_held needs bases with the truth's noise as columns (truth_columns=True)")
     params = fit_parameters(bases, models, robot, kinds, set(fixed) | set(held))
     names = list(log_names) if log_names is not None else [f"log {i}" for i in range(len(bases))]
@@ -576,8 +580,8 @@ def fit_noise(
         coverage_in_sample=coverage(everything.error[:, :2],
                                     everything.window_covariance(v_hat)[:, :2, :2]),
         trimmed=n_trimmed, trim=trim,
-        truth_noise={p.key: params[k].to_value(v_hat[k]) for k, p in enumerate(params) if p.kind == "truth"}
-        or None, truth_held=tuple(held),
+        truth_noise={p.key: p.to_value(v_hat[k]) for k, p in enumerate(params) if p.kind == "truth"} or None,
+        truth_held=tuple(held),
         correlation={keys[a]: {keys[b]: float(corr[x, y]) for y, b in enumerate(informed)}
                      for x, a in enumerate(informed)},
         per_log=per_log, warnings=warnings, cross_validation=cv,
