@@ -16,7 +16,7 @@ With e = truth − odometry at the window end, to first order
 
 where P_start is the start pose's covariance (the truth's own noise ``truth.sigma``² on
 x and y and ``truth.heading_sigma``² on θ; where the truth has no heading, the variance of
-the heading fitted to the truth positions, :func:`odomkit.truth.heading_from_positions`),
+the heading fitted to the truth positions, :func:`odomkit.truth.heading_by_alignment`),
 Φ its transition to the window end (the engines carry it), R_end = diag(σ², σ², σθ²) the
 truth's noise at the end (σθ where the truth has heading), and
 B_j the covariance that unit variance in noise parameter j alone gives
@@ -27,6 +27,7 @@ sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -299,20 +300,34 @@ def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:
     return BodySteps(steps.dd[a:b], steps.dtheta[a:b], steps.dt[a:b], inputs, steps.robot)
 
 
-def _start_heading(truth: Truth | None, time: float, reversing: bool, source: str
-                   ) -> tuple[float, float] | None:
-    """Heading and its variance fitted to position-only truth around ``time``."""
+def _start_heading(truth: Truth | None, time: float, log_t: NDArray[np.float64],
+                   odometry: NDArray[np.float64], source: str) -> tuple[float, float] | None:
+    """Heading and its variance at ``time``, fitted to position-only truth around it by
+    aligning the odometry's own path (``odometry``, (N, 3), at ``log_t``) to the fixes
+    (:func:`odomkit.truth.heading_by_alignment`); None where the truth alone cannot support
+    a heading there (:func:`odomkit.truth.heading_from_positions`: too few fixes, a large
+    residual, a robot hardly moving). That decision is the truth's alone: a window must not
+    be dropped for its odometry's error, which the alignment's residual also holds (the
+    windows kept would then be the odometry's good ones). Where the alignment gives no
+    heading (its residual, odometry included, spread over too short a path: an
+    uncalibrated robot turning on the spot), the truth-only fit's heading is used."""
     if truth is None:
         raise InputError("the truth has no heading at a window start; pass the Truth so that "
                          "one can be fitted to its positions", source=source)
-    from odomkit.truth import heading_from_positions
+    from odomkit.truth import heading_by_alignment, heading_from_positions
 
-    fitted = heading_from_positions(truth, time)
-    if fitted is None:
+    alone = heading_from_positions(truth, time)
+    if alone is None:
         return None
-    heading, var = fitted
-    # heading_from_positions gives the direction of travel; a reversing robot faces away.
-    return (heading + np.pi if reversing else heading), var
+    aligned = heading_by_alignment(truth, time, log_t, odometry, max_residual=math.inf)
+    if aligned is not None:
+        return aligned
+    # heading_from_positions gives the direction of travel; a robot whose odometry moves
+    # backwards over the next 0.5 s faces away from it.
+    a, b = np.searchsorted(log_t, [time, time + 0.5]).clip(0, len(log_t) - 1)
+    moved = odometry[b, :2] - odometry[a, :2]
+    backwards = moved[0] * math.cos(odometry[a, 2]) + moved[1] * math.sin(odometry[a, 2]) < 0
+    return (alone[0] + math.pi if backwards else alone[0]), alone[1]
 
 
 def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid: ArrayLike,
@@ -336,6 +351,8 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
     tracks: list[NDArray[np.float64]] = []
     starts, errors, from_truth, rates = [], [], [], []
     dropped = 0
+    odometry: NDArray[np.float64] | None = None
+    log_t = np.asarray(log.t, dtype=float)
     for w in windows:
         a, b = w.start, w.end
         if not (0 <= a < b < n) or not (ok[a] and ok[b]):
@@ -354,8 +371,9 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         elif np.isfinite(pose0[2]):
             cov0[2, 2], own_heading = heading2, True
         else:
-            ahead = part.dd[: max(1, int(np.searchsorted(np.cumsum(part.dt), 0.5)))]
-            fitted = _start_heading(truth, float(log.t[a]), float(np.sum(ahead)) < 0, log.source)
+            if odometry is None:  # the whole log from the origin: its shape around each start
+                odometry = dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)  # type: ignore[arg-type]
+            fitted = _start_heading(truth, float(log.t[a]), log_t, odometry, log.source)
             if fitted is None:
                 dropped += 1
                 continue
@@ -410,7 +428,7 @@ def window_errors(
     diag(σ², σ², σθ²), σ = ``truth.sigma`` and σθ = ``truth.heading_sigma`` (zero without
     ``truth``), and its end gets the same truth noise; where the truth has no
     heading (θ NaN in ``truth_poses``), the start heading is fitted to the truth positions
-    (:func:`odomkit.truth.heading_from_positions`, turned by π while reversing) and its
+    (the odometry's own path aligned to them, :func:`odomkit.truth.heading_by_alignment`) and its
     variance enters the start covariance; a window where that fails is dropped and
     counted. A compass robot starts from its measured heading, as ``odomkit track`` does.
 
