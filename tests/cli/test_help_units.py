@@ -21,6 +21,7 @@ UNITS: dict[str, tuple[str, ...]] = {
     "--truth-sigma": ("m",),
     "--truth-heading-sigma": ("rad",),
     "--truth-time-sigma": ("s",),
+    "--truth-time-offset": ("s",),
     "--max-gap": ("s",),
     # poses and covariances
     "--initial-pose": ("m, m, rad",),

@@ -15,7 +15,7 @@ import pytest
 
 from odomkit.data import builtin_data_path
 from odomkit.io.optiodom import read_run
-from odomkit.io.robotfile import read_robot, read_truth_noise
+from odomkit.io.robotfile import read_robot, read_truth_table
 from odomkit.noise import ParameterUncertainty, WheelNoise
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
@@ -56,7 +56,7 @@ def test_fit_noise_writes_the_robot_file_with_the_fitted_noise(run_cli, tmp_path
     assert params.mode == "bias"
     assert robot.wheel_base == pytest.approx(0.2)
     # The truth's own noise, fitted, is the robot file's [truth] (not a [noise] model).
-    assert read_truth_noise(out) == {"sigma": result["parameters"]["truth_sigma"],
+    assert read_truth_table(out) == {"sigma": result["parameters"]["truth_sigma"],
                                      "heading_sigma": result["parameters"]["truth_heading_sigma"],
                                      "time_sigma": result["parameters"]["truth_time_sigma"]}
     assert result["truth_noise"] == {key: result["parameters"][key] for key in truth}
@@ -67,12 +67,12 @@ def test_truth_noise_given_on_the_command_line_is_held_not_fitted(run_cli, tmp_p
     assert "truth_sigma" not in result["parameters"]
     assert {"truth_heading_sigma", "truth_time_sigma"} <= set(result["parameters"])
     assert result["truth_noise"]["truth_sigma"] == 0.002
-    assert read_truth_noise(out)["sigma"] == 0.002
+    assert read_truth_table(out)["sigma"] == 0.002
     timed, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-time-sigma", "0.004",
                       name="t.toml")
     assert "truth_time_sigma" not in timed["parameters"] and "truth_sigma" in timed["parameters"]
     assert timed["truth_noise"]["truth_time_sigma"] == 0.004
-    assert read_truth_noise(out)["time_sigma"] == 0.004
+    assert read_truth_table(out)["time_sigma"] == 0.004
     both, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--truth-sigma", "0",
                    "--truth-heading-sigma", "0", "--truth-time-sigma", "0", name="b.toml")
     assert not {"truth_sigma", "truth_heading_sigma", "truth_time_sigma"} & set(both["parameters"])
@@ -83,7 +83,7 @@ def test_truth_noise_given_on_the_command_line_is_held_not_fitted(run_cli, tmp_p
 
 def test_evaluate_adds_the_robot_files_truth_noise_unless_flags_say_otherwise(run_cli, tmp_path):
     _, out = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s")
-    noise = read_truth_noise(out)
+    noise = read_truth_table(out)
     assert noise["sigma"] > 0
 
     def evaluate(*flags):
@@ -275,6 +275,6 @@ def test_a_1_hz_position_only_truth_gives_windows(run_cli, tmp_path):
                    header="t,x,y", comments="", fmt="%.9g")
         args += ["--log", str(run), "--truth", str(path)]
     result, out = _fit(run_cli, tmp_path, *args, "--window", "20s", "--truth-sigma", "0.01")
-    assert result["windows"] >= 6
+    assert result["windows"] >= 6, (result["windows"], result["windows_dropped"], result["warnings"])
     assert "truth_heading_sigma" not in result["parameters"]  # no truth heading to fit it from
-    assert read_truth_noise(out)["sigma"] == 0.01
+    assert read_truth_table(out)["sigma"] == 0.01

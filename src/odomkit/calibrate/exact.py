@@ -1,5 +1,7 @@
 """Exact-model calibration: wheel scales, wheel base (or a tricycle's or car's scale,
-steering offset and wheel base) by nonlinear least squares on the exact kinematics.
+steering offset and wheel base; a unicycle's speed scale, yaw-rate bias and yaw-rate scale;
+a gyro robot's metres per tick, gyro bias and gyro scale) by nonlinear least squares on the
+exact kinematics.
 
 UMBmark (Borenstein–Feng section IV) linearises the square path (``L sin γ ≈ Lγ``) and
 treats turns and straight legs as if they were driven perfectly apart from one error
@@ -47,8 +49,10 @@ from scipy.optimize import least_squares
 
 from odomkit import validate
 from odomkit.calibrate.residuals import (
-    DiffCalibrationModel,
+    CalibratedRobot,
+    GyroCalibrationModel,
     ResidualProblem,
+    UnicycleCalibrationModel,
     calibration_model,
     endpoint_whitening,
 )
@@ -56,7 +60,7 @@ from odomkit.errors import InputError, ModelError
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.propagate.plan import NoiseArg
-from odomkit.robot import Car, DiffDrive, Tricycle
+from odomkit.robot import DiffDrive
 
 __all__ = ["SCALE_OBSERVABLE_BELOW", "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source"]
 
@@ -72,12 +76,14 @@ class ExactCalibration:
 
     Parameters
     ----------
-    robot : DiffDrive | Tricycle | Car
+    robot : DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
         The input robot with the fitted corrections in place.
     names : tuple of str
-        Parameter names: ``c_left, c_right, c_wheel_base``,
-        ``c_scale, steering_offset, wheel_to_axle`` (m for ``wheel_to_axle``, rad for the offset)
-        or ``c_scale, steering_offset, wheel_base`` (car).
+        Parameter names: ``c_left, c_right, c_wheel_base`` (diff),
+        ``c_scale, steering_offset, wheel_to_axle`` (tricycle; m for ``wheel_to_axle``, rad for
+        the offset), ``c_scale, steering_offset, wheel_base`` (car),
+        ``c_scale, yaw_rate_bias, yaw_rate_scale`` (unicycle; rad/s for the bias) or
+        ``m_per_tick, gyro_bias, gyro_scale`` (gyro; m, rad/s).
     values, std_errors : ndarray, shape (3,)
         Estimates and standard errors ``sqrt(diag(cov))``.
     cov, corr : ndarray, shape (3, 3)
@@ -91,14 +97,18 @@ class ExactCalibration:
         ``positions``: :func:`odomkit.calibrate.positions.calibrate_positions` (truth
         positions on their own clock, start poses fitted).
     scale_fixed : bool
-        True when the mean scale was held at its input value (unobservable or asked).
+        True when the mean scale (diff) or speed scale (``c_scale``, ``m_per_tick``) was held
+        at its input value (unobservable or asked).
     scale_sensitivity : float
         Relative sensitivity of the residuals to the overall scale at the start (0 = none).
     notes : tuple of str
         Human-readable remarks (why the scale was fixed, convergence).
+    time_offset, time_offset_std_error : float or None
+        ``positions`` with ``fit_time_offset``: the truth's clock offset δ [s] (a fix
+        stamped t is the pose at log time t − δ) and its standard error; None otherwise.
     """
 
-    robot: DiffDrive | Tricycle | Car
+    robot: CalibratedRobot
     names: tuple[str, ...]
     values: NDArray[np.float64]
     std_errors: NDArray[np.float64]
@@ -111,6 +121,8 @@ class ExactCalibration:
     scale_fixed: bool
     scale_sensitivity: float
     notes: tuple[str, ...] = ()
+    time_offset: float | None = None
+    time_offset_std_error: float | None = None
 
     @property
     def E_d(self) -> float:
@@ -149,10 +161,33 @@ class ExactCalibration:
             "scale_sensitivity": self.scale_sensitivity,
             "notes": list(self.notes),
         }
+        if self.time_offset is not None:
+            out["truth_time_offset"] = {"value": self.time_offset, "std_error": self.time_offset_std_error}
         if isinstance(self.robot, DiffDrive):
             out.update(E_d=self.E_d, E_b=self.E_b, E_s=self.E_s,
                        wheel_base=self.robot.effective_wheel_base)
         return out
+
+
+def _hold_fixed(offset: NDArray[np.float64], T: NDArray[np.float64], held: Sequence[int],
+                p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Restrict the map p = offset + T q, shapes (P,), (P, Q), to p[held] = p0[held].
+
+    The constraint T[held] q = p0[held] − offset[held] has the solutions q = q* + N z with
+    q* its least-squares solution and N an orthonormal basis of the null space of T[held];
+    the new map is p = (offset + T q*) + (T N) z.
+    """
+    idx = np.asarray(held, dtype=np.intp)
+    A = T[idx]
+    q_star = np.linalg.lstsq(A, p0[idx] - offset[idx], rcond=None)[0]
+    _, sv, vt = np.linalg.svd(A)
+    rank = int(np.count_nonzero(sv > 1e-12 * max(1.0, float(sv.max(initial=0.0)))))
+    N = vt[rank:].T
+    new_offset = offset + T @ q_star
+    new_offset[idx] = p0[idx]  # exactly, not to round-off
+    T_new = T @ N
+    T_new[idx] = 0.0
+    return new_offset, T_new
 
 
 def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
@@ -181,7 +216,7 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
 
 def calibrate_exact(
     runs: Sequence[OdometryLog],
-    robot: DiffDrive | Tricycle | Car,
+    robot: CalibratedRobot,
     source: Source = "endpoints",
     *,
     heading_weight: float | None = 0.0,
@@ -196,10 +231,17 @@ def calibrate_exact(
     ----------
     runs : sequence of OdometryLog
         Logs with ``ground_truth`` (N, 3); diff robots need ``ticks_left/right`` (or
-        ``dist_*``), tricycles ``ticks`` (or ``dist``/``speed``) and ``steer``. Each run is
-        integrated from its first ground-truth pose.
-    robot : DiffDrive | Tricycle | Car
-        Nominal parameters; its current corrections are the starting point.
+        ``dist_*``), tricycles and cars ``ticks`` (or ``dist``/``speed``) and ``steer``,
+        unicycles ``speed`` (or ``dist``) and ``yaw_rate``, gyro robots ``ticks`` (or
+        ``dist``/``speed``) and ``yaw_rate``. Each run is integrated from its first
+        ground-truth pose.
+    robot : DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
+        Nominal parameters; its current corrections are the starting point. Fitted: diff
+        (c_left, c_right, c_wheel_base), tricycle (c_scale, steering_offset [rad],
+        wheel_to_axle [m]), car (c_scale, steering_offset [rad], wheel_base [m]), unicycle
+        (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale), gyro (m_per_tick [m], gyro_bias
+        [rad/s], gyro_scale). A parameter the runs' channels do not depend on (a gyro
+        robot's m_per_tick without a ``ticks`` channel) is held at its value, with a note.
     source : {"endpoints", "trajectory"}
         Compare only each run's final pose, or every row's pose.
     heading_weight : float or None
@@ -209,9 +251,10 @@ def calibrate_exact(
         positions only, like UMBmark and E_max,syst; on the OptiOdom squares adding the
         heading made the calibration worse in and out of sample (docs/results/real-data.md).
     fix_scale : bool, optional
-        Hold the mean scale (diff: (c_left + c_right)/2; tricycle: c_scale) at its input
-        value. Default: automatically, when the compared poses lie closer to the start than
-        ``SCALE_OBSERVABLE_BELOW`` times the distance travelled (closed paths, endpoints).
+        Hold the mean scale (diff: (c_left + c_right)/2; tricycle, car, unicycle: c_scale;
+        gyro: m_per_tick) at its input value. Default: automatically, when the compared
+        poses lie closer to the start than ``SCALE_OBSERVABLE_BELOW`` times the distance
+        travelled (closed paths, endpoints).
     noise : WheelNoise, optional
         Diff endpoints only: whiten each run's end residual by the end-pose covariance that
         this per-wheel noise predicts (Chong–Kleeman eq. 23), making the fit a generalised
@@ -254,19 +297,29 @@ def calibrate_exact(
         whiten = endpoint_whitening(model, runs, source, noise, method)
     prob = ResidualProblem(model, runs, source, heading_weight, every, whiten, method)
     p0 = model.p0.copy()
-    scale_index = [0, 1, 2] if isinstance(model, DiffCalibrationModel) else [0, 2]
+    scale_index = [k for k, positive in enumerate(model.positive) if positive]
     sens = prob.scale_sensitivity(p0)
     notes: list[str] = []
+    held = [k for k, name in enumerate(model.names) if name in model.unobservable]
+    for k in held:
+        notes.append(f"{model.names[k]} held at {p0[k]:.6g}: {model.unobservable[model.names[k]]}")
     if fix_scale is None:
         fix_scale = sens < SCALE_OBSERVABLE_BELOW
-        if fix_scale:
-            notes.append(
-                f"overall scale unobservable (relative sensitivity {sens:.3g} < "
-                f"{SCALE_OBSERVABLE_BELOW}): mean wheel scale held fixed as in UMBmark; the "
-                "wheel base absorbs any scale error E_s"
-            )
+        if fix_scale and 0 not in held:
+            unobservable = (f"overall scale unobservable (relative sensitivity {sens:.3g} < "
+                            f"{SCALE_OBSERVABLE_BELOW}): ")
+            if isinstance(model, UnicycleCalibrationModel | GyroCalibrationModel):
+                # Its speed scale stretches the track about the start and leaves every Δθ alone.
+                notes.append(unobservable + f"speed scale {model.names[0]} held fixed; the heading "
+                             "parameters are unaffected, distances keep any scale error")
+            else:
+                notes.append(unobservable + "mean wheel scale held fixed as in UMBmark; the wheel "
+                             "base absorbs any scale error E_s")
     if fix_scale:
         prob.offset, prob.T = model.fixed_scale_map(p0)
+    if held:
+        prob.offset, prob.T = _hold_fixed(prob.offset, prob.T, held, p0)
+    if fix_scale or held:
         q0 = np.asarray(np.linalg.lstsq(prob.T, p0 - prob.offset, rcond=None)[0], dtype=np.float64)
     else:
         q0 = p0.copy()
@@ -304,12 +357,13 @@ def calibrate_exact(
     return ExactCalibration(
         robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov,
         corr=corr, residual_variance=var_res, n_residuals=n_res, n_runs=len(runs),
-        source=source, scale_fixed=bool(fix_scale), scale_sensitivity=sens, notes=tuple(notes),
+        source=source, scale_fixed=bool(fix_scale) or 0 in held, scale_sensitivity=sens,
+        notes=tuple(notes),
     )
 
 
 def jackknife_runs(
-    runs: Sequence[OdometryLog], robot: DiffDrive | Tricycle | Car, source: Source = "trajectory",
+    runs: Sequence[OdometryLog], robot: CalibratedRobot, source: Source = "trajectory",
     **kwargs: Any,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Delete-one-run jackknife standard errors of :func:`calibrate_exact`'s parameters.

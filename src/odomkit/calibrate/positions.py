@@ -20,7 +20,14 @@ its noise, and rows without truth. Here:
   a rotation of the start cannot undo), so the first stage fits the start pose alone
   (an SE(2) alignment, Umeyama 1991, closed form) over a short prefix of each run, and
   each later stage refits everything over a prefix twice as long, starting from the
-  previous stage's solution, until the whole run is used.
+  previous stage's solution, until the whole run is used;
+* optionally (``fit_time_offset``) the truth's clock offset δ is fitted too, one for all
+  runs: a fix stamped t is compared with the odometry at log time t − δ. A GPS's latency
+  or a commanded velocity's lag behind the motion makes the truth look late by a constant;
+  left out, it reads as an along-track error proportional to speed. Its Jacobian column
+  is −(the odometry's velocity at t − δ), the slope of the log segment the fix falls in
+  (the residual is piecewise linear in δ). Fixes within :data:`MAX_TIME_OFFSET` of either
+  end of the log are then left out, so the same fixes are compared at every δ.
 
 The parameter-to-body-step maps are :mod:`odomkit.calibrate.residuals`' (diff, tricycle,
 car) and the integration with sensitivities its
@@ -38,83 +45,115 @@ from scipy.optimize import least_squares
 
 from odomkit import validate
 from odomkit.calibrate.exact import ExactCalibration
-from odomkit.calibrate.residuals import CalibrationModel, calibration_model, integrate_with_sensitivity
+from odomkit.calibrate.residuals import (
+    CALIBRATED_ROBOTS,
+    CalibratedRobot,
+    CalibrationModel,
+    calibration_model,
+    integrate_with_sensitivity,
+)
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
-from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.truth import Truth
 
-__all__ = ["MIN_FIRST_FIXES", "calibrate_positions"]
+__all__ = ["MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
+#: The largest truth clock offset [s] the calibration fits: a GPS's latency or a
+#: command's lag is a fraction of a second; beyond this the clocks differ, and the truth
+#: file's times need shifting (``--truth-time-offset``).
+MAX_TIME_OFFSET = 2.0
 
 
 @dataclass(frozen=True)
 class _Run:
-    """The truth fixes of one run inside its log's span: fix j lies between log rows
-    row[j] and row[j] + 1, a fraction w[j] of the way."""
+    """The truth fixes of one run inside its log's span (less ``margin`` [s] at each end)."""
 
-    row: NDArray[np.intp]  # (n,)
-    w: NDArray[np.float64]  # (n,)
+    log_t: NDArray[np.float64]  # (N,) the log's times [s]
     xy: NDArray[np.float64]  # (n, 2) truth positions [m]
     t: NDArray[np.float64]  # (n,) fix times [s]
     outside: int  # fixes outside the log's span
 
+    def at(self, delta: float) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
+        """Where each fix falls on the log's clock at offset ``delta``: fix j lies between
+        log rows row[j] and row[j] + 1, a fraction w[j] of the way; span[j] [s] is that
+        segment's length (0 where two rows share a time)."""
+        t, tau = self.log_t, self.t - delta
+        row = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, t.size - 2)
+        span = t[row + 1] - t[row]
+        w = np.divide(tau - t[row], span, out=np.zeros_like(tau), where=span > 0)
+        return row.astype(np.intp), w, span
 
-def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth]) -> list[_Run]:
+
+def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margin: float) -> list[_Run]:
     if len(runs) != len(truths):
         raise InputError(f"give one truth per run: {len(runs)} run(s), {len(truths)} truth(s)")
     out = []
     for log, truth in zip(runs, truths, strict=True):
         t = np.asarray(log.t, dtype=float)
-        inside = (truth.t >= t[0]) & (truth.t <= t[-1])
+        inside = (truth.t >= t[0] + margin) & (truth.t <= t[-1] - margin)
         tau = truth.t[inside]
         if tau.size < 4:
+            within = f" (less {margin:g} s at each end, the largest clock offset fitted)" if margin else ""
             raise InputError(f"only {tau.size} truth fixes lie inside the log's time span "
-                             f"({t[0]:.6g}..{t[-1]:.6g} s; the truth covers {truth.t[0]:.6g}.."
-                             f"{truth.t[-1]:.6g} s): check the clocks (--truth-time-unit)",
-                             source=truth.source)
-        row = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, t.size - 2)
-        span = t[row + 1] - t[row]
-        w = np.divide(tau - t[row], span, out=np.zeros_like(tau), where=span > 0)
-        out.append(_Run(row.astype(np.intp), w, truth.xy[inside], tau, int(np.count_nonzero(~inside))))
+                             f"({t[0]:.6g}..{t[-1]:.6g} s{within}; the truth covers {truth.t[0]:.6g}.."
+                             f"{truth.t[-1]:.6g} s): check the clocks (--truth-time-unit, "
+                             "--truth-time-offset)", source=truth.source)
+        out.append(_Run(t, truth.xy[inside], tau, int(np.count_nonzero(~inside))))
     return out
 
 
 class _Problem:
     """Position residuals of all runs over their first ``horizon`` fraction, for
-    q = (free robot parameters, then x₀, y₀, θ₀ of each run)."""
+    q = (free robot parameters, the truth's clock offset δ if fitted, then x₀, y₀, θ₀ of
+    each run)."""
 
     def __init__(self, model: CalibrationModel, runs: list[_Run], logs: Sequence[OdometryLog],
-                 free: NDArray[np.intp], method: Method):
+                 free: NDArray[np.intp], method: Method, fit_time_offset: bool):
         self.model, self.runs, self.free, self.method = model, runs, free, method
         self.p_fixed = model.p0.copy()
         self.t0 = [float(log.t[0]) for log in logs]
         self.t1 = [float(log.t[-1]) for log in logs]
         self.horizon = 1.0
+        self.n_global = free.size + int(fit_time_offset)  # parameters shared by every run
+        self.fit_time_offset = fit_time_offset
 
-    def split(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    def split(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
+        """(robot parameters, clock offset δ [s], start poses (runs, 3))."""
         p = self.p_fixed.copy()
         p[self.free] = q[: self.free.size]
-        return p, q[self.free.size:].reshape(-1, 3)
+        delta = float(q[self.free.size]) if self.fit_time_offset else 0.0
+        return p, delta, q[self.n_global:].reshape(-1, 3)
 
     def used(self, i: int) -> NDArray[np.bool_]:
         run = self.runs[i]
         return run.t <= self.t0[i] + self.horizon * (self.t1[i] - self.t0[i])
 
-    def at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_]) -> NDArray[np.float64]:
-        """Per-row ``values`` (N, ...) interpolated linearly at run i's kept fixes."""
-        run = self.runs[i]
-        row, w = run.row[keep], run.w[keep]
+    def at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_],
+                 delta: float = 0.0) -> NDArray[np.float64]:
+        """Per-row ``values`` (N, ...) interpolated linearly at run i's kept fixes, each
+        taken at log time (its stamp − ``delta``)."""
+        row, w, _ = self.runs[i].at(delta)
+        row, w = row[keep], w[keep]
         w = w.reshape(w.shape + (1,) * (values.ndim - 1))
         return (1.0 - w) * values[row] + w * values[row + 1]
 
+    def velocity_at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_],
+                          delta: float) -> NDArray[np.float64]:
+        """d/dt of the linear interpolation of ``values`` (N, 2) at run i's kept fixes (zero
+        inside a segment of zero length)."""
+        row, _, span = self.runs[i].at(delta)
+        row, span = row[keep], span[keep]
+        step = values[row + 1] - values[row]
+        rate = np.divide(1.0, span, out=np.zeros_like(span), where=span > 0)
+        return step * rate[:, None]
+
     def residuals_and_jacobian(self, q: NDArray[np.float64]
                                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        p, starts = self.split(q)
+        p, delta, starts = self.split(q)
         n_free = self.free.size
         res, jac = [], []
         for i, run in enumerate(self.runs):
@@ -122,11 +161,14 @@ class _Problem:
             poses, dposes = integrate_with_sensitivity(dd, dth, ddd[:, self.free], ddt[:, self.free],
                                                        starts[i], self.method)
             keep = self.used(i)
-            pos = self.at_fixes(poses[:, :2], i, keep)
+            pos = self.at_fixes(poses[:, :2], i, keep, delta)
             r = pos - run.xy[keep]
             j = np.zeros((pos.shape[0], 2, q.size))
-            j[:, :, :n_free] = self.at_fixes(dposes[:, :2], i, keep)
-            col = n_free + 3 * i
+            j[:, :, :n_free] = self.at_fixes(dposes[:, :2], i, keep, delta)
+            if self.fit_time_offset:
+                # a later δ compares each fix with the odometry earlier: −velocity there
+                j[:, :, n_free] = -self.velocity_at_fixes(poses[:, :2], i, keep, delta)
+            col = self.n_global + 3 * i
             j[:, 0, col] = 1.0
             j[:, 1, col + 1] = 1.0
             # a turn of the start by dθ₀ swings every position about the start
@@ -153,18 +195,21 @@ class _Problem:
 _MAX_STEERING_OFFSET = 0.5  # rad: beyond this the steering channel is wrong, not offset
 
 
-def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int
+def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_time_offset: bool
             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Plausible ranges of q = (free robot parameters, start poses): a scale or length
-    within half to twice the robot file's value (a factor 2 is a wrong robot file, not a
-    calibration), a steering offset within ±0.5 rad; start poses free."""
-    lower = np.full(free.size + 3 * n_runs, -np.inf)
-    upper = np.full(free.size + 3 * n_runs, np.inf)
+    """Plausible ranges of q = (free robot parameters, clock offset, start poses): a scale
+    or length within half to twice the robot file's value (a factor 2 is a wrong robot
+    file, not a calibration), a steering offset within ±0.5 rad, the clock offset within
+    ±:data:`MAX_TIME_OFFSET`; start poses free."""
+    n = free.size + int(fit_time_offset) + 3 * n_runs
+    lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
+    if fit_time_offset:
+        lower[free.size], upper[free.size] = -MAX_TIME_OFFSET, MAX_TIME_OFFSET
     for j, k in enumerate(free):
         value = float(model.p0[k])
         if model.names[k] == "steering_offset":
             lower[j], upper[j] = value - _MAX_STEERING_OFFSET, value + _MAX_STEERING_OFFSET
-        elif value > 0:
+        elif model.positive[k]:  # a scale or a length (an offset or bias may be any sign)
             lower[j], upper[j] = value / 2, value * 2
     return lower, upper
 
@@ -184,11 +229,12 @@ def _first_horizon(problem: _Problem, min_fixes: int) -> float:
 def calibrate_positions(
     runs: Sequence[OdometryLog],
     truths: Sequence[Truth],
-    robot: DiffDrive | Tricycle | Car,
+    robot: CalibratedRobot,
     *,
     fixed: Collection[str] = (),
     min_first_fixes: int = MIN_FIRST_FIXES,
     method: Method = "exact",
+    fit_time_offset: bool = False,
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to truth positions on the truth's own clock.
 
@@ -198,41 +244,50 @@ def calibrate_positions(
         The logs (their own ground truth, if any, is not used).
     truths : sequence of Truth
         One per run (:class:`odomkit.truth.Truth`; heading, if any, is not used).
-    robot : DiffDrive | Tricycle | Car
+    robot : DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
         Nominal parameters, the starting point: diff (c_left, c_right, c_wheel_base),
-        tricycle (c_scale, steering_offset, wheel_to_axle), car (c_scale,
+        tricycle (c_scale, steering_offset, wheel_to_axle), unicycle (c_scale,
+        yaw_rate_bias, yaw_rate_scale), gyro (m_per_tick, held where no log has ticks;
+        gyro_bias, gyro_scale), car (c_scale,
         steering_offset, wheel_base).
     fixed : collection of str
         Parameter names held at the robot's values.
     min_first_fixes : int
         Fewest fixes per run in the first stage of the growing horizon.
     method : {"exact", "midpoint", "euler"}
+    fit_time_offset : bool
+        Fit the truth's clock offset δ [s] too, one for all runs (a fix stamped t is the pose
+        at log time t − δ), within ±:data:`MAX_TIME_OFFSET`; fixes within that of either
+        end of a log are left out.
 
     Returns
     -------
     ExactCalibration
         ``source = "positions"``; ``values``, ``std_errors``, ``cov`` of all the robot's
-        parameters (a fixed one has zero variance); ``notes`` list the stages and each
-        run's fitted start pose.
+        parameters (a fixed one has zero variance); ``time_offset`` and
+        ``time_offset_std_error`` [s] when fitted; ``notes`` list the stages and each run's
+        fitted start pose.
     """
     if len(runs) < 1:
         raise InputError("calibration needs at least one run")
-    if not isinstance(robot, DiffDrive | Tricycle | Car):
-        raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle and Car "
-                         f"robots, got {type(robot).__name__}")
+    if not isinstance(robot, CALIBRATED_ROBOTS):
+        raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle, Car, Unicycle "
+                         f"and GyroOdometry robots, got {type(robot).__name__}")
     min_first_fixes = validate.positive_int(min_first_fixes, "min_first_fixes")
     model = calibration_model(robot, runs)
     unknown = sorted(set(fixed) - set(model.names))
     if unknown:
         raise ModelError(f"fixed names {', '.join(unknown)}; the parameters are {', '.join(model.names)}")
+    notes: list[str] = [f"{name} held at the robot file's value: {why}"
+                        for name, why in model.unobservable.items() if name not in fixed]
+    fixed = set(fixed) | set(model.unobservable)
     free = np.array([k for k, n in enumerate(model.names) if n not in fixed], dtype=np.intp)
-    with_truth = _runs_with_truth(runs, truths)
-    problem = _Problem(model, with_truth, runs, free, method)
-    notes: list[str] = []
+    with_truth = _runs_with_truth(runs, truths, MAX_TIME_OFFSET if fit_time_offset else 0.0)
+    problem = _Problem(model, with_truth, runs, free, method, fit_time_offset)
 
     horizon = _first_horizon(problem, min_first_fixes)
-    q = np.concatenate([model.p0[free], problem.align_starts(model.p0)])
-    lower, upper = _bounds(model, free, len(with_truth))
+    q = np.concatenate([model.p0[free], [0.0] if fit_time_offset else [], problem.align_starts(model.p0)])
+    lower, upper = _bounds(model, free, len(with_truth), fit_time_offset)
     while True:
         n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(with_truth)))
         if n_res > q.size:
@@ -253,14 +308,16 @@ def calibrate_positions(
             break
         horizon = min(1.0, 2 * horizon)
         problem.horizon = horizon
-    at_bound = [model.names[k] for j, k in enumerate(free)
+    names = [*(model.names[k] for k in free), *(["truth time offset"] if fit_time_offset else [])]
+    at_bound = [name for j, name in enumerate(names)
                 if np.isclose(q[j], lower[j], rtol=1e-6, atol=0.0)
                 or np.isclose(q[j], upper[j], rtol=1e-6, atol=0.0)]
     if at_bound:
         raise ModelError(f"the calibration ran to the edge of the plausible range for "
                          f"{', '.join(at_bound)} (half to twice the robot file's value; steering "
-                         f"offset ±{_MAX_STEERING_OFFSET} rad): check the channel signs, the robot "
-                         "file and the truth's clock, and that the runs turn both ways")
+                         f"offset ±{_MAX_STEERING_OFFSET} rad; clock offset ±{MAX_TIME_OFFSET:g} s): check "
+                         "the channel signs, the robot file and the truth's clock, and that the runs "
+                         "turn both ways")
     res, jac = problem.residuals_and_jacobian(q)
     dof = res.size - q.size
     if dof <= 0:
@@ -268,7 +325,7 @@ def calibrate_positions(
                          "(the robot's and each run's start pose): give longer runs or more truth")
     var_res = float(res @ res) / dof
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
-    p, starts = problem.split(q)
+    p, delta, starts = problem.split(q)
     cov = np.zeros((len(model.names), len(model.names)))
     cov[np.ix_(free, free)] = cov_q[: free.size, : free.size]
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -276,8 +333,7 @@ def calibrate_positions(
         corr = cov / np.outer(std, std)
     corr[~np.isfinite(corr)] = 0.0
     np.fill_diagonal(corr, np.where(std > 0, 1.0, 0.0))
-    scale_index = [0, 1, 2] if isinstance(robot, DiffDrive) else [0, 2]
-    if np.any(p[scale_index] <= 0):
+    if np.any(p[np.asarray(model.positive)] <= 0):
         raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; check the "
                          "channel signs and the robot file")
     for log, start, run in zip(runs, starts, with_truth, strict=True):
@@ -290,6 +346,9 @@ def calibrate_positions(
     return ExactCalibration(
         robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov, corr=corr,
         residual_variance=var_res, n_residuals=int(res.size), n_runs=len(runs), source="positions",
-        scale_fixed="c_scale" in fixed or {"c_left", "c_right"} <= set(fixed),
+        scale_fixed=bool({"c_scale", "m_per_tick"} & fixed) or {"c_left", "c_right"} <= fixed,
         scale_sensitivity=sensitivity, notes=tuple(notes),
+        time_offset=delta if fit_time_offset else None,
+        time_offset_std_error=(float(np.sqrt(max(cov_q[free.size, free.size], 0.0))) if fit_time_offset
+                               else None),
     )

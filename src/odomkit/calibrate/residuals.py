@@ -3,10 +3,11 @@ set of runs and their analytic Jacobian with respect to the robot's parameters.
 
 * :func:`integrate_with_sensitivity` dead-reckons body steps and, in the same vectorised
   pass, the derivative of every pose with respect to the parameters;
-* :class:`DiffCalibrationModel`, :class:`TricycleCalibrationModel` and
-  :class:`CarCalibrationModel` map a parameter vector p onto the body steps of each run
+* :class:`DiffCalibrationModel`, :class:`TricycleCalibrationModel`,
+  :class:`CarCalibrationModel`, :class:`UnicycleCalibrationModel` and
+  :class:`GyroCalibrationModel` map a parameter vector p onto the body steps of each run
   (and their derivatives) and back onto a robot; :func:`calibration_model` picks the one
-  for a robot;
+  for a robot (:data:`CALIBRATED_ROBOTS`);
 * :class:`ResidualProblem` compares the integrated poses with the ground truth (endpoints or whole
   trajectories), weights or whitens the residuals and stacks them, with their Jacobian,
   over all runs for :func:`scipy.optimize.least_squares`; :func:`endpoint_whitening` gives
@@ -32,12 +33,19 @@ from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.kinematics import Method, body_steps, car_body_jacobian, car_body_steps, step_jacobians
 from odomkit.log import OdometryLog
-from odomkit.robot import Car, DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, GyroOdometry, Tricycle, Unicycle
 from odomkit.track import initial_pose
 
-__all__ = ["CalibrationModel", "CarCalibrationModel", "DiffCalibrationModel", "ResidualProblem",
-           "TricycleCalibrationModel", "calibration_model", "endpoint_whitening",
+__all__ = ["CALIBRATED_ROBOTS", "CalibratedRobot", "CalibrationModel", "CarCalibrationModel",
+           "DiffCalibrationModel", "GyroCalibrationModel", "ResidualProblem", "TricycleCalibrationModel",
+           "UnicycleCalibrationModel", "calibration_model", "endpoint_whitening",
            "integrate_with_sensitivity"]
+
+CalibratedRobot: TypeAlias = DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
+"""A robot whose systematic parameters the exact calibration fits."""
+
+CALIBRATED_ROBOTS = (DiffDrive, Tricycle, Car, Unicycle, GyroOdometry)
+"""The robot classes of :data:`CalibratedRobot`, for ``isinstance`` checks."""
 
 
 def integrate_with_sensitivity(
@@ -103,6 +111,7 @@ class DiffCalibrationModel:
     """p = (c_left, c_right, c_wheel_base) of a DiffDrive."""
 
     names = ("c_left", "c_right", "c_wheel_base")
+    positive = (True, True, True)
 
     def __init__(self, robot: DiffDrive, runs: Sequence[OdometryLog]):
         self.robot = robot
@@ -110,6 +119,7 @@ class DiffCalibrationModel:
         steps = [body_steps(raw, log) for log in runs]
         self.raw = [(s.inputs["d_left"], s.inputs["d_right"]) for s in steps]
         self.p0 = np.array([robot.c_left, robot.c_right, robot.c_wheel_base])
+        self.unobservable: dict[str, str] = {}
 
     def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
         a, r = self.raw[i]
@@ -137,6 +147,7 @@ class TricycleCalibrationModel:
     """p = (c_scale, steering_offset, wheel_to_axle) of a Tricycle."""
 
     names = ("c_scale", "steering_offset", "wheel_to_axle")
+    positive = (True, False, True)
 
     def __init__(self, robot: Tricycle, runs: Sequence[OdometryLog]):
         self.robot = robot
@@ -144,6 +155,7 @@ class TricycleCalibrationModel:
         steps = [body_steps(raw, log) for log in runs]
         self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
         self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_to_axle])
+        self.unobservable: dict[str, str] = {}
 
     def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
         s0, a0 = self.raw[i]
@@ -169,6 +181,7 @@ class CarCalibrationModel:
     are geometry, known)."""
 
     names = ("c_scale", "steering_offset", "wheel_base")
+    positive = (True, False, True)
 
     def __init__(self, robot: Car, runs: Sequence[OdometryLog]):
         self.robot = robot
@@ -176,6 +189,7 @@ class CarCalibrationModel:
         steps = [body_steps(raw, log) for log in runs]
         self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
         self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_base])
+        self.unobservable: dict[str, str] = {}
 
     def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
         s0, a0 = self.raw[i]
@@ -198,20 +212,132 @@ class CarCalibrationModel:
         return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-CalibrationModel: TypeAlias = DiffCalibrationModel | TricycleCalibrationModel | CarCalibrationModel
-"""The parameter-to-body-step map of a robot the exact calibration supports."""
+def _yaw_rate_steps(w: NDArray[np.float64], dt: NDArray[np.float64], bias: float, scale: float
+                    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Δθ = scale·(ω − bias)·Δt of a measured yaw rate ω held from row k over step k, and its
+    derivatives with respect to bias and scale."""
+    rate = w - bias
+    return scale * rate * dt, -scale * dt, rate * dt
 
 
-def calibration_model(robot: DiffDrive | Tricycle | Car, runs: Sequence[OdometryLog]) -> CalibrationModel:
-    """The :data:`CalibrationModel` of ``robot`` over ``runs`` (ModelError if unsupported)."""
+class UnicycleCalibrationModel:
+    """p = (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale) of a Unicycle.
+
+    Body velocities (:func:`odomkit.kinematics.body_steps` for a unicycle, Kelly's
+    integrated heading with velocities measured at the body):
+    Δd_k = c_scale·s_k (s_k the step's ``dist`` increment [m], or ``speed``_k·Δt_k with the
+    speed held from row k) and Δθ_k = yaw_rate_scale·(ω_k − yaw_rate_bias)·Δt_k.
+    """
+
+    names = ("c_scale", "yaw_rate_bias", "yaw_rate_scale")
+    positive = (True, False, True)
+
+    def __init__(self, robot: Unicycle, runs: Sequence[OdometryLog]):
+        self.robot = robot
+        raw = replace(robot, c_scale=1.0, yaw_rate_bias=0.0, yaw_rate_scale=1.0)
+        steps = [body_steps(raw, log) for log in runs]
+        # (travel [m] at c_scale 1, measured yaw rate [rad/s] held over the step, Δt [s])
+        self.raw = [(s.dd, s.inputs["yaw_rate"], s.dt) for s in steps]
+        self.p0 = np.array([robot.c_scale, robot.yaw_rate_bias, robot.yaw_rate_scale])
+        self.unobservable: dict[str, str] = {}
+
+    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
+        s0, w, dt = self.raw[i]
+        dtheta, dth_bias, dth_scale = _yaw_rate_steps(w, dt, p[1], p[2])
+        zero = np.zeros_like(s0)
+        ddd = np.stack([s0, zero, zero], axis=1)
+        ddt = np.stack([zero, dth_bias, dth_scale], axis=1)
+        return p[0] * s0, dtheta, ddd, ddt
+
+    def make_robot(self, p: NDArray[np.float64]) -> Unicycle:
+        return replace(self.robot, c_scale=float(p[0]), yaw_rate_bias=float(p[1]),
+                       yaw_rate_scale=float(p[2]))
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Keep c_scale; fit (yaw_rate_bias, yaw_rate_scale)."""
+        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+
+
+class GyroCalibrationModel:
+    """p = (m_per_tick [m], gyro_bias [rad/s], gyro_scale) of a GyroOdometry.
+
+    Kelly's integrated heading (:func:`odomkit.kinematics.body_steps` for a gyro robot):
+    Δd_k = m_per_tick·n_k for a ``ticks`` increment n_k, the ``dist`` increment or
+    ``speed``_k·Δt_k otherwise (metres already: m_per_tick does not enter), and
+    Δθ_k = gyro_scale·(ω_k − gyro_bias)·Δt_k with the gyro rate ω_k held from row k.
+    When no run has a ``ticks`` channel, m_per_tick changes nothing: it is listed in
+    :attr:`unobservable` and its Jacobian column is zero.
+    """
+
+    names = ("m_per_tick", "gyro_bias", "gyro_scale")
+    positive = (True, False, True)
+
+    def __init__(self, robot: GyroOdometry, runs: Sequence[OdometryLog]):
+        self.robot = robot
+        raw = replace(robot, m_per_tick=1.0, gyro_bias=0.0, gyro_scale=1.0)
+        steps = [body_steps(raw, log) for log in runs]
+        # body_steps reads ticks before dist and speed (kinematics._travel)
+        self.ticked = ["ticks" in log.channels for log in runs]
+        self.raw = [(s.dd, s.inputs["yaw_rate"], s.dt) for s in steps]
+        self.p0 = np.array([robot.m_per_tick, robot.gyro_bias, robot.gyro_scale])
+        self.unobservable: dict[str, str] = {}
+        if not any(self.ticked):
+            self.unobservable["m_per_tick"] = ("it converts a ticks channel only and the logs carry "
+                                               "dist [m] or speed [m/s], metres already")
+
+    def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
+        s0, w, dt = self.raw[i]
+        dtheta, dth_bias, dth_scale = _yaw_rate_steps(w, dt, p[1], p[2])
+        zero = np.zeros_like(s0)
+        if self.ticked[i]:
+            dd, dd_scale = p[0] * s0, s0
+        else:
+            dd, dd_scale = s0, zero
+        ddd = np.stack([dd_scale, zero, zero], axis=1)
+        ddt = np.stack([zero, dth_bias, dth_scale], axis=1)
+        return dd, dtheta, ddd, ddt
+
+    def make_robot(self, p: NDArray[np.float64]) -> GyroOdometry:
+        return replace(self.robot, m_per_tick=float(p[0]), gyro_bias=float(p[1]), gyro_scale=float(p[2]))
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Keep m_per_tick; fit (gyro_bias, gyro_scale)."""
+        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+
+
+CalibrationModel: TypeAlias = (DiffCalibrationModel | TricycleCalibrationModel | CarCalibrationModel
+                               | UnicycleCalibrationModel | GyroCalibrationModel)
+"""The parameter-to-body-step map of a robot the exact calibration supports.
+
+Every model has ``names`` (3 parameter names), ``positive`` (which of them must stay
+> 0: scales and lengths), ``p0`` (the robot's values), ``unobservable`` (name -> why the
+runs' channels do not depend on it; such a parameter's Jacobian column is zero, so a fit
+must hold it), ``steps(p, i)`` -> (Δd, Δθ, ∂Δd/∂p, ∂Δθ/∂p) of run i, shapes (M,), (M,),
+(M, 3), (M, 3), ``make_robot(p)`` and ``fixed_scale_map(p0)`` -> (offset, T) with
+p = offset + T q keeping the speed scale.
+"""
+
+
+def calibration_model(robot: CalibratedRobot, runs: Sequence[OdometryLog]) -> CalibrationModel:
+    """The :data:`CalibrationModel` of ``robot`` over ``runs`` (ModelError if unsupported).
+
+    Parameters fitted: DiffDrive (c_left, c_right, c_wheel_base); Tricycle (c_scale,
+    steering_offset [rad], wheel_to_axle [m]); Car (c_scale, steering_offset [rad],
+    wheel_base [m]); Unicycle (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale);
+    GyroOdometry (m_per_tick [m], gyro_bias [rad/s], gyro_scale).
+    """
     if isinstance(robot, DiffDrive):
         return DiffCalibrationModel(robot, runs)
     if isinstance(robot, Tricycle):
         return TricycleCalibrationModel(robot, runs)
     if isinstance(robot, Car):
         return CarCalibrationModel(robot, runs)
-    raise ModelError("exact calibration supports DiffDrive, Tricycle and Car robots, "
-                     f"got {type(robot).__name__}")
+    if isinstance(robot, Unicycle):
+        return UnicycleCalibrationModel(robot, runs)
+    if isinstance(robot, GyroOdometry):
+        return GyroCalibrationModel(robot, runs)
+    raise ModelError("exact calibration supports DiffDrive, Tricycle, Car, Unicycle and GyroOdometry "
+                     f"robots, got {type(robot).__name__}")
 
 
 class ResidualProblem:

@@ -1,6 +1,6 @@
 """The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
 and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
---truth-heading-sigma --truth-time-sigma --max-gap``, parsed into
+--truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap``, parsed into
 :class:`odomkit.workflows.truth.TruthOptions`."""
 
 from __future__ import annotations
@@ -20,7 +20,7 @@ if TYPE_CHECKING:
 __all__ = [
     "MaxGapOption", "parse_initial_cov", "TRUTH_FLAGS", "truth_options", "TruthColumnsOption",
     "TruthFormatOption", "TruthHeadingSigmaOption", "TruthListOption", "TruthOption", "TruthSigmaOption",
-    "TruthTimeSigmaOption", "TruthTimeUnitOption",
+    "TruthTimeOffsetOption", "TruthTimeSigmaOption", "TruthTimeUnitOption",
     "with_truth_options",
 ]
 
@@ -45,6 +45,10 @@ TruthHeadingSigmaOption = Annotated[float | None, typer.Option(
 TruthTimeSigmaOption = Annotated[float | None, typer.Option(
     "--truth-time-sigma", help="Standard deviation of the truth fixes' times against the log's clock "
     "[s] (jitter, latency); default as --truth-sigma's.")]
+TruthTimeOffsetOption = Annotated[float | None, typer.Option(
+    "--truth-time-offset", help="How late the truth's clock runs against the log's [s]: a fix stamped t "
+    "is the pose at log time t - OFFSET. Default: the robot file's [truth] time_offset, else 0; "
+    "calibrate --truth fits it if not given.")]
 MaxGapOption = Annotated[float, typer.Option(
     "--max-gap", help="Rows inside a truth gap longer than this [s] (and than twice the "
                       "truth's median spacing) are left out and counted (0: no limit).")]
@@ -52,8 +56,8 @@ MaxGapOption = Annotated[float, typer.Option(
 
 def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float | None,
                   max_gap: float, heading_sigma: float | None = None,
-                  time_sigma: float | None = None) -> TruthOptions:
-    """The parsed truth options (``--max-gap 0`` means no limit; a noise not given is None)."""
+                  time_sigma: float | None = None, time_offset: float | None = None) -> TruthOptions:
+    """The parsed truth options (``--max-gap 0`` means no limit; a noise or offset not given is None)."""
     from odomkit.workflows.truth import TruthOptions
 
     for flag, value, unit in (("--truth-sigma", sigma, "metres"), ("--truth-heading-sigma", heading_sigma,
@@ -63,7 +67,10 @@ def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: 
             raise InputError(f"{flag} must be a non-negative number of {unit}, got {value!r}")
     if not (math.isfinite(max_gap) and max_gap >= 0):
         raise InputError(f"--max-gap must be a non-negative number of seconds, got {max_gap!r}")
-    return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma, time_sigma)
+    if time_offset is not None and not math.isfinite(time_offset):
+        raise InputError(f"--truth-time-offset must be a finite number of seconds, got {time_offset!r}")
+    return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma, time_sigma,
+                        time_offset)
 
 
 #: The truth flags besides ``--truth`` itself (one file, or one per log, as the command
@@ -72,14 +79,15 @@ TRUTH_FLAGS: tuple[Flag, ...] = (
     ("truth_format", TruthFormatOption, "auto"), ("truth_columns", TruthColumnsOption, None),
     ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, None),
     ("truth_heading_sigma", TruthHeadingSigmaOption, None), ("truth_time_sigma", TruthTimeSigmaOption, None),
-    ("max_gap", MaxGapOption, 0.5),
+    ("truth_time_offset", TruthTimeOffsetOption, None), ("max_gap", MaxGapOption, 0.5),
 )
 #: Decorator: the command takes :data:`TRUTH_FLAGS` and is called with ``truth_base``, the
 #: parsed :class:`~odomkit.workflows.truth.TruthOptions` without a path
 #: (:func:`odomkit.cli.shared_flags.with_flags`).
 with_truth_options = with_flags(TRUTH_FLAGS, "truth_base", lambda values: truth_options(
     None, values["truth_format"], values["truth_columns"], values["truth_time_unit"],
-    values["truth_sigma"], values["max_gap"], values["truth_heading_sigma"], values["truth_time_sigma"]))
+    values["truth_sigma"], values["max_gap"], values["truth_heading_sigma"], values["truth_time_sigma"],
+    values["truth_time_offset"]))
 
 
 def parse_initial_cov(text: str | None) -> list[list[float]] | None:

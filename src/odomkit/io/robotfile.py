@@ -70,7 +70,7 @@ from odomkit.robot import (
     robot_type_name,
 )
 
-__all__ = ["TRUTH_KEYS", "read_robot", "read_truth_noise", "robot_to_dict", "write_robot"]
+__all__ = ["TRUTH_KEYS", "TRUTH_SIGMAS", "read_robot", "read_truth_table", "robot_to_dict", "write_robot"]
 
 
 class _Fields:
@@ -265,12 +265,18 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
     return tuple(models)
 
 
-#: The ``[truth]`` table's keys: the noise of the ground truth a robot's noise was fitted
-#: against (``odomkit fit-noise`` writes them), σ of a truth position per axis [m], of a
-#: truth heading [rad] and of a fix's time against the log's clock [s]. Not the robot's:
-#: ``evaluate`` and ``report`` add them to each scored window end where no
-#: ``--truth-sigma``/``--truth-heading-sigma``/``--truth-time-sigma`` says otherwise.
-TRUTH_KEYS = ("sigma", "heading_sigma", "time_sigma")
+#: The ``[truth]`` table's keys: what the ground truth a robot was calibrated and fitted
+#: against adds, not the robot's own. ``sigma``, ``heading_sigma``, ``time_sigma``: the
+#: truth's noise (``odomkit fit-noise`` writes them), σ of a truth position per axis [m], of
+#: a truth heading [rad] and of a fix's time against the log's clock [s]; ``evaluate`` and
+#: ``report`` add them to each scored window end where no ``--truth-sigma``/
+#: ``--truth-heading-sigma``/``--truth-time-sigma`` says otherwise. ``time_offset`` [s]: how
+#: late the truth's clock runs against the log's (a fix stamped t is the pose at log time
+#: t − time_offset; ``odomkit calibrate --truth`` fits it); every command reading truth with
+#: this robot file applies it where no ``--truth-time-offset`` says otherwise.
+TRUTH_KEYS = ("sigma", "heading_sigma", "time_sigma", "time_offset")
+#: The keys of :data:`TRUTH_KEYS` that are standard deviations (never negative).
+TRUTH_SIGMAS = ("sigma", "heading_sigma", "time_sigma")
 
 
 def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
@@ -291,14 +297,14 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     return robot, noise
 
 
-def read_truth_noise(path: str | Path) -> dict[str, float]:
+def read_truth_table(path: str | Path) -> dict[str, float]:
     """A robot file's ``[truth]`` table (:data:`TRUTH_KEYS`), empty when it has none."""
     f = _Fields(_document(Path(path)).get("truth", {}), "truth", str(path))
     out = {key: f.number(key) for key in TRUTH_KEYS if f.has(key)}
     f.check_unused()
-    for key, value in out.items():
-        if value < 0:
-            raise InputError(f"[truth] {key} must be >= 0, got {value!r}", source=str(path))
+    for key in TRUTH_SIGMAS:
+        if out.get(key, 0.0) < 0:
+            raise InputError(f"[truth] {key} must be >= 0, got {out[key]!r}", source=str(path))
     return out
 
 
@@ -325,8 +331,8 @@ def _document(path: Path) -> dict[str, Any]:
 
 
 def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
-                  truth_noise: Mapping[str, float] | None = None) -> dict[str, Any]:
-    """The TOML document of a robot (and noise, and the truth's noise: :data:`TRUTH_KEYS`),
+                  truth: Mapping[str, float] | None = None) -> dict[str, Any]:
+    """The TOML document of a robot (and noise, and the ``[truth]`` table: :data:`TRUTH_KEYS`),
     as written by :func:`write_robot`."""
     from dataclasses import asdict
 
@@ -341,15 +347,15 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
             else:
                 noise_table.update(model.to_dict())
         doc["noise"] = noise_table
-    if truth_noise:
-        doc["truth"] = {key: float(truth_noise[key]) for key in TRUTH_KEYS if key in truth_noise}
+    if truth:
+        doc["truth"] = {key: float(truth[key]) for key in TRUTH_KEYS if key in truth}
     return doc
 
 
 def write_robot(path: str | Path, robot: Robot, noise: tuple[NoiseModel, ...] = (),
-                overwrite: bool = False, truth_noise: Mapping[str, float] | None = None) -> Path:
+                overwrite: bool = False, truth: Mapping[str, float] | None = None) -> Path:
     """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
     path = Path(path)
     refuse_overwrite(path, overwrite=overwrite)
-    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth_noise)), encoding="utf-8")
+    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth)), encoding="utf-8")
     return path

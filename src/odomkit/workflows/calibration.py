@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -23,13 +24,14 @@ from odomkit.calibrate.realdata import (
     square_table,
     umbmark_from_runs,
 )
+from odomkit.calibrate.residuals import CALIBRATED_ROBOTS
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
-from odomkit.io.robotfile import read_robot, robot_to_dict, write_robot
+from odomkit.io.robotfile import read_robot, read_truth_table, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.progress import NO_PROGRESS, Progress, stage
-from odomkit.robot import Car, DiffDrive, Tricycle
+from odomkit.robot import DiffDrive, Tricycle
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, load_truth
@@ -140,6 +142,7 @@ def calibrate_files(
         raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
                          source=str(robot_path))
     runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    truth_table = read_truth_table(robot_path)  # kept in --out-robot; its offset refitted with --truth
     with numeric_guard("the calibration"):
         if method == "umbmark":
             assert side is not None and isinstance(robot, DiffDrive)
@@ -147,9 +150,9 @@ def calibrate_files(
             summary = um.to_dict()
             new_robot: Any = um.robot
         elif truth is not None:
-            if not isinstance(robot, DiffDrive | Tricycle | Car):
-                raise InputError("calibration from truth positions fits a diff, tricycle or car robot; "
-                                 f"the robot file describes a {robot.type_name!r} robot",
+            if not isinstance(robot, CALIBRATED_ROBOTS):
+                raise InputError("calibration from truth positions fits a diff, tricycle, car, unicycle or "
+                                 f"gyro robot; the robot file describes a {robot.type_name!r} robot",
                                  source=str(robot_path))
             truths = []
             for log, options in zip(runs, truth, strict=True):
@@ -157,9 +160,17 @@ def calibrate_files(
                 if found is None:
                     raise InputError("no truth: give --truth or a log with gt_* columns", source=log.source)
                 truths.append(found)
-            cal = calibrate_positions(runs, truths, robot)
+            # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
+            # truths above are already on the log's clock).
+            given = truth[0].time_offset
+            cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None)
             summary = cal.to_dict()
             new_robot = cal.robot
+            summary["truth_time_offset"] = (
+                {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
+                {**summary["truth_time_offset"], "fitted": True})
+            truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
+            truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
         else:
             cal = calibrate_exact(runs, robot, source or "endpoints", **exact_kwargs)  # type: ignore[arg-type]
             summary = cal.to_dict()
@@ -175,7 +186,8 @@ def calibrate_files(
     })
     outputs: dict[str, str] = {}
     if out_robot is not None:
-        outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite))
+        outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite,
+                                           truth=truth_table))
     if ros_yaml is not None:
         assert wheel_radius is not None
         twist = None

@@ -51,7 +51,7 @@ def check_file(
     from odomkit.io.robotfile import read_robot
     from odomkit.workflows.logs import LogOptions, load_log
     from odomkit.workflows.results import numeric_guard
-    from odomkit.workflows.truth import load_truth
+    from odomkit.workflows.truth import clock_from_robot, load_truth
 
     if spin is not None and spin not in ("ccw", "cw"):
         raise InputError(f"--spin must be ccw or cw, got {spin!r}")
@@ -76,7 +76,7 @@ def check_file(
             warnings.showwarning(item.message, item.category, item.filename, item.lineno)
     found_truth = None
     if log is not None:
-        found_truth = load_truth(truth, log)
+        found_truth = load_truth(clock_from_robot(robot_path, [truth])[0], log)
         if spin is not None and found_truth is not None:
             spin = None  # the truth says more than the spin's stated direction
         # Times of 1e200 s make the checks' least squares fail (SVD on inf): one line.

@@ -223,10 +223,11 @@ def fit_noise_files(
     """
     from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
     from odomkit.io.files import check_outputs
-    from odomkit.io.robotfile import TRUTH_KEYS, read_robot, write_robot
+    from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, write_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.results import check_result, numeric_guard
+    from odomkit.workflows.truth import clock_from_robot
 
     started = time.perf_counter()
     if not logs:
@@ -245,6 +246,9 @@ def fit_noise_files(
 
         check_plot_file(plot)
     robot, file_models = read_robot(robot_path)
+    # The truth's clock offset is the calibration's (the robot file's [truth] time_offset)
+    # unless --truth-time-offset gives it; it is applied, not fitted, here.
+    truths = clock_from_robot(robot_path, truths)
     models, default_fixed = models_to_fit(robot, file_models, kinds)
     options = log_options if log_options is not None else LogOptions()
     tasks = [LogTask(Path(p), t, options, robot, models, specs, min_travel, method)
@@ -285,8 +289,10 @@ def fit_noise_files(
                                    "log_likelihood": fit.log_likelihood,
                                    "lower bounds": [lo for lo, _ in fit.interval.values()]})
     truth_noise = fit.truth_noise or {}
-    written = write_robot(out, robot, fit.models, overwrite=overwrite,
-                          truth_noise={key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_KEYS})
+    truth_table = {key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_SIGMAS}
+    if truths[0].time_offset:
+        truth_table["time_offset"] = float(truths[0].time_offset)
+    written = write_robot(out, robot, fit.models, overwrite=overwrite, truth=truth_table)
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)
     result.update({

@@ -24,7 +24,7 @@ from odomkit.track import Track, dead_reckon_log
 from odomkit.truth import start_pose, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
-from odomkit.workflows.truth import TruthOptions, load_truth
+from odomkit.workflows.truth import TruthOptions, clock_from_robot, load_truth
 
 __all__ = ["TrackRun", "run_track"]
 
@@ -134,6 +134,7 @@ def run_track(
 
         check_plot_file(plot)
     robot, noise = read_robot(robot_path)
+    options = clock_from_robot(robot_path, [options])[0]  # the robot file's [truth] time_offset
     _refuse_covariance_flags(engine, cov0, with_covariance, bool(noise), robot_path)
     log = load_log(log_path, robot, log_options or LogOptions(), progress=progress)
     found = load_truth(options, log)

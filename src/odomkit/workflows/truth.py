@@ -14,7 +14,7 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.truth import Truth
 
-__all__ = ["load_truth", "resolved_truth", "TruthOptions", "truth_options_per_log"]
+__all__ = ["clock_from_robot", "load_truth", "resolved_truth", "TruthOptions", "truth_options_per_log"]
 
 
 @dataclass(frozen=True)
@@ -26,7 +26,10 @@ class TruthOptions:
     [s] its fixes' time against the log's clock. None means not given: zero, or the robot
     file's ``[truth]`` (what ``fit-noise`` fitted) where a command scores a robot file's
     covariance (:meth:`resolved`); ``fit-noise`` fits it. ``max_gap`` [s] is the longest gap between fixes to
-    interpolate across (None: no limit).
+    interpolate across (None: no limit). ``time_offset`` [s] is how late the truth's clock
+    runs against the log's: a fix stamped t is the pose at log time t − ``time_offset``
+    (``--truth-time-offset``; None: not given, the robot file's ``[truth] time_offset`` or
+    zero, and ``calibrate --truth`` fits it).
     """
 
     path: Path | None = None
@@ -37,10 +40,12 @@ class TruthOptions:
     max_gap: float | None = 0.5
     heading_sigma: float | None = None
     time_sigma: float | None = None
+    time_offset: float | None = None
 
     def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
-        """These options with each truth noise not given taken from ``defaults`` (a robot
-        file's ``[truth]``: ``sigma``, ``heading_sigma``, ``time_sigma``), else zero."""
+        """These options with each truth noise and the clock offset not given taken from
+        ``defaults`` (a robot file's ``[truth]``: ``sigma``, ``heading_sigma``, ``time_sigma``,
+        ``time_offset``), else zero."""
         found = defaults or {}
 
         def pick(given: float | None, key: str) -> float:
@@ -48,7 +53,8 @@ class TruthOptions:
 
         return replace(self, sigma=pick(self.sigma, "sigma"),
                        heading_sigma=pick(self.heading_sigma, "heading_sigma"),
-                       time_sigma=pick(self.time_sigma, "time_sigma"))
+                       time_sigma=pick(self.time_sigma, "time_sigma"),
+                       time_offset=pick(self.time_offset, "time_offset"))
 
     @property
     def held(self) -> dict[str, float]:
@@ -61,7 +67,8 @@ class TruthOptions:
 
 
 def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth | None:
-    """The truth file of ``options``, else the log's own ground truth, else None."""
+    """The truth file of ``options``, else the log's own ground truth, else None; its clock
+    moved onto the log's by ``options.time_offset`` (t − offset)."""
     from odomkit.io.truth import read_truth
     from odomkit.truth import truth_from_log
 
@@ -72,6 +79,8 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     if found is None:
         return None
     truth: Truth = found
+    if options.time_offset:
+        truth = replace(truth, t=truth.t - options.time_offset)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
@@ -81,10 +90,20 @@ def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> l
     """``options`` with each truth noise not given taken from the robot file's ``[truth]``
     (the noise of the truth its noise was fitted against), else zero: for scoring that
     robot's covariance against a truth (:meth:`TruthOptions.resolved`)."""
-    from odomkit.io.robotfile import read_truth_noise
+    from odomkit.io.robotfile import read_truth_table
 
-    defaults = read_truth_noise(robot_path)
+    defaults = read_truth_table(robot_path)
     return [o.resolved(defaults) for o in options]
+
+
+def clock_from_robot(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
+    """``options`` with the truth's clock offset, where not given, taken from the robot
+    file's ``[truth] time_offset`` (what ``calibrate --truth`` fitted), else zero; the truth's
+    noise is left as given (for ``fit-noise``, which fits what is not given, and ``track``)."""
+    from odomkit.io.robotfile import read_truth_table
+
+    offset = read_truth_table(robot_path).get("time_offset", 0.0)
+    return [o if o.time_offset is not None else replace(o, time_offset=offset) for o in options]
 
 
 def truth_options_per_log(options: TruthOptions, paths: list[Path], logs: int) -> list[TruthOptions]:
