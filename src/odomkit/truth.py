@@ -23,7 +23,8 @@ from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "MAX_HEADING_SIGMA",
-           "MAX_RESIDUAL_SIGMAS", "start_pose", "Truth", "truth_at", "truth_from_log", "TruthSamples"]
+           "MAX_RESIDUAL_SIGMAS", "start_heading", "start_pose", "Truth", "truth_at", "truth_from_log",
+           "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
@@ -360,14 +361,53 @@ def heading_by_alignment(
     return float(np.interp(time, t_odo, poses[:, 2])) + phi, var
 
 
+def start_heading(truth: Truth, time: float, track_t: ArrayLike, track_poses: ArrayLike
+                  ) -> tuple[float, float] | None:
+    """The heading [rad] and its variance [rad²] to start dead reckoning from at ``time``
+    where the truth has no heading: the odometry's own path aligned to the fixes around it
+    (:func:`heading_by_alignment`), or None where the truth alone cannot support a heading
+    there (:func:`heading_from_positions`: too few fixes, a residual above
+    :data:`MAX_RESIDUAL_SIGMAS` σ, a robot hardly moving).
+
+    Which starts are refused is the truth's decision alone: a window must not be left out
+    for its odometry's error, which the alignment's residual also holds (the windows kept
+    would then be the odometry's good ones). Where the alignment gives no heading (its
+    residual, odometry included, spread over too short a path: an uncalibrated robot
+    turning on the spot), the truth-only fit's heading is used, turned by π where the
+    odometry moves backwards over the next 0.5 s.
+
+    Parameters
+    ----------
+    truth : Truth
+    time : float
+        Start time [s], inside the track.
+    track_t : array_like, shape (N,)
+    track_poses : array_like, shape (N, 3)
+        The odometry over (at least) the fixes around ``time``, in any frame.
+    """
+    alone = heading_from_positions(truth, time)
+    if alone is None:
+        return None
+    t_odo = np.asarray(track_t, dtype=float)
+    poses = np.asarray(track_poses, dtype=float)
+    aligned = heading_by_alignment(truth, time, t_odo, poses, max_residual=math.inf)
+    if aligned is not None:
+        return aligned
+    a, b = np.searchsorted(t_odo, [time, time + 0.5]).clip(0, len(t_odo) - 1)
+    moved = poses[b, :2] - poses[a, :2]
+    backwards = moved[0] * math.cos(poses[a, 2]) + moved[1] * math.sin(poses[a, 2]) < 0
+    return (alone[0] + math.pi if backwards else alone[0]), alone[1]
+
+
 def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, reverse: bool = False,
-               span: float | None = None) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+               span: float | None = None, odometry: tuple[ArrayLike, ArrayLike] | None = None
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The truth pose at ``time`` to start dead reckoning from, and its covariance.
 
     The covariance is diag(σ², σ², var_θ): σ = ``truth.sigma`` and var_θ =
-    ``truth.heading_sigma``² when the truth measures heading; otherwise θ is
-    :func:`heading_from_positions` (plus π when ``reverse``, a robot backing up) and var_θ
-    its variance.
+    ``truth.heading_sigma``² when the truth measures heading; otherwise θ and var_θ are
+    :func:`start_heading`'s where the ``odometry`` is given, else
+    :func:`heading_from_positions`' (plus π when ``reverse``, a robot backing up).
 
     Parameters
     ----------
@@ -379,8 +419,12 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
     reverse : bool
         The robot travels backwards at ``time`` (position-only truth only).
     span : float, optional
-        Width of the heading fit [s] (position-only truth only; default
+        Width of the heading fit [s] (position-only truth without ``odometry`` only; default
         :func:`heading_span`).
+    odometry : (times (N,), poses (N, 3)), optional
+        The odometry in any frame around ``time`` (position-only truth only): its own path
+        is aligned to the fixes (:func:`start_heading`); ``reverse`` and ``span`` then do
+        not apply.
 
     Returns
     -------
@@ -402,12 +446,13 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
     pose = sample.poses[0].copy()
     cov = np.diag([truth.sigma**2, truth.sigma**2, truth.heading_sigma**2])
     if truth.theta is None:
-        fit = heading_from_positions(truth, time, span)
+        fit = (heading_from_positions(truth, time, span) if odometry is None
+               else start_heading(truth, time, *odometry))
         if fit is None:
             raise InputError(f"the truth has no heading, and its positions around {time:.6g} s do not "
                              "give one (too few fixes, fixes off a smooth path by more than 3 "
                              "--truth-sigma, or the robot hardly moves); give --initial-pose",
                              source=truth.source)
-        pose[2] = fit[0] + (math.pi if reverse else 0.0)
+        pose[2] = fit[0] + (math.pi if reverse and odometry is None else 0.0)
         cov[2, 2] = fit[1]
     return pose, cov

@@ -27,7 +27,6 @@ sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
 
 from __future__ import annotations
 
-import math
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -300,36 +299,6 @@ def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:
     return BodySteps(steps.dd[a:b], steps.dtheta[a:b], steps.dt[a:b], inputs, steps.robot)
 
 
-def _start_heading(truth: Truth | None, time: float, log_t: NDArray[np.float64],
-                   odometry: NDArray[np.float64], source: str) -> tuple[float, float] | None:
-    """Heading and its variance at ``time``, fitted to position-only truth around it by
-    aligning the odometry's own path (``odometry``, (N, 3), at ``log_t``) to the fixes
-    (:func:`odomkit.truth.heading_by_alignment`); None where the truth alone cannot support
-    a heading there (:func:`odomkit.truth.heading_from_positions`: too few fixes, a large
-    residual, a robot hardly moving). That decision is the truth's alone: a window must not
-    be dropped for its odometry's error, which the alignment's residual also holds (the
-    windows kept would then be the odometry's good ones). Where the alignment gives no
-    heading (its residual, odometry included, spread over too short a path: an
-    uncalibrated robot turning on the spot), the truth-only fit's heading is used."""
-    if truth is None:
-        raise InputError("the truth has no heading at a window start; pass the Truth so that "
-                         "one can be fitted to its positions", source=source)
-    from odomkit.truth import heading_by_alignment, heading_from_positions
-
-    alone = heading_from_positions(truth, time)
-    if alone is None:
-        return None
-    aligned = heading_by_alignment(truth, time, log_t, odometry, max_residual=math.inf)
-    if aligned is not None:
-        return aligned
-    # heading_from_positions gives the direction of travel; a robot whose odometry moves
-    # backwards over the next 0.5 s faces away from it.
-    a, b = np.searchsorted(log_t, [time, time + 0.5]).clip(0, len(log_t) - 1)
-    moved = odometry[b, :2] - odometry[a, :2]
-    backwards = moved[0] * math.cos(odometry[a, 2]) + moved[1] * math.sin(odometry[a, 2]) < 0
-    return (alone[0] + math.pi if backwards else alone[0]), alone[1]
-
-
 def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid: ArrayLike,
              windows: list[Window], truth: Truth | None, method: str,
              steps: BodySteps | None = None, own_noise: bool = True) -> _Prepared:
@@ -373,7 +342,12 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
         else:
             if odometry is None:  # the whole log from the origin: its shape around each start
                 odometry = dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)  # type: ignore[arg-type]
-            fitted = _start_heading(truth, float(log.t[a]), log_t, odometry, log.source)
+            if truth is None:
+                raise InputError("the truth has no heading at a window start; pass the Truth so that "
+                                 "one can be fitted to its positions", source=log.source)
+            from odomkit.truth import start_heading
+
+            fitted = start_heading(truth, float(log.t[a]), log_t, odometry)
             if fitted is None:
                 dropped += 1
                 continue

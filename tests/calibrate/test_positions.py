@@ -182,3 +182,22 @@ def test_a_robot_file_far_off_is_refused_at_the_edge_of_the_plausible_range():
     log, truth = _builtin_square(2)
     with pytest.raises(ModelError, match="edge of the plausible range for c_wheel_base"):
         calibrate_positions([log], [truth], wrong)
+
+
+def test_residuals_beyond_the_truths_noise_warn_that_the_standard_errors_are_optimistic(recwarn):
+    """The standard errors treat the residuals as the fixes' independent noise. Perfect
+    odometry against 3 m fixes gives residuals of 3 m and no warning; a steering reading that
+    wanders (a random walk of a few mrad the robot file cannot know) puts its drift into the
+    residuals, correlated along the run, and the calibration says so."""
+    import warnings
+
+    log, truth = drive(4, TRUE_CAR)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        calibrate_positions([log], [truth], NOMINAL_CAR)
+    rng = np.random.default_rng(4)
+    wander = np.cumsum(rng.normal(0.0, 0.3 / np.sqrt(len(log)), len(log)))
+    drifting = OdometryLog(log.t, {**log.channels, "steer": log.channels["steer"] + 0.02 * wander},
+                           source="drifting")
+    with pytest.warns(UserWarning, match="standard errors are optimistic"):
+        calibrate_positions([drifting], [truth], NOMINAL_CAR)

@@ -31,3 +31,33 @@ def test_one_truth_per_log():
     assert [o.path for o in got] == [Path("a.tum"), Path("b.tum")] and got[1].sigma == 0.1
     with pytest.raises(InputError, match="one --truth per log"):
         truth_options_per_log(base, [Path("a.tum")], 2)
+
+
+def test_track_starts_a_reversing_robot_facing_its_body_heading_from_position_only_truth(tmp_path):
+    """``track --truth`` with position-only truth: the start heading aligns the odometry's own
+    path to the fixes (odomkit.truth.start_pose with the odometry), so a robot that backs up
+    from the first row starts facing its body's way (the fixes only show the direction of
+    travel, π away). Before, the start faced the direction of travel and the track ran off
+    the other way: the final error was the path's length twice over."""
+    from odomkit.workflows.track import run_track
+
+    t = np.arange(0.0, 20.0, 0.05)
+    speed, yaw_rate = -0.5 * np.ones_like(t), 0.05 * np.ones_like(t)
+    log = tmp_path / "log.csv"
+    # the log starts at 2 s; the fixes (5 Hz) from 0 s, so that some lie before its start
+    np.savetxt(log, np.column_stack((t, speed, yaw_rate))[40:], delimiter=",", header="t,speed,yaw_rate",
+               comments="")
+    robot = tmp_path / "robot.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n')
+    # the true body heading is 1.0 rad at 0 s (1.1 at the log's start); it reverses on an arc
+    theta = 1.0 + 0.05 * t
+    x = np.cumsum(np.r_[0.0, (-0.5 * np.cos(theta[:-1] + 0.025 * 0.05)) * 0.05])
+    y = np.cumsum(np.r_[0.0, (-0.5 * np.sin(theta[:-1] + 0.025 * 0.05)) * 0.05])
+    fixes = tmp_path / "xy.csv"
+    np.savetxt(fixes, np.column_stack((t[::4], x[::4], y[::4])), delimiter=",", header="t,x,y", comments="")
+    from odomkit.workflows.logs import LogOptions
+
+    run = run_track(log, robot, truth=TruthOptions(fixes, sigma=0.001), with_covariance=False,
+                    log_options=LogOptions(columns="t=t,speed=speed,yaw_rate=yaw_rate"))
+    assert run.track.poses[0, 2] == pytest.approx(1.1, abs=0.01)
+    assert np.hypot(*(run.track.poses[-1, :2] - [x[-1], y[-1]])) < 0.02

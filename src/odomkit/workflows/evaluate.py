@@ -430,6 +430,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                spec: WindowSpec | None, *, min_travel: float, align: str, rpe_distances: Sequence[float],
                method: str) -> Scored:
     """Whole-run figures from truth at the first row, and the window ends of one log."""
+    from odomkit.integrate import dead_reckon
     from odomkit.kinematics import body_steps
     from odomkit.log import OdometryLog
     from odomkit.track import dead_reckon_log
@@ -443,8 +444,10 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                          f"({log.t[0]:.6g}..{log.t[-1]:.6g} s); check --truth-time-unit", source=log.source)
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)  # odometry travel at each row [m], reversing counted
-    signed = np.concatenate(([0.0], np.cumsum(steps.dd)))  # forward minus backward [m]
-    first, pose0, cov0 = _whole_run_start(log, truth, opts, rows, signed)
+    # Without truth heading the start heading aligns the odometry's own path to the fixes.
+    odometry = (None if truth.has_heading
+                else dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method))  # type: ignore[arg-type]
+    first, pose0, cov0 = _whole_run_start(log, truth, opts, rows, odometry)
     # The whole run, dead-reckoned from the truth at its first usable row.
     sub = OdometryLog(log.t[first:], {k: v[first:] for k, v in log.channels.items()},
                       None, log.source, log.meta)
@@ -486,13 +489,14 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
 
 
 def _whole_run_start(log: OdometryLog, truth: Truth, opts: TruthOptions, rows: NDArray[np.intp],
-                     signed: NDArray[np.float64]) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
+                     odometry: NDArray[np.float64] | None
+                     ) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
     """The first row with valid truth from which a track can start, its pose and covariance.
 
-    With position-only truth the heading is fitted to the truth positions
-    (:func:`odomkit.truth.start_pose`; turned by π where the odometry ``signed`` travel
-    goes backwards over the next 0.5 s), which a robot standing still cannot give: then
-    the next rows are tried, about every 0.5 s, until one gives a heading.
+    With position-only truth the heading comes from the fixes around the start and the
+    ``odometry`` (N, 3; its own path, any frame, at ``log.t``) aligned to them
+    (:func:`odomkit.truth.start_pose`), which a robot standing still cannot give: then the
+    next rows are tried, about every 0.5 s, until one gives a heading.
     """
     from odomkit.truth import start_pose
 
@@ -502,9 +506,9 @@ def _whole_run_start(log: OdometryLog, truth: Truth, opts: TruthOptions, rows: N
         if log.t[row] < tried + 0.5:
             continue
         tried = float(log.t[row])
-        ahead = min(int(np.searchsorted(log.t, log.t[row] + 0.5)), len(signed) - 1)
         try:
-            pose, cov = start_pose(truth, tried, opts.max_gap, reverse=bool(signed[ahead] < signed[row]))
+            pose, cov = start_pose(truth, tried, opts.max_gap,
+                                   odometry=None if odometry is None else (log.t, odometry))
         except InputError as exc:
             if truth.has_heading:
                 raise

@@ -20,8 +20,9 @@ from odomkit.io.trackio import kitti_times_path, write_kitti, write_track_csv, w
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
+from odomkit.robot import Robot
 from odomkit.track import Track, dead_reckon_log
-from odomkit.truth import start_pose, truth_at
+from odomkit.truth import Truth, start_pose, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, clock_from_robot, load_truth
@@ -147,7 +148,8 @@ def run_track(
                              source=found.source)
         truth_rows = samples.poses
         if pose0 is None:
-            start, start_cov = start_pose(found, float(log.t[0]), options.max_gap)
+            start, start_cov = start_pose(found, float(log.t[0]), options.max_gap,
+                                          odometry=_own_path(log, robot, method, found))
             pose0 = (float(start[0]), float(start[1]), float(start[2]))
             if cov0 is None and start_cov.any():
                 cov0 = start_cov.tolist()
@@ -181,6 +183,24 @@ def run_track(
 
         outputs["plot"] = str(track_figure(plot, run, robot))
     return run
+
+
+def _own_path(log: OdometryLog, robot: Robot, method: Method, truth: Truth
+              ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+    """The odometry's own path (from the origin) over the log's first rows, as far as the
+    heading fit at its start looks (:func:`odomkit.truth.heading_span`), for
+    :func:`odomkit.truth.start_pose` to align to position-only truth; None with truth heading."""
+    if truth.has_heading:
+        return None
+    from odomkit.integrate import dead_reckon
+    from odomkit.kinematics import body_steps
+    from odomkit.truth import heading_span
+
+    rows = int(np.searchsorted(log.t, log.t[0] + heading_span(truth), side="right")) + 1
+    head = OdometryLog(log.t[:rows], {k: v[:rows] for k, v in log.channels.items()}, None, log.source,
+                       log.meta)
+    steps = body_steps(robot, head)
+    return head.t, dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)
 
 
 def _refuse_covariance_flags(engine: str | None, cov0: object, with_covariance: bool, has_noise: bool,
