@@ -1,6 +1,6 @@
 """How honest is the covariance? The tables of docs/results/honesty.md (issue 11's targets), one command.
 
-    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--part optiodom snowhite speed]
+    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--part optiodom snowhite gps speed car]
 
 (a) OptiOdom, differential and tricycle. The experiments of each kind (diff: square,
     circular, ivanjko, free; tricycle: square, circular, free) are sorted by name; every
@@ -21,6 +21,8 @@
 (c) GPS-like truth: Snowhite calibrated on its first half from position-only fixes (1 Hz,
     own clock, noise σ = 5, 20, 50 cm), scored on the second half against the full truth.
 (d) Speed: ``odomkit fit-noise`` on all 203 OptiOdom runs (two robot files), wall time.
+(e) A simulated car against a late, noisy 1 Hz GPS (``--part car``; no data needed):
+    calibrate, fit-noise and evaluate through the CLI over six seeds.
 """
 
 from __future__ import annotations
@@ -335,18 +337,55 @@ def speed(root: Path) -> None:
         print(f"{platform}: {len(logs)} runs, {seconds:.1f} s wall (exit {done.returncode}): {first}")
 
 
+def car(_root: Path) -> None:
+    """A simulated car against a 1 Hz, 1 m GPS on a clock 0.2 s late (the drive of
+    tests/workflows/test_car_gps.py, six seeds): calibrate from the first half (scale,
+    steering offset, wheel base and the GPS's clock offset), fit-noise there, evaluate the
+    second half in 30 s windows, all through the CLI as a user would."""
+    import json
+    import tempfile
+
+    sys.path.insert(0, str(REPO / "tests" / "workflows"))
+    from test_car_gps import _drive  # the test's own simulation: one drive, two places use it
+
+    print("\n## A simulated car against GPS (1 Hz, 1 m, 0.2 s late; 20 min, fit on the first half)\n")
+    print("| seed | clock offset fitted [s] | c_scale fitted (1.015) | held-out 30 s ends | inside 95 % / 50 % "
+          "| NEES mean (bounds) |\n|---|---|---|---|---|---|")
+    odomkit = str(Path(sys.executable).with_name("odomkit"))
+    for seed in range(1, 7):
+        with tempfile.TemporaryDirectory() as folder:
+            robot, files = _drive(Path(folder), seed=seed)
+            (log, gps_file), (held, held_gps) = files["first"], files["second"]
+            common = ["--columns", "t=t,speed=speed,steer=steer", "--truth-sigma", "1", "--json"]
+
+            def run(*args):
+                done = subprocess.run([odomkit, *map(str, args), *common], capture_output=True, text=True,
+                                      check=True)
+                return json.loads(done.stdout)
+
+            cal = run("calibrate", log, "--robot", robot, "--truth", gps_file, "--out-robot",
+                      Path(folder) / "cal.toml")
+            run("fit-noise", "--robot", Path(folder) / "cal.toml", "--log", log, "--truth", gps_file,
+                "--window", "30s", "--window", "60s", "--kinds", "white,bias", "--out", Path(folder) / "fit.toml")
+            ev = run("evaluate", held, "--robot", Path(folder) / "fit.toml", "--truth", held_gps, "--window", "30s")
+            lo, hi = ev["nees_bounds"]
+            print(f"| {seed} | {cal['truth_time_offset']['value']:.3f} | {cal['parameters']['c_scale']:.4f} | "
+                  f"{ev['windows']} | {ev['coverage']['0.95']:.2f} / {ev['coverage']['0.5']:.2f} | "
+                  f"{ev['nees_position_mean']:.2f} ({lo:.2f}–{hi:.2f}) |")
+
+
 def main() -> None:
     default = Path(os.environ.get("ODOMKIT_DATA", REPO.parent / "shared" / "data"))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=default)
-    parser.add_argument("--part", nargs="*", default=["optiodom", "snowhite", "gps", "speed"])
+    parser.add_argument("--part", nargs="*", default=["optiodom", "snowhite", "gps", "speed", "car"])
     args = parser.parse_args()
     import warnings
 
     warnings.simplefilter("ignore")  # the fits' warnings are printed in the tables
     for name in args.part:
         {"optiodom": lambda: optiodom(args.data / "optiodom"), "snowhite": lambda: snowhite(args.data),
-         "gps": lambda: gps(args.data),
+         "gps": lambda: gps(args.data), "car": lambda: car(args.data),
          "speed": lambda: speed(args.data / "optiodom")}[name]()
 
 

@@ -61,3 +61,25 @@ def test_track_starts_a_reversing_robot_facing_its_body_heading_from_position_on
                     log_options=LogOptions(columns="t=t,speed=speed,yaw_rate=yaw_rate"))
     assert run.track.poses[0, 2] == pytest.approx(1.1, abs=0.01)
     assert np.hypot(*(run.track.poses[-1, :2] - [x[-1], y[-1]])) < 0.02
+
+
+def test_a_robot_files_clock_offset_applies_to_truth_files_not_to_a_logs_own_columns(tmp_path):
+    """``[truth] time_offset`` is the clock of the truth files a robot was calibrated against:
+    a log's own gt_* columns share the log's clock by construction and keep it, while
+    ``--truth-time-offset`` (the user's word) moves either."""
+    from odomkit.workflows.truth import clock_from_robot, resolved_truth
+
+    robot = tmp_path / "r.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n\n[truth]\ntime_offset = 0.3\n')
+    t = np.arange(0.0, 5.0, 0.1)
+    log = OdometryLog(t, {"speed": np.ones_like(t), "yaw_rate": np.zeros_like(t)},
+                      np.column_stack((t, 0 * t, 0 * t)))
+    truth_file = tmp_path / "gt.csv"
+    np.savetxt(truth_file, np.column_stack((t, t, 0 * t)), delimiter=",", header="t,x,y", comments="")
+    for fill in (clock_from_robot, resolved_truth):
+        own, from_file = fill(robot, [TruthOptions(), TruthOptions(truth_file)])
+        assert own.time_offset == 0.0 and from_file.time_offset == 0.3
+        np.testing.assert_allclose(load_truth(own, log).t, t)
+        np.testing.assert_allclose(load_truth(from_file, log).t, t - 0.3)
+        (flagged,) = fill(robot, [TruthOptions(time_offset=0.1)])
+        np.testing.assert_allclose(load_truth(flagged, log).t, t - 0.1)

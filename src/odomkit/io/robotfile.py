@@ -302,6 +302,9 @@ def read_truth_table(path: str | Path) -> dict[str, float]:
     f = _Fields(_document(Path(path)).get("truth", {}), "truth", str(path))
     out = {key: f.number(key) for key in TRUTH_KEYS if f.has(key)}
     f.check_unused()
+    for key, value in out.items():
+        if not math.isfinite(value):
+            raise InputError(f"[truth] {key} must be a finite number, got {value!r}", source=str(path))
     for key in TRUTH_SIGMAS:
         if out.get(key, 0.0) < 0:
             raise InputError(f"[truth] {key} must be >= 0, got {out[key]!r}", source=str(path))

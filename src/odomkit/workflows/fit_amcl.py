@@ -182,8 +182,10 @@ def fit_amcl_files(
     robot = None
     if robot_path is not None:
         from odomkit.io.robotfile import read_robot
+        from odomkit.workflows.truth import clock_from_robot
 
         robot = read_robot(robot_path)[0]
+        truth = clock_from_robot(robot_path, truth)  # the [truth] time_offset calibrate fitted
     elif log_options is not None and set(log_options.given()) - _BAG_FLAGS:
         stray = sorted(set(log_options.given()) - _BAG_FLAGS)
         raise InputError(f"{', '.join(stray)} reads logs, so it needs --robot")

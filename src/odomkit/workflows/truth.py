@@ -51,10 +51,14 @@ class TruthOptions:
         def pick(given: float | None, key: str) -> float:
             return found.get(key, 0.0) if given is None else given
 
+        # A robot file's clock offset belongs to the truth files it was fitted against, not
+        # to a log's own gt_* columns (on the log's clock by construction); a flag is applied
+        # to either.
+        offset = (self.time_offset if self.time_offset is not None
+                  else found.get("time_offset", 0.0) if self.path is not None else 0.0)
         return replace(self, sigma=pick(self.sigma, "sigma"),
                        heading_sigma=pick(self.heading_sigma, "heading_sigma"),
-                       time_sigma=pick(self.time_sigma, "time_sigma"),
-                       time_offset=pick(self.time_offset, "time_offset"))
+                       time_sigma=pick(self.time_sigma, "time_sigma"), time_offset=offset)
 
     @property
     def held(self) -> dict[str, float]:
@@ -98,12 +102,14 @@ def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> l
 
 def clock_from_robot(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
     """``options`` with the truth's clock offset, where not given, taken from the robot
-    file's ``[truth] time_offset`` (what ``calibrate --truth`` fitted), else zero; the truth's
-    noise is left as given (for ``fit-noise``, which fits what is not given, and ``track``)."""
+    file's ``[truth] time_offset`` (what ``calibrate --truth`` fitted) for a truth file, else
+    zero (a log's own gt_* columns share its clock); the truth's noise is left as given (for
+    ``fit-noise``, which fits what is not given, ``track``, ``check`` and ``fit-amcl``)."""
     from odomkit.io.robotfile import read_truth_table
 
     offset = read_truth_table(robot_path).get("time_offset", 0.0)
-    return [o if o.time_offset is not None else replace(o, time_offset=offset) for o in options]
+    return [o if o.time_offset is not None else replace(o, time_offset=offset if o.path is not None else 0.0)
+            for o in options]
 
 
 def truth_options_per_log(options: TruthOptions, paths: list[Path], logs: int) -> list[TruthOptions]:
