@@ -143,7 +143,16 @@ class DiffCalibrationModel:
         return np.array([mean, mean, 0.0]), T
 
 
-class TricycleCalibrationModel:
+class _ScaleFirst:
+    """A model whose first parameter is the travel scale (c_scale, m_per_tick): with the
+    overall scale unobservable it is kept and the other two are fitted."""
+
+    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """p = offset + T q keeping p[0]; q = (p[1], p[2])."""
+        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+
+
+class TricycleCalibrationModel(_ScaleFirst):
     """p = (c_scale, steering_offset, wheel_to_axle) of a Tricycle."""
 
     names = ("c_scale", "steering_offset", "wheel_to_axle")
@@ -171,12 +180,9 @@ class TricycleCalibrationModel:
         return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
                        wheel_to_axle=float(p[2]))
 
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep c_scale; fit (steering_offset, wheel_to_axle)."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-class CarCalibrationModel:
+class CarCalibrationModel(_ScaleFirst):
     """p = (c_scale, steering_offset, wheel_base) of a Car (its encoder offset and position
     are geometry, known)."""
 
@@ -207,9 +213,6 @@ class CarCalibrationModel:
         return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
                        wheel_base=float(p[2]))
 
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep c_scale; fit (steering_offset, wheel_base)."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
 def _yaw_rate_steps(w: NDArray[np.float64], dt: NDArray[np.float64], bias: float, scale: float
@@ -220,7 +223,7 @@ def _yaw_rate_steps(w: NDArray[np.float64], dt: NDArray[np.float64], bias: float
     return scale * rate * dt, -scale * dt, rate * dt
 
 
-class UnicycleCalibrationModel:
+class UnicycleCalibrationModel(_ScaleFirst):
     """p = (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale) of a Unicycle.
 
     Body velocities (:func:`odomkit.kinematics.body_steps` for a unicycle, Kelly's
@@ -253,12 +256,9 @@ class UnicycleCalibrationModel:
         return replace(self.robot, c_scale=float(p[0]), yaw_rate_bias=float(p[1]),
                        yaw_rate_scale=float(p[2]))
 
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep c_scale; fit (yaw_rate_bias, yaw_rate_scale)."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
-class GyroCalibrationModel:
+class GyroCalibrationModel(_ScaleFirst):
     """p = (m_per_tick [m], gyro_bias [rad/s], gyro_scale) of a GyroOdometry.
 
     Kelly's integrated heading (:func:`odomkit.kinematics.body_steps` for a gyro robot):
@@ -299,10 +299,6 @@ class GyroCalibrationModel:
 
     def make_robot(self, p: NDArray[np.float64]) -> GyroOdometry:
         return replace(self.robot, m_per_tick=float(p[0]), gyro_bias=float(p[1]), gyro_scale=float(p[2]))
-
-    def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Keep m_per_tick; fit (gyro_bias, gyro_scale)."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
 
 
 CalibrationModel: TypeAlias = (DiffCalibrationModel | TricycleCalibrationModel | CarCalibrationModel
