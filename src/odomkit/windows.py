@@ -58,6 +58,7 @@ __all__ = [
     "log_window_basis",
     "parse_window",
     "split_windows",
+    "why_no_windows",
     "window_covariance_basis",
     "window_errors",
 ]
@@ -290,6 +291,29 @@ def _pose_rates(part: BodySteps, poses: NDArray[np.float64], fitted_heading: boo
     if not fitted_heading:
         start[2] = 0.0
     return start, end
+
+
+def why_no_windows(t: ArrayLike, travel: ArrayLike, valid: ArrayLike, spec: WindowSpec | None,
+                   min_travel: float, skipped: int) -> str:
+    """One line on why :func:`split_windows` found no window in a log (same arguments, and
+    the ``skipped`` it returned): the window is longer than the longest stretch of truth
+    between gaps (the log inside the truth when there is no gap), or no window moves."""
+    unit = "s" if spec is None or spec.unit == "s" else "m of travel"
+    along = np.asarray(t if unit == "s" else travel, dtype=float)
+    # The longest stretch of rows with truth, gaps splitting them (as split_windows cuts).
+    rows = np.flatnonzero(np.asarray(valid, dtype=bool))
+    if rows.size < 2:
+        return "the truth does not overlap the log in time (check --truth-time-unit, --truth-time-offset)"
+    breaks = np.flatnonzero(np.diff(rows) > 1)
+    firsts, lasts = np.r_[rows[0], rows[breaks + 1]], np.r_[rows[breaks], rows[-1]]
+    longest = float(np.max(along[lasts] - along[firsts]))
+    if spec is not None and not skipped:
+        within = "the log inside the truth" if len(firsts) == 1 else (
+            f"the longest of the log's {len(firsts)} stretches of truth between gaps")
+        return (f"the window ({spec.length:g} {unit}) is longer than {within} ({longest:.4g} {unit}); "
+                "shorten --window" + ("" if len(firsts) == 1 else " or raise --max-gap"))
+    return (f"no window travels --min-travel {min_travel:g} m or more: the log shows no motion, and a "
+            "robot standing still says nothing about odometry")
 
 
 def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:

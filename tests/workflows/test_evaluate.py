@@ -275,3 +275,27 @@ def test_snowhite_whole_run_matches_the_data_notes(data_dir, tmp_path):
     assert out["final_position_error"] == pytest.approx(0.228, abs=0.001)
     assert out["max_position_error"] == pytest.approx(0.266, abs=0.001)
     assert out["windows"] == 10
+
+
+def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp_path):
+    """Truth with a 1 s dropout every 20 s holds no 30 s window: alone, that log is one line
+    naming the longest stretch between gaps and --max-gap (it used to say "the log shows no
+    motion", a robot driving all along); beside a log with windows, it is left out of the
+    windowed test with a warning, and its windows do not change the other log's."""
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    log, gt, robot = _simulate(tmp_path / "a", k_true=0.01, k_model=0.01, seconds=120.0)
+    gappy_log, gappy_gt, _ = _simulate(tmp_path / "b", k_true=0.01, k_model=0.01, seconds=120.0, seed=12)
+    data = np.loadtxt(gappy_gt, delimiter=",", skiprows=1)
+    keep = (data[:, 0] % 20.0) < 19.0
+    np.savetxt(gappy_gt, data[keep], delimiter=",", header="t,x,y,theta", comments="")
+    opts = LogOptions(columns=SIM_COLUMNS)
+    with pytest.raises(InputError, match=r"7 stretches of truth between gaps \(18.9 s\).*--max-gap"):
+        evaluate_logs([gappy_log], robot, [TruthOptions(gappy_gt)], log_options=opts, window="30s")
+    alone = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="30s")
+    both = evaluate_logs([log, gappy_log], robot, [TruthOptions(gt), TruthOptions(gappy_gt)],
+                         log_options=opts, window="30s")
+    assert both["windows"] == alone["windows"] == 4
+    assert both["coverage"] == alone["coverage"]
+    left_out = [w for w in both["warnings"] if "1 of 2 logs left out of the windowed test" in w]
+    assert len(left_out) == 1 and str(gappy_log) in left_out[0]

@@ -68,6 +68,8 @@ class Scored:
     honesty_t: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
     # The evaluated rows themselves (the whole run of a log), for figures
     rows: TrackRows | None = None
+    # Why a log asked for windows has none (None: it has some, or none were asked for)
+    no_windows: str | None = None
 
 
 @dataclass(frozen=True)
@@ -423,7 +425,21 @@ def score_logs(
             scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
                                      align=align, rpe_distances=rpe_distances, method=method))
             progress.advance()
-    return scored
+    return _windowless_left_out(scored)
+
+
+def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
+    """The logs with windows, each without one named in a warning; an error when none has
+    one (the first log's reason)."""
+    empty = [s for s in scored if s.no_windows is not None]
+    if not empty:
+        return scored
+    if len(empty) == len(scored):
+        raise InputError(empty[0].no_windows or "no windows", source=empty[0].label)
+    first = scored[0]
+    named = "; ".join(f"{s.label}: {s.no_windows}" for s in empty[:3]) + ("; ..." if len(empty) > 3 else "")
+    note = f"{len(empty)} of {len(scored)} logs left out of the windowed test: {named}"
+    return [replace(first, warnings=[*first.warnings, note]), *scored[1:]]
 
 
 def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, opts: TruthOptions,
@@ -435,7 +451,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     from odomkit.log import OdometryLog
     from odomkit.track import dead_reckon_log
     from odomkit.truth import truth_at
-    from odomkit.windows import cumulative_travel, split_windows, window_errors
+    from odomkit.windows import cumulative_travel, split_windows, why_no_windows, window_errors
 
     samples = truth_at(truth, log.t, opts.max_gap)
     rows = np.flatnonzero(samples.valid)
@@ -461,19 +477,11 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                      "time the position-only truth gives a heading (before it the robot stands still, "
                      "or the fixes around the start are too few or stray from a smooth path)")
     # The honesty test: one window per span of the log, restarted from truth.
-    valid_t = log.t[samples.valid]
-    if spec is not None:
-        have = (float(valid_t[-1] - valid_t[0]) if spec.unit == "s"
-                else float(travel[samples.valid][-1] - travel[samples.valid][0]))
-        if spec.length > have:
-            unit = "s" if spec.unit == "s" else "m of travel"
-            raise InputError(f"the window ({spec.length:g} {unit}) is longer than the log inside the truth "
-                             f"({have:.4g} {unit})", source=log.source)
     windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=samples.valid)
     if not windows:
-        raise InputError(f"no window travels --min-travel {min_travel:g} m or more: the log shows no "
-                         "motion, and a robot standing still says nothing about odometry",
-                         source=log.source)
+        reason = why_no_windows(log.t, travel, samples.valid, spec, min_travel, skipped)
+        return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=np.empty((0, 2)),
+                       honesty_cov=np.empty((0, 2, 2)), windows=0, warnings=notes, no_windows=reason)
     if skipped:
         notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m and "
                                "were left out")

@@ -75,11 +75,9 @@ class PreparedLog:
 
 def prepare_log(task: LogTask) -> PreparedLog:
     """Read one log and its truth, cut its windows and compute their covariance bases."""
-    import numpy as np
-
     from odomkit.kinematics import body_steps
     from odomkit.truth import truth_at
-    from odomkit.windows import cumulative_travel, log_window_basis
+    from odomkit.windows import cumulative_travel, log_window_basis, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -98,21 +96,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     travel = cumulative_travel(body_steps(task.robot, log))
-    spec = task.specs[0]
-    rows = np.flatnonzero(samples.valid)
-    span = float(log.t[rows[-1]] - log.t[rows[0]]) if rows.size else 0.0
-    moved = float(travel[rows[-1]] - travel[rows[0]]) if rows.size else 0.0
-    if rows.size < 2:
-        reason = "the truth does not overlap the log in time (check --truth-time-unit)"
-    elif skipped:
-        reason = (f"no motion: every window travels less than {task.min_travel:g} m "
-                  f"(--min-travel)")
-    elif spec is not None and spec.unit == "s":
-        reason = f"the window ({spec}) is longer than the log's {span:.3g} s with truth"
-    elif spec is not None:
-        reason = f"the window ({spec}) is longer than the log's {moved:.3g} m of travel"
-    else:
-        reason = "no window: the log has fewer than two rows with truth"
+    reason = why_no_windows(log.t, travel, samples.valid, task.specs[0], task.min_travel, skipped)
     return PreparedLog(name, None, len(log), skipped, reason)
 
 
