@@ -337,40 +337,45 @@ def speed(root: Path) -> None:
         print(f"{platform}: {len(logs)} runs, {seconds:.1f} s wall (exit {done.returncode}): {first}")
 
 
+def _odomkit_json(*args) -> dict:
+    """``odomkit ARGS --json`` in a subprocess, as a user runs it: its JSON object."""
+    import json
+
+    odomkit = str(Path(sys.executable).with_name("odomkit"))
+    done = subprocess.run([odomkit, *map(str, args), "--json"], capture_output=True, text=True, check=True)
+    return json.loads(done.stdout)
+
+
 def car(_root: Path) -> None:
     """A simulated car against a 1 Hz, 1 m GPS on a clock 0.2 s late (the drive of
     tests/workflows/test_car_gps.py, six seeds): calibrate from the first half (scale,
     steering offset, wheel base and the GPS's clock offset), fit-noise there, evaluate the
     second half in 30 s windows, all through the CLI as a user would."""
-    import json
     import tempfile
 
     sys.path.insert(0, str(REPO / "tests" / "workflows"))
     from test_car_gps import _drive  # the test's own simulation: one drive, two places use it
 
     print("\n## A simulated car against GPS (1 Hz, 1 m, 0.2 s late; 20 min, fit on the first half)\n")
-    print("| seed | clock offset fitted [s] | c_scale fitted (1.015) | held-out 30 s ends | inside 95 % / 50 % "
-          "| NEES mean (bounds) |\n|---|---|---|---|---|---|")
-    odomkit = str(Path(sys.executable).with_name("odomkit"))
+    print("| seed | clock offset fitted [s] | c_scale fitted (1.015) | held-out 30 s ends | "
+          "inside 95 % / 50 % | NEES mean (bounds) |\n|---|---|---|---|---|---|")
+    common = ("--columns", "t=t,speed=speed,steer=steer", "--truth-sigma", "1")
     for seed in range(1, 7):
-        with tempfile.TemporaryDirectory() as folder:
-            robot, files = _drive(Path(folder), seed=seed)
+        with tempfile.TemporaryDirectory() as name:
+            folder = Path(name)
+            robot, files = _drive(folder, seed=seed)
             (log, gps_file), (held, held_gps) = files["first"], files["second"]
-            common = ["--columns", "t=t,speed=speed,steer=steer", "--truth-sigma", "1", "--json"]
-
-            def run(*args):
-                done = subprocess.run([odomkit, *map(str, args), *common], capture_output=True, text=True,
-                                      check=True)
-                return json.loads(done.stdout)
-
-            cal = run("calibrate", log, "--robot", robot, "--truth", gps_file, "--out-robot",
-                      Path(folder) / "cal.toml")
-            run("fit-noise", "--robot", Path(folder) / "cal.toml", "--log", log, "--truth", gps_file,
-                "--window", "30s", "--window", "60s", "--kinds", "white,bias", "--out", Path(folder) / "fit.toml")
-            ev = run("evaluate", held, "--robot", Path(folder) / "fit.toml", "--truth", held_gps, "--window", "30s")
+            cal = _odomkit_json("calibrate", log, "--robot", robot, "--truth", gps_file,
+                                "--out-robot", folder / "cal.toml", *common)
+            _odomkit_json("fit-noise", "--robot", folder / "cal.toml", "--log", log, "--truth", gps_file,
+                          "--window", "30s", "--window", "60s", "--kinds", "white,bias",
+                          "--out", folder / "fit.toml", *common)
+            ev = _odomkit_json("evaluate", held, "--robot", folder / "fit.toml", "--truth", held_gps,
+                               "--window", "30s", *common)
             lo, hi = ev["nees_bounds"]
-            print(f"| {seed} | {cal['truth_time_offset']['value']:.3f} | {cal['parameters']['c_scale']:.4f} | "
-                  f"{ev['windows']} | {ev['coverage']['0.95']:.2f} / {ev['coverage']['0.5']:.2f} | "
+            offset, scale = cal["truth_time_offset"]["value"], cal["parameters"]["c_scale"]
+            print(f"| {seed} | {offset:.3f} | {scale:.4f} | {ev['windows']} | "
+                  f"{ev['coverage']['0.95']:.2f} / {ev['coverage']['0.5']:.2f} | "
                   f"{ev['nees_position_mean']:.2f} ({lo:.2f}–{hi:.2f}) |")
 
 
