@@ -201,3 +201,30 @@ def test_residuals_beyond_the_truths_noise_warn_that_the_standard_errors_are_opt
                            source="drifting")
     with pytest.warns(UserWarning, match="standard errors are optimistic"):
         calibrate_positions([drifting], [truth], NOMINAL_CAR)
+
+
+def test_a_run_that_stands_or_spins_at_its_start_still_calibrates_and_one_that_never_moves_is_named():
+    """The growing horizon's first stage aligns each run's odometry to its fixes, which a
+    robot standing still (then spinning on the spot) for its first 20 s cannot give: the
+    first stage now takes the shortest prefix whose fixes spread (3 σ, at least 1 cm). It
+    used to stop with 'SE(2) alignment is undetermined', naming no run (found on simulated
+    commanded-velocity logs). A run that never moves is refused, by name."""
+    from odomkit.robot import Unicycle
+
+    t = np.arange(0.0, 150.0, 0.05)
+    speed = np.where(t < 20.0, 0.0, 0.3 + 0.1 * np.sin(t / 5.0))
+    yaw_rate = np.where(t < 10.0, 0.0, 0.4 * np.sin(t / 7.0))  # spins on the spot from 10 s
+    log = OdometryLog(t, {"speed": speed, "yaw_rate": yaw_rate}, source="standing-start")
+    true = Unicycle(c_scale=1.03, yaw_rate_bias=0.01, yaw_rate_scale=0.97)
+    path = dead_reckon_log(log, true, pose0=(2.0, 1.0, 0.5)).poses
+    fixes = np.arange(0.013, t[-1], 0.01)
+    xy = np.column_stack([np.interp(fixes, t, path[:, k]) for k in (0, 1)])
+    truth = Truth(fixes, xy + np.random.default_rng(1).normal(0.0, 0.001, xy.shape), None, 0.001, "mocap")
+    cal = calibrate_positions([log], [truth], Unicycle())
+    np.testing.assert_allclose(cal.values, [1.03, 0.01, 0.97], atol=2e-3)
+    still = OdometryLog(t, {"speed": 0 * t, "yaw_rate": 0 * t}, source="never-moves")
+    parked = Truth(fixes, np.zeros_like(xy) + np.random.default_rng(2).normal(0.0, 0.001, xy.shape), None,
+                   0.001, "mocap")
+    with pytest.raises(InputError, match="do not spread") as info:
+        calibrate_positions([log, still], [truth, parked], Unicycle())
+    assert info.value.source == "never-moves"

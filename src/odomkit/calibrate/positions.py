@@ -121,6 +121,7 @@ class _Problem:
         self.p_fixed = model.p0.copy()
         self.t0 = [float(log.t[0]) for log in logs]
         self.t1 = [float(log.t[-1]) for log in logs]
+        self.sources = [log.source for log in logs]
         self.horizon = 1.0
         self.n_global = free.size + int(fit_time_offset)  # parameters shared by every run
         self.fit_time_offset = fit_time_offset
@@ -191,7 +192,12 @@ class _Problem:
             zero = np.zeros((dd.size, 0))
             poses, _ = integrate_with_sensitivity(dd, dth, zero, zero, np.zeros(3), self.method)
             keep = self.used(i)
-            phi, shift = umeyama_se2(self.at_fixes(poses[:, :2], i, keep), run.xy[keep])
+            try:
+                phi, shift = umeyama_se2(self.at_fixes(poses[:, :2], i, keep), run.xy[keep])
+            except ModelError:
+                raise InputError("the odometry does not move over the run's first "
+                                 f"{self.horizon * (self.t1[i] - self.t0[i]):.3g} s while the truth does: "
+                                 "check the log's channels and --columns", source=self.sources[i]) from None
             starts.append([shift[0], shift[1], phi])
         return np.asarray(starts, dtype=float).reshape(-1)
 
@@ -218,12 +224,28 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
     return lower, upper
 
 
-def _first_horizon(problem: _Problem, min_fixes: int) -> float:
-    """The shortest power-of-two fraction of every run holding at least ``min_fixes`` fixes."""
+def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float],
+                   sources: Sequence[str]) -> float:
+    """The shortest power-of-two fraction of every run holding at least ``min_fixes`` fixes
+    that spread (RMS distance from their centroid) at least ``min_spread`` [m] of that run:
+    the first stage aligns each run's odometry to them, which a robot standing or turning
+    on the spot at its start cannot give. A run whose fixes never spread so far is refused."""
+
+    def enough(i: int) -> bool:
+        xy = problem.runs[i].xy[problem.used(i)]
+        spread = float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)))) if len(xy) else 0.0
+        return len(xy) >= min_fixes and spread >= min_spread[i]
+
+    problem.horizon = 1.0
+    for i in range(len(problem.runs)):
+        if not enough(i):
+            raise InputError(f"the run's truth fixes do not spread {min_spread[i]:.3g} m or more (three "
+                             "times the truth's σ, at least 1 cm) over the whole run: it does not move "
+                             "enough to calibrate from", source=sources[i])
     horizon = 1.0
     while horizon > 1 / 64:
         problem.horizon = horizon / 2
-        if any(int(np.count_nonzero(problem.used(i))) < min_fixes for i in range(len(problem.runs))):
+        if not all(enough(i) for i in range(len(problem.runs))):
             break
         horizon /= 2
     problem.horizon = horizon
@@ -305,7 +327,8 @@ def calibrate_positions(
     with_truth = _runs_with_truth(runs, truths, MAX_TIME_OFFSET if fit_time_offset else 0.0)
     problem = _Problem(model, with_truth, runs, free, method, fit_time_offset)
 
-    horizon = _first_horizon(problem, min_first_fixes)
+    horizon = _first_horizon(problem, min_first_fixes, [max(3.0 * t.sigma, 0.01) for t in truths],
+                             [log.source for log in runs])
     q = np.concatenate([model.p0[free], [0.0] if fit_time_offset else [], problem.align_starts(model.p0)])
     lower, upper = _bounds(model, free, len(with_truth), fit_time_offset)
     while True:
