@@ -239,3 +239,30 @@ def test_truth_files_are_sniffed_like_logs(tmp_path):
     semicolon.write_text("# mocap export\nt;x;y\n0;0;0 # start\n0.5;1;0.5\n\n1;2;1\n")
     a, b = read_truth(comma), read_truth(semicolon)
     assert np.array_equal(a.t, b.t) and np.array_equal(a.xy, b.xy)
+
+
+def test_a_header_in_odomkits_own_names_needs_no_columns(tmp_path):
+    """A log whose header names every column as odomkit does (``t,speed,yaw_rate``, or
+    ``time`` and ``gt_*``) is read without --columns, identically to the mapped form; a
+    header with a name odomkit does not know, or no header, still asks for --columns and
+    says why (a misspelt channel must not be dropped silently)."""
+    t = np.arange(0.0, 5.0, 0.1)
+    rows = np.column_stack((t, 0.3 + 0 * t, 0.1 * np.sin(t), t, 0 * t, 0 * t))
+    own = tmp_path / "own.csv"
+    np.savetxt(own, rows, delimiter=",", header="time,speed,yaw_rate,gt_x,gt_y,gt_theta", comments="")
+    robot = Unicycle()
+    plain = load_log(own, robot, LogOptions())
+    mapped = load_log(own, robot, LogOptions(columns="t=time,speed=speed,yaw_rate=yaw_rate,gt_x=gt_x,"
+                                                     "gt_y=gt_y,gt_theta=gt_theta"))
+    np.testing.assert_array_equal(plain.t, mapped.t)
+    for name in ("speed", "yaw_rate"):
+        np.testing.assert_array_equal(plain.channels[name], mapped.channels[name])
+    np.testing.assert_array_equal(plain.ground_truth, mapped.ground_truth)
+    odd = tmp_path / "odd.csv"
+    np.savetxt(odd, rows[:, :3], delimiter=",", header="t,speed,yawrate", comments="")
+    with pytest.raises(InputError, match=r"needs --columns.*'yawrate', not odomkit's own names"):
+        load_log(odd, robot, LogOptions())
+    bare = tmp_path / "bare.csv"
+    np.savetxt(bare, rows[:, :3], delimiter=",")
+    with pytest.raises(InputError, match="needs --columns.*no header"):
+        load_log(bare, robot, LogOptions())

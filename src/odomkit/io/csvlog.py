@@ -71,6 +71,32 @@ def parse_columns(text: str) -> dict[str, str] | list[str]:
     return mapping
 
 
+#: Header names taken as the time column when a log's header names its columns itself.
+TIME_NAMES = ("t", "time", "timestamp", "stamp")
+
+
+def _columns_from_header(header: Sequence[str] | None, source: str) -> dict[str, str]:
+    """The ``columns`` mapping of a header that names every column by odomkit's own names
+    (a time column of :data:`TIME_NAMES`, channels such as ``speed``, ``yaw_rate``,
+    ``ticks_left``, and ``gt_x``, ``gt_y``, ``gt_theta``); otherwise the error asking for
+    ``--columns``. Only a header wholly in these names is read so: a column it does not
+    know could be a misspelt channel, which guessing would silently drop."""
+    hint = ("a text log needs --columns: header names (t=time,ticks_left=L,ticks_right=R) or the "
+            "columns in order (t,ticks_left,ticks_right)")
+    if header is None:
+        raise InputError(hint + "; this log has no header", source=source)
+    times = [name for name in header if name.lower() in TIME_NAMES]
+    known = [name for name in header if name in KNOWN_CHANNELS or name in GROUND_TRUTH_FIELDS]
+    unknown = [name for name in header if name not in times and name not in known]
+    if len(times) != 1 or not known or unknown:
+        why = (f"its header names {', '.join(repr(u) for u in unknown)}, not odomkit's own names" if unknown
+               else "its header names no time column (t, time, timestamp or stamp)" if not times
+               else "its header names more than one time column" if len(times) > 1
+               else "its header names no channel")
+        raise InputError(f"{hint}; {why}", source=source)
+    return {"t": times[0], **{name: name for name in known}}
+
+
 def _check_targets(targets: Sequence[str], source: str) -> None:
     named = [k for k in targets if k != SKIP_COLUMN]
     for key in named:
@@ -124,7 +150,7 @@ def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
 
 def read_csv_log(
     path: str | Path,
-    columns: Mapping[str, str] | Sequence[str],
+    columns: Mapping[str, str] | Sequence[str] | None,
     *,
     time_unit: str | float = "s",
     cumulative: bool = False,
@@ -136,7 +162,9 @@ def read_csv_log(
     Parameters
     ----------
     path : the file
-    columns : which column holds what. A sequence names the columns in order
+    columns : which column holds what; None: the header's own names, where it names every
+        column by odomkit's (``t,speed,yaw_rate``; :data:`TIME_NAMES` for time). A sequence
+        names the columns in order
         (``["t", "ticks_left", "_", "ticks_right"]``; ``_`` skips one; columns after the
         last name are ignored; a header line, if any, is skipped); a mapping goes from
         odomkit name to header name (``{"t": "time", "ticks_left": "L"}``). Names: ``t``
@@ -168,9 +196,11 @@ def read_csv_log(
     if isinstance(columns, str):
         raise InputError("columns must be a mapping or a sequence of names, not a string "
                          "(parse --columns text with parse_columns)")
-    _check_targets(list(columns), source)
     text = read_text(path)
     layout = sniff_layout(text, source)
+    if columns is None:
+        columns = _columns_from_header(layout.header, source)
+    _check_targets(list(columns), source)
     if isinstance(columns, Mapping):
         layout, index = _by_header(columns, layout, text, source)
         labels = {key: f"column {name!r}" for key, name in columns.items()}

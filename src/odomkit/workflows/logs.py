@@ -179,10 +179,6 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
     if not path.is_file():
         raise InputError("no such file", source=str(path))
     options.check_format(fmt, str(path))
-    if fmt == "csv" and not options.columns:
-        raise InputError("a text log needs --columns: header names (t=time,ticks_left=L,"
-                         "ticks_right=R) or the columns in order (t,ticks_left,ticks_right)",
-                         source=str(path))
     with stage(progress, None, f"reading {path.name}"):
         if fmt == "khepera":
             log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
@@ -191,6 +187,8 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         elif fmt == "optiodom":
             log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
         else:
-            log = read_csv_log(path, parse_columns(options.columns or ""), cumulative=options.cumulative,
+            # Without --columns, a header in odomkit's own names (t,speed,yaw_rate) is enough.
+            log = read_csv_log(path, parse_columns(options.columns) if options.columns else None,
+                               cumulative=options.cumulative,
                                wrap_bits=options.wrap_bits, time_unit=options.time_unit)
         return log.decimate(options.decimate)
