@@ -299,3 +299,16 @@ def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp
     assert both["coverage"] == alone["coverage"]
     left_out = [w for w in both["warnings"] if "1 of 2 logs left out of the windowed test" in w]
     assert len(left_out) == 1 and str(gappy_log) in left_out[0]
+
+
+def test_evaluate_warns_where_the_scored_covariance_leaves_the_first_order_regime(tmp_path):
+    """fit-noise warns when σθ at a window end passes 0.2 rad; evaluate now says the same of
+    the covariance it scores (heading σ of a robot file with k = 0.03 m^½ on a 0.4 m wheel
+    base: 0.32 rad after 60 s at 0.3 m/s, 0.09 rad after 5 s), and not of the same log in 5 s
+    windows."""
+    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.03, seconds=240.0)
+    opts = LogOptions(columns=SIM_COLUMNS)
+    long = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="60s")
+    short = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="5s")
+    assert any("first-order model may not hold" in w for w in long["warnings"])
+    assert not any("first-order model may not hold" in w for w in short["warnings"])

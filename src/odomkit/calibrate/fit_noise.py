@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, fields
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 from scipy.stats import chi2
 
@@ -47,6 +47,7 @@ __all__ = [
     "DEFAULT_FIXED",
     "DEFAULT_TRIM",
     "DEFAULT_WHITE",
+    "first_order_note",
     "FIRST_ORDER_SIGMA_THETA",
     "NoiseFit",
     "NoiseParameter",
@@ -87,6 +88,21 @@ DEFAULT_TRIM: float | None = 0.999
 #: second-order error (≈ D σθ²/2) reaches a tenth of the cross-track error (D σθ).
 FIRST_ORDER_SIGMA_THETA = 0.2
 _CORRELATION = 0.95
+
+
+def first_order_note(var_theta: ArrayLike) -> str | None:
+    """The warning that the first-order covariance may not hold at window ends whose
+    heading variance ``var_theta`` (W,) [rad²] exceeds :data:`FIRST_ORDER_SIGMA_THETA`²
+    (fit-noise's fitted model, evaluate's scored one), or None."""
+    sigma_theta = np.sqrt(np.clip(np.asarray(var_theta, dtype=float), 0.0, None))
+    big = sigma_theta > FIRST_ORDER_SIGMA_THETA
+    if not big.any():
+        return None
+    return (f"the first-order model may not hold: σθ reaches {sigma_theta.max():.3g} rad at "
+            f"{int(big.sum())} of {big.size} window ends (> {FIRST_ORDER_SIGMA_THETA} rad); use shorter "
+            "windows")
+
+
 _U_MAX = 1e14  # upper bound of a variance in units of its starting scale
 _MAX_STEPS = 200
 _TOL_LL = 1e-9  # log L gain that ends the iteration (intervals need ~1e-3)
@@ -632,12 +648,9 @@ def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter
                 a, b = params[informed[x]].key, params[informed[y]].key
                 out.append(f"{a} and {b} are not separately identifiable (correlation "
                            f"{corr[x, y]:+.3f}){hint}")
-    sigma_theta = np.sqrt(np.clip(cov[:, 2, 2], 0.0, None))
-    big = sigma_theta > FIRST_ORDER_SIGMA_THETA
-    if big.any():
-        out.append(f"the first-order model may not hold: σθ reaches {sigma_theta.max():.3g} rad "
-                   f"at {int(big.sum())} of {big.size} window ends (> {FIRST_ORDER_SIGMA_THETA} "
-                   "rad); use shorter windows")
+    note = first_order_note(cov[:, 2, 2])
+    if note:
+        out.append(note)
     p = np.array([_two_sided(float(q), int(n)) for q, n in zip(quad, lik.nobs, strict=True)])
     bad = np.flatnonzero(p < 0.01 / max(len(p), 1))
     if len(p) > 1 and bad.size:

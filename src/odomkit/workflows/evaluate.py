@@ -490,6 +490,11 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     if found.dropped:
         notes.append(f"{log.source}: {found.dropped} window(s) left out: no start heading could be "
                                "fitted to the position-only truth")
+    from odomkit.calibrate.fit_noise import first_order_note
+
+    note = first_order_note(found.cov[:, 2, 2])
+    if note:
+        notes.append(f"{log.source}: {note}")
     # found.cov holds the truth's noise at both window ends already (odomkit.windows).
     return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
                    honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
