@@ -278,3 +278,21 @@ def test_a_1_hz_position_only_truth_gives_windows(run_cli, tmp_path):
     assert result["windows"] >= 6, (result["windows"], result["windows_dropped"], result["warnings"])
     assert "truth_heading_sigma" not in result["parameters"]  # no truth heading to fit it from
     assert read_truth_table(out)["sigma"] == 0.01
+
+
+def test_logs_grouped_by_robot_share_one_bias_draw(run_cli, tmp_path):
+    """``--group``: the six built-in runs come from one robot, so its wheel-scale error is one
+    draw, not six. Grouped as one robot, fit-noise says the bias variances rest on one draw;
+    each log its own group gives exactly the ungrouped
+    fit; a count that does not match the logs is one line, exit 2."""
+    args = (*_logs(), "--window", "10s", "--kinds", "white,bias")
+    plain, _ = _fit(run_cli, tmp_path, *args, name="plain.toml")
+    own, _ = _fit(run_cli, tmp_path, *args, *[a for i in range(6) for a in ("--group", f"run{i}")],
+                  name="own.toml")
+    one, _ = _fit(run_cli, tmp_path, *args, *["--group", "robot"] * 6, name="one.toml")
+    assert own["parameters"] == plain["parameters"] and own["log_likelihood"] == plain["log_likelihood"]
+    assert any("bias variances rest on 1 log(s) or robot(s)" in w for w in one["warnings"])
+    assert not any("bias variances rest on" in w for w in plain["warnings"])
+    assert [p["log"] for p in one["per_log"]] == ["robot"]
+    code, _, err = run_cli("fit-noise", "--robot", ROBOT, *args, "--group", "a", "--out", tmp_path / "x.toml")
+    assert code == 2 and "one --group per --log" in err

@@ -637,8 +637,8 @@ def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter
         out.append(f"too few windows ({lik.n_windows}) for {n_free} free parameter(s): the "
                    "intervals rest on large-sample theory; use more logs or shorter windows")
     if any(params[j].kind == "bias" for j in free) and lik.n_logs < 5:
-        out.append(f"bias variances rest on {lik.n_logs} log(s): each log draws its bias once, "
-                   "so they are weakly determined; fit more logs")
+        out.append(f"bias variances rest on {lik.n_logs} log(s) or robot(s) (--group): each draws its "
+                   "bias once, so they are weakly determined; fit more logs, from more robots")
     for j in flat:
         out.append(f"{params[j].key} is not identifiable from these data (the likelihood does "
                    f"not bound it){hint}; kept at its robot-file value")

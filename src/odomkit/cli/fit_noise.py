@@ -3,7 +3,7 @@
 ::
 
     odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
-        [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] --out FITTED.toml
+        [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] [--group ROBOT ...] --out FITTED.toml
         [--trim 0.999] [--cross-validate] [--truth-sigma S] [--truth-heading-sigma S] [--truth-time-sigma S]
         [--workers N | --scheduler ADDR]
         [--force] [--json]
@@ -65,6 +65,10 @@ def fit_noise_command(
     scheduler: Annotated[str | None, typer.Option(
         "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
     truth: TruthListOption = None,
+    group: Annotated[list[str] | None, typer.Option(
+        "--group", help="The robot the i-th --log comes from (repeat it, one per --log): logs of one "
+                        "robot share one draw of its bias, so the bias variances rest on the robots, "
+                        "not the logs.")] = None,
     plot: Annotated[Path | None, typer.Option(
         "--plot", help="Draw each fitted parameter's profile likelihood with its interval and the "
                        "in-sample coverage (white only beside white + bias) into this file (.png, .svg "
@@ -97,7 +101,7 @@ def fit_noise_command(
                                  method=method, level=level, cross_validate=cross_validate,
                                  trim=None if trim >= 1 else trim,
                                  workers=workers, scheduler=scheduler, overwrite=force,
-                                 progress=progress, plot=plot)
+                                 progress=progress, plot=plot, groups=group)
     result = with_warnings(result, warned)
     if json_out:
         print_json(result)

@@ -100,6 +100,17 @@ def prepare_log(task: LogTask) -> PreparedLog:
     return PreparedLog(name, None, len(log), skipped, reason)
 
 
+def _grouped(bases: list[WindowBasis], groups: list[str]) -> tuple[list[WindowBasis], list[str]]:
+    """One basis per group, in order of first appearance: the logs of one robot share its
+    bias draw (:meth:`odomkit.windows.WindowBasis.merge`; their white errors are independent,
+    being different runs, so the merged likelihood is exact here, not composite)."""
+    from odomkit.windows import WindowBasis
+
+    order = list(dict.fromkeys(groups))
+    return [WindowBasis.merge([b for b, g in zip(bases, groups, strict=True) if g == name])
+            for name in order], order
+
+
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -168,6 +179,7 @@ def fit_noise_files(
     overwrite: bool = False,
     progress: Progress = NO_PROGRESS,
     plot: str | Path | None = None,
+    groups: Sequence[str] | None = None,
 ) -> dict[str, Any]:
     """Fit the noise of ``robot_path`` to ``logs`` and write the fitted robot file to ``out``.
 
@@ -199,6 +211,10 @@ def fit_noise_files(
         cut into windows, then ``"fitting"`` (of unknown length).
     plot : draw each fitted parameter's profile likelihood and the in-sample coverage into
         this .png, .svg or .pdf file (:func:`odomkit.workflows.figures.profiles_figure`).
+    groups : one name per log (``--group``): logs of one name come from one robot and share
+        one draw of its bias (its wheel scales, its yaw-rate scale), so the bias variances
+        rest on as many draws as there are groups, not logs; the per-log checks and
+        ``cross_validate`` then leave out a group at a time. None: each log is its own.
 
     Returns
     -------
@@ -216,6 +232,8 @@ def fit_noise_files(
     started = time.perf_counter()
     if not logs:
         raise InputError("fit-noise needs at least one --log")
+    if groups is not None and len(groups) != len(logs):
+        raise InputError(f"give one --group per --log: {len(logs)} log(s), {len(groups)} group(s)")
     if len(truths) != len(logs):
         raise InputError(f"give one --truth per --log: {len(logs)} log(s), {len(truths)} truth(s)")
     texts = [window] if isinstance(window, str) or window is None else list(window)
@@ -263,9 +281,12 @@ def fit_noise_files(
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
     held = truths[0].held  # the truth-noise flags are shared by every log
+    names = [p.name for p in used]
+    if groups is not None:
+        bases, names = _grouped(bases, [groups[prepared.index(p)] for p in used])
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
-                        level=level, log_names=[p.name for p in used], cross_validate=cross_validate,
+                        level=level, log_names=names, cross_validate=cross_validate,
                         trim=trim, truth_held=held)
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
