@@ -312,8 +312,8 @@ def why_no_windows(t: ArrayLike, travel: ArrayLike, valid: ArrayLike, spec: Wind
             f"the longest of the log's {len(firsts)} stretches of truth between gaps")
         return (f"the window ({spec.length:g} {unit}) is longer than {within} ({longest:.4g} {unit}); "
                 "shorten --window" + ("" if len(firsts) == 1 else " or raise --max-gap"))
-    return (f"no window travels --min-travel {min_travel:g} m or more: the log shows no motion, and a "
-            "robot standing still says nothing about odometry")
+    return (f"no window travels --min-travel {min_travel:g} m or more: the log shows no motion along a "
+            "path (standing still, or turning on the spot), and windows without travel are not scored")
 
 
 def _slice_steps(steps: BodySteps, a: int, b: int) -> BodySteps:

@@ -483,8 +483,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
         return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=np.empty((0, 2)),
                        honesty_cov=np.empty((0, 2, 2)), windows=0, warnings=notes, no_windows=reason)
     if skipped:
-        notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m and "
-                               "were left out")
+        notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m (standing "
+                     "still or turning on the spot) and were left out")
     found = window_errors(log, robot, noise, samples.poses, samples.valid, windows, truth=truth,
                           method=method)
     if found.dropped:
