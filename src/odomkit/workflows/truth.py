@@ -51,14 +51,18 @@ class TruthOptions:
         def pick(given: float | None, key: str) -> float:
             return found.get(key, 0.0) if given is None else given
 
-        # A robot file's clock offset belongs to the truth files it was fitted against, not
-        # to a log's own gt_* columns (on the log's clock by construction); a flag is applied
-        # to either.
-        offset = (self.time_offset if self.time_offset is not None
-                  else found.get("time_offset", 0.0) if self.path is not None else 0.0)
         return replace(self, sigma=pick(self.sigma, "sigma"),
                        heading_sigma=pick(self.heading_sigma, "heading_sigma"),
-                       time_sigma=pick(self.time_sigma, "time_sigma"), time_offset=offset)
+                       time_sigma=pick(self.time_sigma, "time_sigma"), time_offset=self.clock(found))
+
+    def clock(self, table: Mapping[str, float]) -> float:
+        """The truth's clock offset [s]: as given, else a robot file's ``[truth]``
+        ``time_offset`` (``table``) for a truth file, else zero. The robot file's offset
+        belongs to the truth files it was fitted against, not to a log's own gt_* columns
+        (on the log's clock by construction); a flag is applied to either."""
+        if self.time_offset is not None:
+            return self.time_offset
+        return float(table.get("time_offset", 0.0)) if self.path is not None else 0.0
 
     @property
     def held(self) -> dict[str, float]:
@@ -107,9 +111,8 @@ def clock_from_robot(robot_path: str | Path, options: Sequence[TruthOptions]) ->
     ``fit-noise``, which fits what is not given, ``track``, ``check`` and ``fit-amcl``)."""
     from odomkit.io.robotfile import read_truth_table
 
-    offset = read_truth_table(robot_path).get("time_offset", 0.0)
-    return [o if o.time_offset is not None else replace(o, time_offset=offset if o.path is not None else 0.0)
-            for o in options]
+    table = read_truth_table(robot_path)
+    return [replace(o, time_offset=o.clock(table)) for o in options]
 
 
 def truth_options_per_log(options: TruthOptions, paths: list[Path], logs: int) -> list[TruthOptions]:
