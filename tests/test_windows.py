@@ -88,6 +88,18 @@ def test_split_windows_restart_after_a_truth_gap_and_one_window_without_spec():
     assert [(w.start, w.end) for w in whole] == [(0, 20)]
 
 
+def test_windows_span_a_truth_gap_shorter_than_a_window():
+    """A window needs truth at its two ends only: a 1 s dropout (row 6) inside 3 s windows
+    costs none; a window whose end would fall in it ends at the next row with truth (7);
+    a gap as long as a window (rows 7, 8: 6 s to 9 s) still restarts the windows after it
+    (test_split_windows_restart_after_a_truth_gap_and_one_window_without_spec)."""
+    t = np.arange(0.0, 20.01, 1.0)
+    valid = np.ones(t.size, bool)
+    valid[6] = False
+    windows, _ = split_windows(t, t, WindowSpec(3.0, "s"), valid=valid)
+    assert [(w.start, w.end) for w in windows] == [(0, 3), (3, 7), (7, 10), (10, 13), (13, 16), (16, 19)]
+
+
 def test_a_window_longer_than_the_log_gives_none():
     t = np.arange(0.0, 5.01, 0.5)
     assert split_windows(t, t, WindowSpec(30.0, "s")) == ([], 0)

@@ -58,6 +58,7 @@ __all__ = [
     "log_window_basis",
     "parse_window",
     "split_windows",
+    "truth_stretches",
     "why_no_windows",
     "window_covariance_basis",
     "window_errors",
@@ -139,11 +140,13 @@ def split_windows(
 ) -> tuple[list[Window], int]:
     """Non-overlapping windows over the rows where the truth is valid.
 
-    The rows with valid truth form contiguous runs (a truth gap splits them); each run is
-    cut greedily from its first row: a window ends at the first row at least
+    A window needs truth at its two ends only: the odometry runs on through a truth gap
+    inside it. So the rows with valid truth are cut into stretches only where the gap
+    between two of them is as long as a window (:func:`truth_stretches`), and each stretch
+    is cut greedily from its first row: a window ends at the first valid row at least
     ``spec.length`` seconds (or metres of travel) after its start, and the next window
-    starts there. A run's tail shorter than a window is left out. ``spec`` None gives one
-    window from the first to the last valid row.
+    starts there. A stretch's tail shorter than a window is left out. ``spec`` None gives
+    one window from the first to the last valid row.
 
     Parameters
     ----------
@@ -195,22 +198,29 @@ def split_windows(
         if rows[-1] > rows[0]:
             add(int(rows[0]), int(rows[-1]))
         return windows, skipped
-    axis = t if spec.unit == "s" else s
-    # Runs of consecutive valid rows: [first, last] inclusive.
-    breaks = np.flatnonzero(np.diff(rows) > 1)
-    firsts = np.concatenate(([rows[0]], rows[breaks + 1]))
-    lasts = np.concatenate((rows[breaks], [rows[-1]]))
-    for first, last in zip(firsts.tolist(), lasts.tolist(), strict=True):
-        a = first
+    axis = (t if spec.unit == "s" else s)[rows]
+    for first, last in truth_stretches(axis, spec.length):
+        i = first  # positions in ``rows``
         while True:
-            b = int(np.searchsorted(axis, axis[a] + spec.length, side="left"))
-            # searchsorted may land on a repeated value below the target; never before a+1.
-            b = max(b, a + 1)
-            if b > last or axis[b] < axis[a] + spec.length:
+            j = int(np.searchsorted(axis, axis[i] + spec.length, side="left"))
+            # searchsorted may land on a repeated value below the target; never before i+1.
+            j = max(j, i + 1)
+            if j > last or axis[j] < axis[i] + spec.length:
                 break
-            add(a, b)
-            a = b
+            add(int(rows[i]), int(rows[j]))
+            i = j
     return windows, skipped
+
+
+def truth_stretches(axis: NDArray[np.float64], length: float) -> list[tuple[int, int]]:
+    """[first, last] positions (inclusive) of the stretches of valid-truth rows that
+    windows of ``length`` may span: ``axis`` (n,) holds each valid row's time [s] or
+    travel [m], and a jump of ``length`` or more between two of them (a truth gap as long
+    as a window) ends a stretch."""
+    breaks = np.flatnonzero(np.diff(axis) >= length)
+    firsts = np.concatenate(([0], breaks + 1)).tolist()
+    lasts = np.concatenate((breaks, [axis.size - 1])).tolist()
+    return list(zip(firsts, lasts, strict=True))
 
 
 @dataclass(frozen=True)
@@ -300,18 +310,17 @@ def why_no_windows(t: ArrayLike, travel: ArrayLike, valid: ArrayLike, spec: Wind
     between gaps (the log inside the truth when there is no gap), or no window moves."""
     unit = "s" if spec is None or spec.unit == "s" else "m of travel"
     along = np.asarray(t if unit == "s" else travel, dtype=float)
-    # The longest stretch of rows with truth, gaps splitting them (as split_windows cuts).
+    # The longest stretch of rows with truth, as split_windows cuts them.
     rows = np.flatnonzero(np.asarray(valid, dtype=bool))
     if rows.size < 2:
         return "the truth does not overlap the log in time (check --truth-time-unit, --truth-time-offset)"
-    breaks = np.flatnonzero(np.diff(rows) > 1)
-    firsts, lasts = np.r_[rows[0], rows[breaks + 1]], np.r_[rows[breaks], rows[-1]]
-    longest = float(np.max(along[lasts] - along[firsts]))
     if spec is not None and not skipped:
-        within = "the log inside the truth" if len(firsts) == 1 else (
-            f"the longest of the log's {len(firsts)} stretches of truth between gaps")
+        stretches = truth_stretches(along[rows], spec.length)
+        longest = max(float(along[rows[b]] - along[rows[a]]) for a, b in stretches)
+        within = "the log inside the truth" if len(stretches) == 1 else (
+            f"the longest of the log's {len(stretches)} stretches of truth between gaps as long as a window")
         return (f"the window ({spec.length:g} {unit}) is longer than {within} ({longest:.4g} {unit}); "
-                "shorten --window" + ("" if len(firsts) == 1 else " or raise --max-gap"))
+                "shorten --window")
     return (f"no window travels --min-travel {min_travel:g} m or more: the log shows no motion along a "
             "path (standing still, or turning on the spot), and windows without travel are not scored")
 

@@ -278,21 +278,27 @@ def test_snowhite_whole_run_matches_the_data_notes(data_dir, tmp_path):
 
 
 def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp_path):
-    """Truth with a 1 s dropout every 20 s holds no 30 s window: alone, that log is one line
-    naming the longest stretch between gaps and --max-gap (it used to say "the log shows no
-    motion", a robot driving all along); beside a log with windows, it is left out of the
-    windowed test with a warning, and its windows do not change the other log's."""
+    """Truth present 20 s out of every 55 s holds no 30 s window (its gaps, 35 s, are longer
+    than a window): alone, that log is one line naming the longest stretch between such gaps
+    (it used to say "the log shows no motion", a robot driving all along); beside a log with
+    windows, it is left out of the windowed test with a warning, and its windows do not
+    change the other log's. A 1 s dropout every 20 s, by contrast, costs no window: a window
+    needs truth at its two ends only."""
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
     log, gt, robot = _simulate(tmp_path / "a", k_true=0.01, k_model=0.01, seconds=120.0)
     gappy_log, gappy_gt, _ = _simulate(tmp_path / "b", k_true=0.01, k_model=0.01, seconds=120.0, seed=12)
     data = np.loadtxt(gappy_gt, delimiter=",", skiprows=1)
-    keep = (data[:, 0] % 20.0) < 19.0
-    np.savetxt(gappy_gt, data[keep], delimiter=",", header="t,x,y,theta", comments="")
     opts = LogOptions(columns=SIM_COLUMNS)
-    with pytest.raises(InputError, match=r"7 stretches of truth between gaps \(18.9 s\).*--max-gap"):
-        evaluate_logs([gappy_log], robot, [TruthOptions(gappy_gt)], log_options=opts, window="30s")
     alone = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="30s")
+    dropouts = (data[:, 0] % 20.0) < 19.0
+    np.savetxt(gappy_gt, data[dropouts], delimiter=",", header="t,x,y,theta", comments="")
+    spanned = evaluate_logs([gappy_log], robot, [TruthOptions(gappy_gt)], log_options=opts, window="30s")
+    assert spanned["windows"] == alone["windows"] == 4
+    keep = (data[:, 0] % 55.0) < 20.0
+    np.savetxt(gappy_gt, data[keep], delimiter=",", header="t,x,y,theta", comments="")
+    with pytest.raises(InputError, match=r"3 stretches of truth between gaps as long as a window \(19.9 s\)"):
+        evaluate_logs([gappy_log], robot, [TruthOptions(gappy_gt)], log_options=opts, window="30s")
     both = evaluate_logs([log, gappy_log], robot, [TruthOptions(gt), TruthOptions(gappy_gt)],
                          log_options=opts, window="30s")
     assert both["windows"] == alone["windows"] == 4
