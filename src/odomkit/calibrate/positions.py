@@ -81,15 +81,36 @@ class _Run:
     t: NDArray[np.float64]  # (n,) fix times [s]
     outside: int  # fixes outside the log's span
 
-    def at(self, delta: float) -> tuple[NDArray[np.intp], NDArray[np.float64], NDArray[np.float64]]:
-        """Where each fix falls on the log's clock at offset ``delta``: fix j lies between
-        log rows row[j] and row[j] + 1, a fraction w[j] of the way; span[j] [s] is that
-        segment's length (0 where two rows share a time)."""
-        t, tau = self.log_t, self.t - delta
+    def at(self, delta: float, keep: NDArray[np.bool_]) -> _FixRows:
+        """Where the kept fixes fall on the log's clock at offset ``delta`` (each at its
+        stamp − ``delta``)."""
+        t, tau = self.log_t, self.t[keep] - delta
         row = np.clip(np.searchsorted(t, tau, side="right") - 1, 0, t.size - 2)
         span = t[row + 1] - t[row]
         w = np.divide(tau - t[row], span, out=np.zeros_like(tau), where=span > 0)
-        return row.astype(np.intp), w, span
+        return _FixRows(row.astype(np.intp), w, span)
+
+
+@dataclass(frozen=True)
+class _FixRows:
+    """Fix j lies between log rows row[j] and row[j] + 1, a fraction w[j] of the way;
+    span[j] [s] is that segment's length (0 where two rows share a time)."""
+
+    row: NDArray[np.intp]  # (n,)
+    w: NDArray[np.float64]  # (n,)
+    span: NDArray[np.float64]  # (n,)
+
+    def interpolate(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Per-row ``values`` (N, ...) interpolated linearly at the fixes."""
+        w = self.w.reshape(self.w.shape + (1,) * (values.ndim - 1))
+        return (1.0 - w) * values[self.row] + w * values[self.row + 1]
+
+    def rate(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
+        """d/dt of that interpolation of ``values`` (N, 2) at the fixes (zero inside a
+        segment of zero length)."""
+        step = values[self.row + 1] - values[self.row]
+        inverse = np.divide(1.0, self.span, out=np.zeros_like(self.span), where=self.span > 0)
+        return step * inverse[:, None]
 
 
 def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margin: float) -> list[_Run]:
@@ -137,24 +158,6 @@ class _Problem:
         run = self.runs[i]
         return run.t <= self.t0[i] + self.horizon * (self.t1[i] - self.t0[i])
 
-    def at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_],
-                 delta: float = 0.0) -> NDArray[np.float64]:
-        """Per-row ``values`` (N, ...) interpolated linearly at run i's kept fixes, each
-        taken at log time (its stamp − ``delta``)."""
-        row, w, _ = self.runs[i].at(delta)
-        row, w = row[keep], w[keep]
-        w = w.reshape(w.shape + (1,) * (values.ndim - 1))
-        return (1.0 - w) * values[row] + w * values[row + 1]
-
-    def velocity_at_fixes(self, values: NDArray[np.float64], i: int, keep: NDArray[np.bool_],
-                          delta: float) -> NDArray[np.float64]:
-        """d/dt of the linear interpolation of ``values`` (N, 2) at run i's kept fixes (zero
-        inside a segment of zero length)."""
-        row, _, span = self.runs[i].at(delta)
-        row, span = row[keep], span[keep]
-        step = values[row + 1] - values[row]
-        rate = np.divide(1.0, span, out=np.zeros_like(span), where=span > 0)
-        return step * rate[:, None]
 
     def residuals_and_jacobian(self, q: NDArray[np.float64]
                                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -166,13 +169,14 @@ class _Problem:
             poses, dposes = integrate_with_sensitivity(dd, dth, ddd[:, self.free], ddt[:, self.free],
                                                        starts[i], self.method)
             keep = self.used(i)
-            pos = self.at_fixes(poses[:, :2], i, keep, delta)
+            fixes = run.at(delta, keep)
+            pos = fixes.interpolate(poses[:, :2])
             r = pos - run.xy[keep]
             j = np.zeros((pos.shape[0], 2, q.size))
-            j[:, :, :n_free] = self.at_fixes(dposes[:, :2], i, keep, delta)
+            j[:, :, :n_free] = fixes.interpolate(dposes[:, :2])
             if self.fit_time_offset:
                 # a later δ compares each fix with the odometry earlier: −velocity there
-                j[:, :, n_free] = -self.velocity_at_fixes(poses[:, :2], i, keep, delta)
+                j[:, :, n_free] = -fixes.rate(poses[:, :2])
             col = self.n_global + 3 * i
             j[:, 0, col] = 1.0
             j[:, 1, col + 1] = 1.0
@@ -193,7 +197,7 @@ class _Problem:
             poses, _ = integrate_with_sensitivity(dd, dth, zero, zero, np.zeros(3), self.method)
             keep = self.used(i)
             try:
-                phi, shift = umeyama_se2(self.at_fixes(poses[:, :2], i, keep), run.xy[keep])
+                phi, shift = umeyama_se2(run.at(0.0, keep).interpolate(poses[:, :2]), run.xy[keep])
             except ModelError:
                 raise InputError("the odometry does not move over the run's first "
                                  f"{self.horizon * (self.t1[i] - self.t0[i]):.3g} s while the truth does: "
