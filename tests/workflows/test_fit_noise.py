@@ -296,3 +296,12 @@ def test_logs_grouped_by_robot_share_one_bias_draw(run_cli, tmp_path):
     assert [p["log"] for p in one["per_log"]] == ["robot"]
     code, _, err = run_cli("fit-noise", "--robot", ROBOT, *args, "--group", "a", "--out", tmp_path / "x.toml")
     assert code == 2 and "one --group per --log" in err
+
+
+def test_a_log_given_twice_with_groups_is_fitted(run_cli, tmp_path):
+    """Each --group belongs to its --log by position, not by comparing the logs' read
+    windows (equal for a log given twice, and numpy arrays do not compare to one truth)."""
+    args = ("--log", str(RUNS[0]), "--log", str(RUNS[0]), "--log", str(RUNS[1]), "--window", "10s",
+            "--group", "a", "--group", "b", "--group", "b")
+    result, _ = _fit(run_cli, tmp_path, *args)
+    assert [p["log"] for p in result["per_log"]] == ["a", "b"]

@@ -283,7 +283,8 @@ def fit_noise_files(
     held = truths[0].held  # the truth-noise flags are shared by every log
     names = [p.name for p in used]
     if groups is not None:
-        bases, names = _grouped(bases, [groups[prepared.index(p)] for p in used])
+        of_used = [g for p, g in zip(prepared, groups, strict=True) if p.basis is not None]
+        bases, names = _grouped(bases, of_used)
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                         level=level, log_names=names, cross_validate=cross_validate,
