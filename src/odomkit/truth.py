@@ -197,6 +197,20 @@ def heading_span(truth: Truth, min_fixes: int = 5) -> float:
     return max(1.0, (max(int(min_fixes), 4) + 1) * spacing)
 
 
+def _fit_span(truth: Truth, span: float | None, min_fixes: int) -> float:
+    """A heading fit's width of fixes [s]: ``span``, or :func:`heading_span` when None."""
+    return validate.positive(heading_span(truth, min_fixes) if span is None else span, "span", unit="s",
+                             error=InputError)
+
+
+def _residual_limit(truth: Truth, given: float | None) -> float:
+    """A heading fit's largest residual RMS per axis [m]: ``given``, else
+    :data:`MAX_RESIDUAL_SIGMAS` × the truth's stated σ, else no limit (inf)."""
+    if given is not None:
+        return given
+    return MAX_RESIDUAL_SIGMAS * truth.sigma if truth.sigma > 0 else math.inf
+
+
 def heading_from_positions(
     truth: Truth,
     time: float,
@@ -245,8 +259,7 @@ def heading_from_positions(
     >>> round(h, 12), var < 1e-20
     (0.785398163397, True)
     """
-    span = validate.positive(heading_span(truth, min_fixes) if span is None else span, "span", unit="s",
-                             error=InputError)
+    span = _fit_span(truth, span, min_fixes)
     min_fixes = max(int(min_fixes), 4)
     near = np.flatnonzero(np.abs(truth.t - time) <= span / 2)
     if near.size < min_fixes:
@@ -262,9 +275,7 @@ def heading_from_positions(
     resid = truth.xy[near] - A @ coef
     dof = near.size - 3
     s2 = float(np.sum(resid**2)) / (2 * dof)  # pooled over x and y
-    if max_residual is None and truth.sigma > 0:
-        max_residual = MAX_RESIDUAL_SIGMAS * truth.sigma
-    if max_residual is not None and math.sqrt(s2) > max_residual:
+    if math.sqrt(s2) > _residual_limit(truth, max_residual):
         return None
     sigma2 = max(truth.sigma**2, s2)
     vx, vy = coef[1, 0] / scale, coef[1, 1] / scale
@@ -333,8 +344,7 @@ def heading_by_alignment(
     """
     t_odo = np.asarray(track_t, dtype=float)
     poses = np.asarray(track_poses, dtype=float)
-    span = validate.positive(heading_span(truth, min_fixes) if span is None else span, "span", unit="s",
-                             error=InputError)
+    span = _fit_span(truth, span, min_fixes)
     near = np.flatnonzero((np.abs(truth.t - time) <= span / 2) & (truth.t >= t_odo[0])
                           & (truth.t <= t_odo[-1]))
     if near.size < max(int(min_fixes), 3):
@@ -351,9 +361,7 @@ def heading_by_alignment(
     c, s = math.cos(phi), math.sin(phi)
     resid = x_c - r_c @ np.array([[c, s], [-s, c]])
     s2 = float(np.sum(resid**2)) / max(2 * near.size - 3, 1)
-    if max_residual is None and truth.sigma > 0:
-        max_residual = MAX_RESIDUAL_SIGMAS * truth.sigma
-    if max_residual is not None and math.sqrt(s2) > max_residual:
+    if math.sqrt(s2) > _residual_limit(truth, max_residual):
         return None
     var = max(truth.sigma**2, s2) / spread
     if var > MAX_HEADING_SIGMA**2:
