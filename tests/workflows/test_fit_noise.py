@@ -124,7 +124,7 @@ def test_text_logs_with_position_only_truth_files(run_cli, tmp_path):
         np.savetxt(truth_path, np.column_stack((log.t[::2] + 0.01, gt[::2, :2])), delimiter=",",
                    header="t,x,y", comments="", fmt="%.17g")
         args += ["--log", str(log_path), "--truth", str(truth_path)]
-    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--truth-time-sigma", "0",
+    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--truth-time-sigma", "0", "--kinds", "white",
                      "--columns", "t=t,ticks_left=L,ticks_right=R", "--truth-sigma", "0.001")
     assert result["windows"] > 20
     # No truth heading: its noise cannot be fitted (not a parameter); the others are held.
@@ -132,7 +132,8 @@ def test_text_logs_with_position_only_truth_files(run_cli, tmp_path):
     assert all(0 < v < 0.1 for v in result["parameters"].values())
     # With the truth's clock noise fitted too (the default) it is a parameter, and the
     # window-start heading fitted to the positions is used alike.
-    free, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--columns", "t=t,ticks_left=L,ticks_right=R",
+    free, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--kinds", "white",
+                   "--columns", "t=t,ticks_left=L,ticks_right=R",
                    "--truth-sigma", "0.001", name="free.toml")
     assert set(free["parameters"]) == {"k_left", "k_right", "truth_time_sigma"}
     assert free["windows"] == result["windows"] and free["log_likelihood"] >= result["log_likelihood"]
@@ -305,3 +306,18 @@ def test_a_log_given_twice_with_groups_is_fitted(run_cli, tmp_path):
             "--group", "a", "--group", "b", "--group", "b")
     result, _ = _fit(run_cli, tmp_path, *args)
     assert [p["log"] for p in result["per_log"]] == ["a", "b"]
+
+
+def test_bias_variances_are_fitted_unless_kinds_says_white(run_cli, tmp_path):
+    """A real robot's error over a run grows like a bias (a scale error per run), so the
+    default fits white and bias: no --kinds is --kinds white,bias, and --kinds white is the
+    white models alone."""
+    logs = (*_logs(RUNS[:4]), "--window", "10s")
+    default, _ = _fit(run_cli, tmp_path, *logs, name="default.toml")
+    both, _ = _fit(run_cli, tmp_path, *logs, "--kinds", "white,bias", name="both.toml")
+    white, _ = _fit(run_cli, tmp_path, *logs, "--kinds", "white", name="white.toml")
+    bias = {"sigma_wheel_base", "sigma_scale_left", "sigma_scale_right"}
+    assert bias <= set(default["parameters"])
+    assert not bias & set(white["parameters"])
+    assert default["parameters"] == both["parameters"]
+    assert default["log_likelihood"] >= white["log_likelihood"] - 1e-9  # bias only adds freedom

@@ -48,7 +48,8 @@ def fit_noise_command(
                          "repeat it to fit one model to several lengths (--window 10s --window "
                          "30s); default one window per log.")] = None,
     kinds: Annotated[str, typer.Option(
-        "--kinds", help="Which variances to fit: white, bias or white,bias.")] = "white",
+        "--kinds", help="Which variances to fit: white, bias or white,bias (default: real "
+                        "odometry errors grow like a bias, so both).")] = "white,bias",
     fix: Annotated[str | None, typer.Option(
         "--fix", help="Noise fields held at the robot file's value, e.g. sigma_dt.")] = None,
     min_travel: Annotated[float, typer.Option(

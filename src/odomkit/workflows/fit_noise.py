@@ -166,7 +166,7 @@ def fit_noise_files(
     out: str | Path,
     *,
     window: str | Sequence[str] | None = None,
-    kinds: Sequence[str] = ("white",),
+    kinds: Sequence[str] = ("white", "bias"),
     fixed: Sequence[str] = (),
     log_options: LogOptions | None = None,
     min_travel: float = 0.05,
@@ -195,7 +195,9 @@ def fit_noise_files(
         (``["10s", "30s"]``: one model fitted to windows of every length together, so that
         it holds at each; a composite likelihood, see
         :meth:`odomkit.windows.WindowBasis.merge`); None: each log is one window.
-    kinds : which models' variances are fitted ("white", "bias").
+    kinds : which models' variances are fitted ("white", "bias"); both by default, since
+        a real robot's errors over a run grow like a bias (a constant scale or offset
+        error per run), which white noise alone covers on some lengths only.
     fixed : parameter names held at the robot file's value.
         The truth's own noise (``truth_sigma`` [m], ``truth_heading_sigma`` [rad],
         ``truth_time_sigma`` [s]; a floor that does not grow with the window) is fitted
