@@ -51,6 +51,7 @@ def robot_file(tmp_path, body: str | bytes):
      "[noise.parameters] sigma_wheel_base must be a number"),
     ('[robot]\ntype = ["diff"]\n', "type must be one of"),
     (DIFF + "m_per_tick = nan\n", "must be a positive"),
+    (DIFF + "m_per_tick = 1.0\nname = 7\n", "[robot] name must be text, got 7"),
     # files that are not UTF-8 TOML text
     (DIFF.encode() + b"m_per_tick = 1.0\n# r\xe9glage\n", "line 5: byte 0xe9 is not UTF-8"),
     (b"\x00\x01\x02", "binary data"),

@@ -321,3 +321,21 @@ def test_bias_variances_are_fitted_unless_kinds_says_white(run_cli, tmp_path):
     assert not bias & set(white["parameters"])
     assert default["parameters"] == both["parameters"]
     assert default["log_likelihood"] >= white["log_likelihood"] - 1e-9  # bias only adds freedom
+
+
+def test_the_robot_files_name_is_kept_by_calibrate_and_fit_noise(run_cli, tmp_path):
+    """A user's ``[robot] name`` survives calibrate --out-robot and fit-noise --out."""
+    from odomkit.io.robotfile import read_robot_name
+
+    named = tmp_path / "named.toml"
+    named.write_text('[robot]\nname = "bench rover 3"\n' + Path(ROBOT).read_text().split("[robot]", 1)[1])
+    calibrated = tmp_path / "cal.toml"
+    code, _, stderr = run_cli("calibrate", str(RUNS[0]), "--robot", named, "--from", "trajectory",
+                              "--out-robot", calibrated)
+    assert code == 0, stderr
+    assert read_robot_name(calibrated) == "bench rover 3"
+    code, _, stderr = run_cli("fit-noise", "--robot", calibrated, *_logs(RUNS[:2]), "--window", "10s",
+                              "--out", tmp_path / "fit.toml")
+    assert code == 0, stderr
+    assert read_robot_name(tmp_path / "fit.toml") == "bench rover 3"
+    assert read_robot_name(ROBOT) is None

@@ -70,7 +70,8 @@ from odomkit.robot import (
     robot_type_name,
 )
 
-__all__ = ["TRUTH_KEYS", "TRUTH_SIGMAS", "read_robot", "read_truth_table", "robot_to_dict", "write_robot"]
+__all__ = ["TRUTH_KEYS", "TRUTH_SIGMAS", "read_robot", "read_robot_name", "read_truth_table", "robot_to_dict",
+           "write_robot"]
 
 
 class _Fields:
@@ -180,6 +181,8 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
     kind = table.get("type")
     f = _Fields(table, "robot", source)
     f.used.update({"type", "name"})
+    if not isinstance(table.get("name", ""), str):
+        raise InputError(f"[robot] name must be text, got {table['name']!r}", source=source)
     sizes = _WheelSizes(f)
     if kind == "diff":
         robot: Robot = DiffDrive(
@@ -297,6 +300,16 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     return robot, noise
 
 
+def read_robot_name(path: str | Path) -> str | None:
+    """A robot file's ``[robot] name`` (None when it has none): the files odomkit writes from
+    it (``calibrate --out-robot``, ``fit-noise --out``) keep it."""
+    path = Path(path)
+    name = _document(path)["robot"].get("name")
+    if name is not None and not isinstance(name, str):
+        raise InputError(f"[robot] name must be text, got {name!r}", source=str(path))
+    return name
+
+
 def read_truth_table(path: str | Path) -> dict[str, float]:
     """A robot file's ``[truth]`` table (:data:`TRUTH_KEYS`), empty when it has none."""
     f = _Fields(_document(Path(path)).get("truth", {}), "truth", str(path))
@@ -334,12 +347,14 @@ def _document(path: Path) -> dict[str, Any]:
 
 
 def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
-                  truth: Mapping[str, float] | None = None) -> dict[str, Any]:
-    """The TOML document of a robot (and noise, and the ``[truth]`` table: :data:`TRUTH_KEYS`),
-    as written by :func:`write_robot`."""
+                  truth: Mapping[str, float] | None = None, name: str | None = None) -> dict[str, Any]:
+    """The TOML document of a robot (and noise, the ``[truth]`` table: :data:`TRUTH_KEYS`,
+    and ``[robot] name`` when given), as written by :func:`write_robot`."""
     from dataclasses import asdict
 
     table: dict[str, Any] = {"type": robot_type_name(robot)}
+    if name is not None:
+        table["name"] = name
     table.update(asdict(robot))
     doc: dict[str, Any] = {"robot": table}
     if noise:
@@ -356,9 +371,10 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
 
 
 def write_robot(path: str | Path, robot: Robot, noise: tuple[NoiseModel, ...] = (),
-                overwrite: bool = False, truth: Mapping[str, float] | None = None) -> Path:
+                overwrite: bool = False, truth: Mapping[str, float] | None = None,
+                name: str | None = None) -> Path:
     """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
     path = Path(path)
     refuse_overwrite(path, overwrite=overwrite)
-    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth)), encoding="utf-8")
+    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth, name)), encoding="utf-8")
     return path

@@ -28,7 +28,7 @@ from odomkit.calibrate.residuals import CALIBRATED_ROBOTS
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import check_outputs
 from odomkit.io.optiodom import read_experiment
-from odomkit.io.robotfile import read_robot, read_truth_table, robot_to_dict, write_robot
+from odomkit.io.robotfile import read_robot, read_robot_name, read_truth_table, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import DiffDrive, Tricycle
@@ -187,7 +187,7 @@ def calibrate_files(
     outputs: dict[str, str] = {}
     if out_robot is not None:
         outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite,
-                                           truth=truth_table))
+                                           truth=truth_table, name=read_robot_name(robot_path)))
     if ros_yaml is not None:
         assert wheel_radius is not None
         twist = None

@@ -225,7 +225,7 @@ def fit_noise_files(
     """
     from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
     from odomkit.io.files import check_outputs
-    from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, write_robot
+    from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_robot_name, write_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.results import check_result, numeric_guard
@@ -300,7 +300,8 @@ def fit_noise_files(
     truth_table = {key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_SIGMAS}
     if truths[0].time_offset:
         truth_table["time_offset"] = float(truths[0].time_offset)
-    written = write_robot(out, robot, fit.models, overwrite=overwrite, truth=truth_table)
+    written = write_robot(out, robot, fit.models, overwrite=overwrite, truth=truth_table,
+                          name=read_robot_name(robot_path))
     result = fit.to_dict()
     result["warnings"] = notes + list(fit.warnings)
     result.update({
