@@ -23,8 +23,8 @@ from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "MAX_HEADING_SIGMA",
-           "MAX_RESIDUAL_SIGMAS", "start_heading", "start_pose", "Truth", "truth_at", "truth_from_log",
-           "TruthSamples"]
+           "MAX_RESIDUAL_SIGMAS", "no_overlap", "start_heading", "start_pose", "Truth", "truth_at",
+           "truth_from_log", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
@@ -173,6 +173,17 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
         if truth.theta is not None:
             poses[valid, 2] = np.interp(tv, truth.t, truth.theta)
     return TruthSamples(poses, valid, int(np.count_nonzero(~inside)), int(np.count_nonzero(gap)))
+
+
+def no_overlap(truth: Truth, times: ArrayLike) -> str:
+    """One line on a truth that covers fewer than two of ``times`` (the log's rows): both
+    spans, and the options that move or widen the truth's."""
+    t = np.asarray(times, dtype=float).reshape(-1)
+    spans = f"the truth ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) and the log ({t[0]:.6g}..{t[-1]:.6g} s)"
+    if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
+        return f"{spans} do not overlap in time; check --truth-time-unit and --truth-time-offset"
+    return (f"{spans} overlap, but the log's rows there fall in gaps between fixes longer than "
+            "--max-gap; check --max-gap, --truth-time-unit and --truth-time-offset")
 
 
 def truth_from_log(log: OdometryLog) -> Truth | None:

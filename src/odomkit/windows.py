@@ -313,7 +313,7 @@ def why_no_windows(t: ArrayLike, travel: ArrayLike, valid: ArrayLike, spec: Wind
     # The longest stretch of rows with truth, as split_windows cuts them.
     rows = np.flatnonzero(np.asarray(valid, dtype=bool))
     if rows.size < 2:
-        return "the truth does not overlap the log in time (check --truth-time-unit, --truth-time-offset)"
+        return "fewer than two of the log's rows have truth (odomkit.truth.no_overlap says why)"
     if spec is not None and not skipped:
         stretches = truth_stretches(along[rows], spec.length)
         longest = max(float(along[rows[b]] - along[rows[a]]) for a, b in stretches)

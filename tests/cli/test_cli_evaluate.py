@@ -122,8 +122,8 @@ def test_position_only_truth_in_the_log_form_starts_once_the_robot_moves(run_cli
 
 
 @pytest.mark.parametrize(("args", "message"), [
-    (["evaluate", "{track}", "--truth", "{late}"], "does not overlap"),
-    (["evaluate", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "does not overlap"),
+    (["evaluate", "{track}", "--truth", "{late}"], "do not overlap in time"),
+    (["evaluate", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "do not overlap in time"),
     (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "10min"], "longer than the log"),
     (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "50m"], "longer than the log"),
     (["evaluate", "{still}", "--robot", str(ROBOT), "--window", "10s"], "no motion"),
@@ -133,7 +133,7 @@ def test_position_only_truth_in_the_log_form_starts_once_the_robot_moves(run_cli
     (["evaluate", "{track}", "--rpe", "-1"], "--rpe expects positive"),
     (["evaluate", "{track}", "--truth", "{late}", "--truth", "{late}"], "one --truth per log"),
     (["evaluate", str(RUN), "--robot", str(ROBOT), "--window", "ten"], "--window must be"),
-    (["track", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "does not overlap"),
+    (["track", str(RUN), "--robot", str(ROBOT), "--truth", "{late}"], "do not overlap in time"),
     (["track", str(RUN), "--robot", str(ROBOT), "--initial-cov", "1,2"], "3 variances"),
     (["track", str(RUN), "--robot", str(ROBOT), "--initial-cov", "1,2,3,4,5,6,7,8,9"], "symmetric"),
     (["track", str(RUN), "--robot", str(ROBOT), "--truth-sigma", "-1"], "--truth-sigma"),
@@ -153,3 +153,31 @@ def test_bad_input_is_one_line_and_exit_2(run_cli, tmp_path, args, message):
     assert code == 2, (out, err)
     assert err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1, err
     assert message in err and "Traceback" not in err
+
+
+def test_every_command_says_the_same_about_a_truth_that_misses_the_log(run_cli, tmp_path):
+    """One message, from odomkit.truth.no_overlap, naming both spans: track, evaluate (a
+    track file, a log whole and in windows) and fit-noise, for a truth 500 s late; and a
+    truth whose span covers the log but whose fixes leave only gaps there names --max-gap."""
+    code, _, _ = run_cli("track", RUN, "--robot", ROBOT, "--out", tmp_path / "track.csv")
+    assert code == 0
+    late = _gt(tmp_path, dt=500.0, name="late.csv")
+    said = set()
+    for args in (["track", RUN, "--robot", ROBOT, "--truth", late],
+                 ["evaluate", tmp_path / "track.csv", "--truth", late],
+                 ["evaluate", RUN, "--robot", ROBOT, "--truth", late],
+                 ["evaluate", RUN, "--robot", ROBOT, "--truth", late, "--window", "10s"],
+                 ["fit-noise", "--robot", ROBOT, "--log", RUN, "--truth", late, "--window", "10s",
+                  "--out", tmp_path / "fit.toml"]):
+        code, _, err = run_cli(*args)
+        assert code == 2 and len(err.strip().splitlines()) == 1, err
+        said.add(err.split(": ", 3)[-1].strip())  # without the file the error names
+    assert len(said) == 1, said
+    (text,) = said
+    t = np.loadtxt(RUN, delimiter=",")[:, 0]
+    assert f"the log ({t[0]:.6g}..{t[-1]:.6g} s)" in text and "--truth-time-offset" in text
+    sparse = tmp_path / "sparse.csv"  # 10 Hz fixes for 2 s before the log and 2 s after it
+    times = np.concatenate((t[0] - 2 + 0.1 * np.arange(20), t[-1] + 0.1 + 0.1 * np.arange(20)))
+    sparse.write_text("t,x,y,theta\n" + "".join(f"{x:.17g},0,0,0\n" for x in times))
+    code, _, err = run_cli("evaluate", tmp_path / "track.csv", "--truth", sparse, "--max-gap", "1")
+    assert code == 2 and "overlap, but" in err and "--max-gap" in err

@@ -221,7 +221,7 @@ def test_position_only_truth_and_truth_sigma_in_the_log_form(tmp_path):
 
 
 @pytest.mark.parametrize(("make", "match"), [
-    ("late_truth", "does not overlap"),
+    ("late_truth", "do not overlap in time"),
     ("long_window", "longer than the log"),
     ("standing", "no motion"),
 ])

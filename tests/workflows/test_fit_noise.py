@@ -124,8 +124,9 @@ def test_text_logs_with_position_only_truth_files(run_cli, tmp_path):
         np.savetxt(truth_path, np.column_stack((log.t[::2] + 0.01, gt[::2, :2])), delimiter=",",
                    header="t,x,y", comments="", fmt="%.17g")
         args += ["--log", str(log_path), "--truth", str(truth_path)]
-    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--truth-time-sigma", "0", "--kinds", "white",
-                     "--columns", "t=t,ticks_left=L,ticks_right=R", "--truth-sigma", "0.001")
+    result, _ = _fit(run_cli, tmp_path, *args, "--window", "10s", "--truth-time-sigma", "0",
+                     "--kinds", "white", "--columns", "t=t,ticks_left=L,ticks_right=R",
+                     "--truth-sigma", "0.001")
     assert result["windows"] > 20
     # No truth heading: its noise cannot be fitted (not a parameter); the others are held.
     assert set(result["parameters"]) == {"k_left", "k_right"}

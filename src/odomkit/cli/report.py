@@ -45,8 +45,9 @@ def report(
     window: Annotated[str | None, typer.Option(
         help="Honesty-test windows: 30s (time) or 5m (odometry travel); default 10s when the log has "
              "three of them with truth, else the whole log.")] = None,
-    kinds: Annotated[str, typer.Option(help="Noise kinds to fit: white, bias or white,bias (default white: one log shows one "
-                                   "draw of a bias, not its spread).")] = "white",
+    kinds: Annotated[str, typer.Option(
+        help="Noise kinds to fit: white, bias or white,bias (default white: one log shows one draw of a "
+             "bias, not its spread).")] = "white",
     method: Annotated[str, typer.Option(help="exact | midpoint | euler")] = "exact",
     initial_pose: Annotated[str | None, typer.Option(
         help="x,y,theta [m, m, rad] of the track's start; default: the truth pose at the first row")] = None,

@@ -100,8 +100,7 @@ def _score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64]
     n = poses.shape[0]
     rows = np.flatnonzero(valid)
     if rows.size == 0:
-        raise InputError("no row of the track lies inside the truth: the truth does not overlap it in "
-                         "time (check --truth-time-unit and --max-gap)", source=label)
+        raise InputError("no row of the track has truth (its gt_* columns are empty)", source=label)
     est, ref = poses[rows], truth[rows]
     P = None if cov is None else cov[rows]
     path = float(np.sum(np.hypot(*np.diff(ref[:, :2], axis=0).T)))
@@ -232,7 +231,7 @@ def evaluate_tracks(
 def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequence[float],
                  min_travel: float) -> Scored:
     """One track file of :func:`evaluate_tracks` scored against its truth."""
-    from odomkit.truth import truth_at
+    from odomkit.truth import no_overlap, truth_at
 
     track = _read_estimate(path)
     opts = opts.resolved()
@@ -240,6 +239,8 @@ def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequ
         found = _load(opts, None)
         samples = truth_at(found, track.t, opts.max_gap)
         ref, valid = samples.poses, samples.valid
+        if np.count_nonzero(valid) < 2:
+            raise InputError(no_overlap(found, track.t), source=str(path))
     elif track.truth is not None:
         ref, valid = track.truth, np.isfinite(track.truth[:, 0]) & np.isfinite(track.truth[:, 1])
     else:
@@ -450,14 +451,13 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     from odomkit.kinematics import body_steps
     from odomkit.log import OdometryLog
     from odomkit.track import dead_reckon_log
-    from odomkit.truth import truth_at
+    from odomkit.truth import no_overlap, truth_at
     from odomkit.windows import cumulative_travel, split_windows, why_no_windows, window_errors
 
     samples = truth_at(truth, log.t, opts.max_gap)
     rows = np.flatnonzero(samples.valid)
-    if rows.size == 0:
-        raise InputError(f"the truth ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) does not overlap the log "
-                         f"({log.t[0]:.6g}..{log.t[-1]:.6g} s); check --truth-time-unit", source=log.source)
+    if rows.size < 2:
+        raise InputError(no_overlap(truth, log.t), source=log.source)
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)  # odometry travel at each row [m], reversing counted
     # Without truth heading the start heading aligns the odometry's own path to the fixes.

@@ -76,7 +76,7 @@ class PreparedLog:
 def prepare_log(task: LogTask) -> PreparedLog:
     """Read one log and its truth, cut its windows and compute their covariance bases."""
     from odomkit.kinematics import body_steps
-    from odomkit.truth import truth_at
+    from odomkit.truth import no_overlap, truth_at
     from odomkit.windows import cumulative_travel, log_window_basis, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
@@ -95,6 +95,8 @@ def prepare_log(task: LogTask) -> PreparedLog:
         return PreparedLog(name, basis, len(log), skipped, None)
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
+    if int(samples.valid.sum()) < 2:
+        return PreparedLog(name, None, len(log), skipped, no_overlap(truth, log.t))
     travel = cumulative_travel(body_steps(task.robot, log))
     reason = why_no_windows(log.t, travel, samples.valid, task.specs[0], task.min_travel, skipped)
     return PreparedLog(name, None, len(log), skipped, reason)

@@ -22,7 +22,7 @@ from odomkit.log import OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import Robot
 from odomkit.track import Track, dead_reckon_log
-from odomkit.truth import Truth, start_pose, truth_at
+from odomkit.truth import Truth, no_overlap, start_pose, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, clock_from_robot, load_truth
@@ -143,9 +143,7 @@ def run_track(
     if found is not None:
         samples = truth_at(found, log.t, options.max_gap)
         if not samples.valid.any():
-            raise InputError(f"the truth ({found.t[0]:.6g}..{found.t[-1]:.6g} s) does not overlap the log "
-                             f"({log.t[0]:.6g}..{log.t[-1]:.6g} s); check --truth-time-unit",
-                             source=found.source)
+            raise InputError(no_overlap(found, log.t), source=found.source)
         truth_rows = samples.poses
         if pose0 is None:
             start, start_cov = start_pose(found, float(log.t[0]), options.max_gap,
