@@ -527,3 +527,40 @@ def test_truth_held_names_only_truth_parameters_of_bases_that_carry_them():
     # Nothing held is fine either way.
     assert fit_noise(plain, models, ROBOT, truth_held={}).truth_noise is None
     assert set(fit_noise(cols, models, ROBOT, truth_held={}).truth_noise) == TRUTH_NAMES
+
+
+def _floor_basis(durations, floor_share):
+    """Windows of the given durations whose end covariance at unit variances is a robot
+    column (1 - floor_share) plus a truth column (floor_share) per position axis."""
+    from odomkit.windows import TRUTH_NOISE, Window
+
+    w = len(durations)
+    white = np.zeros((w, 4, 3, 3))
+    white[:, 0, :2, :2] = (1 - floor_share) * np.eye(2)
+    white[:, 1, :2, :2] = floor_share * np.eye(2)  # truth_sigma: the floor
+    windows = [Window(0, 1, float(d), float(d)) for d in durations]
+    return WindowBasis(windows, np.zeros((w, 3)), np.zeros((w, 3, 3)), white, np.zeros((w, 3, 0)),
+                       np.zeros((0, 0)), ((0, "alpha_ss"), *TRUTH_NOISE), (), np.zeros(w), 0)
+
+
+@pytest.mark.parametrize(("durations", "share", "warned"), [
+    ([30.0] * 8, 0.6, True),  # one length, the floor the larger part
+    ([30.0] * 8, 0.4, False),  # one length, the floor the smaller part
+    ([10.0] * 4 + [30.0] * 4, 0.6, False),  # two lengths tell a floor from growth
+])
+def test_a_floor_fitted_from_one_window_length_that_dominates_is_warned_about(durations, share, warned):
+    """The truth's fitted floor is confounded with growing noise when every window has one
+    length; fit_noise then says so where the floor is most of the predicted variance."""
+    from odomkit.calibrate.fit_noise import NoiseParameter, _floor_note
+
+    basis = _floor_basis(durations, share)
+    params = tuple(NoiseParameter(name, model, name, kind, True) for model, name, kind in (
+        (0, "alpha_ss", "white"), (-1, "truth_sigma", "truth"), (-1, "truth_heading_sigma", "truth"),
+        (-1, "truth_time_sigma", "truth")))
+    v = np.array([1.0, 1.0, 0.0, 0.0])
+    note = _floor_note([basis], v, params, np.arange(4))
+    assert (note is not None) == warned
+    if warned:
+        assert f"is {100 * share:.0f} % of the predicted position variance" in note
+    # Held (given by the user), the floor is no fitted parameter and nothing is said.
+    assert _floor_note([basis], v, params, np.array([0])) is None

@@ -340,3 +340,16 @@ def test_the_robot_files_name_is_kept_by_calibrate_and_fit_noise(run_cli, tmp_pa
     assert code == 0, stderr
     assert read_robot_name(tmp_path / "fit.toml") == "bench rover 3"
     assert read_robot_name(ROBOT) is None
+
+
+def test_a_floor_fitted_from_one_window_length_is_warned_about_on_real_runs(run_cli, tmp_path):
+    """On the built-in OptiTrack runs, 10 s windows alone put most of the error in the
+    truth's fitted floor (about 2 mm and 3 mrad) and fit-noise says that a floor is hard to
+    tell from growing noise there; with 10 s and 30 s windows, or the floor given, it does not."""
+    one, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", name="one.toml")
+    assert any("hard to tell from robot noise" in w for w in one["warnings"]), one["warnings"]
+    two, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--window", "30s", name="two.toml")
+    assert not any("hard to tell" in w for w in two["warnings"])
+    given, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--truth-sigma", "0.001",
+                    "--truth-heading-sigma", "0.005", "--truth-time-sigma", "0.01", name="given.toml")
+    assert not any("hard to tell" in w for w in given["warnings"])

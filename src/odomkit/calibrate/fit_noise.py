@@ -572,6 +572,9 @@ def fit_noise(
     keys = [p.key for p in params]
     _warn(warnings, lik, params, free, intervals, flat, informed, corr, cov, val.quad,
           [names[i] for i in used], bases=[kept_bases[i] for i in used])
+    floor = _floor_note([kept_bases[i] for i in used], v_hat, params, free)
+    if floor:
+        warnings.append(floor)
     fitted = []
     for i, model in enumerate(models):
         mine = {p.name: float(v_hat[k]) for k, p in enumerate(params) if p.model == i}
@@ -659,6 +662,51 @@ def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter
         more = f" and {bad.size - 5} more" if bad.size > 5 else ""
         out.append(f"{bad.size} of {len(p)} logs disagree with the fit (per-log χ² test at 1 %, "
                    f"Bonferroni): {shown}{more}")
+
+
+#: The truth's fitted floor is warned about above this share of the predicted position
+#: variance at the window ends, when the windows are of about one size (FLOOR_SPREAD).
+FLOOR_SHARE = 0.5
+#: Windows whose longest is under this multiple of their shortest, in time or in travel, are
+#: "of one size": a floor and a growing noise are then told apart only by the scatter of sizes.
+FLOOR_SPREAD = 2.0
+
+
+def _floor_note(bases: Sequence[WindowBasis], v_hat: NDArray[np.float64],
+                params: Sequence[NoiseParameter], free: NDArray[np.intp]) -> str | None:
+    """A warning where the truth's own noise, fitted, is most of the predicted position
+    variance at window ends that are all of about one size.
+
+    A floor (the truth's σ at a window's two ends) does not grow with the window; robot
+    noise does. Windows of one length tell the two apart only through the scatter of their
+    travel and turning, so a floor fitted there can absorb what is really model misfit (a
+    robot's systematic error that grows with the window: on simulated commanded-velocity
+    robots a motion capture's "floor" came out at 0.14 m and 0.86 s) and the model then
+    over-covers shorter windows and under-covers longer ones.
+    """
+    truth = [int(j) for j in free if params[int(j)].kind == "truth"]
+    if not truth or not bases:
+        return None
+    durations = np.array([w.duration for b in bases for w in b.windows])
+    travels = np.array([w.travel for b in bases for w in b.windows])
+    one_size = any(x.size and float(np.min(x)) > 0 and float(np.max(x)) < FLOOR_SPREAD * float(np.min(x))
+                   for x in (durations, travels))
+    if not one_size:
+        return None
+    q = len(bases[0].white_names)
+    only_floor = np.zeros_like(v_hat)
+    only_floor[truth] = v_hat[truth]
+    floor = sum(float(np.einsum("j,wjaa->", only_floor[:q], b.white[:, :, :2, :2])) for b in bases)
+    total = sum(float(np.trace(b.covariance(v_hat)[:, :2, :2], axis1=1, axis2=2).sum()) for b in bases)
+    share = floor / total if total > 0 else 0.0
+    if share <= FLOOR_SHARE:
+        return None
+    shown = ", ".join(f"{params[j].key} {params[j].to_value(v_hat[j]):.3g}" for j in truth if v_hat[j] > 0)
+    return (f"the truth's own noise, fitted ({shown}), is {100 * share:.0f} % of the predicted position "
+            "variance at these window ends, all of about one length: there a floor that does not grow "
+            "with the window is hard to tell from robot noise that does, so the model may not hold at "
+            "other lengths; fit two lengths (--window 10s --window 30s) or give the truth's noise "
+            "(--truth-sigma, --truth-heading-sigma, --truth-time-sigma)")
 
 
 def _cross_validate(prob: _Problem, v_hat: NDArray[np.float64], fitted: dict[int, WindowBasis],
