@@ -1,0 +1,258 @@
+"""``check_identifiable`` for every vehicle ``odomkit calibrate`` calibrates (diff, tricycle,
+car, unicycle, gyro), against independent truth:
+
+* closed forms on a straight run: a yaw-rate (gyro) bias turns the heading by −b·t, which
+  bends the track sideways by −v·t²/2, while the speed scale stretches it along x only;
+  the scale of the yaw rate does nothing where the robot does not turn;
+* what separates a bias from a scale: a bias acts with time, a yaw-rate scale with turning,
+  so a steady turn one way (turning in step with time) cannot tell them apart, and any
+  log whose turning does not grow just as time does (a stop, straight stretches, turns
+  both ways) can — it need neither reverse nor stand still;
+* the figure is σ/‖r_i‖, the part of a parameter's column the others cannot reproduce;
+  that is the marginal standard error σ·√((JᵀJ)⁻¹)ᵢᵢ of least squares, checked with J by
+  finite differences of the library's dead reckoning (not the calibration model's
+  analytic Jacobian);
+* Monte Carlo: the same log's truth with fresh position noise σ many times, each fitted by
+  ``calibrate_exact(source="trajectory")``; the fitted parameters scatter as predicted,
+  within the sampling error of a standard deviation, 1/√(2(n−1)) relative, while the
+  conditional figure σ/‖J_i‖ (the others held) is outside it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.check import check_identifiable
+from odomkit.calibrate.exact import calibrate_exact
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
+from odomkit.track import dead_reckon_log
+
+SIGMA = 0.005
+PERIOD = 0.05
+
+
+def by_label(found):
+    return {f.message.split(":")[0]: f for f in found if f.check == "identifiable"}
+
+
+def unicycle_log(speed, yaw_rate, period=PERIOD):
+    speed = np.asarray(speed, dtype=float)
+    t = period * np.arange(speed.size)
+    return OdometryLog(t, {"speed": speed, "yaw_rate": np.asarray(yaw_rate, dtype=float) + 0 * speed})
+
+
+def gyro_log(speed, yaw_rate, m_per_tick=None, period=PERIOD):
+    """``ticks`` of ``m_per_tick`` (or ``dist`` [m] when None) and ``yaw_rate``, the travel
+    of step k being speed_k·Δt as a unicycle's."""
+    speed = np.asarray(speed, dtype=float)
+    t = period * np.arange(speed.size)
+    dist = np.r_[0.0, speed[:-1] * period]
+    travel = {"dist": dist} if m_per_tick is None else {"ticks": dist / m_per_tick}
+    return OdometryLog(t, {**travel, "yaw_rate": np.asarray(yaw_rate, dtype=float) + 0 * speed})
+
+
+def sampled_rows(log):
+    """The rows the check compares: every k-th from the k-th, k rows about one second."""
+    every = max(1, round(1.0 / float(log.t[1] - log.t[0])))
+    return np.arange(every, len(log), every)
+
+
+@pytest.mark.parametrize("kind", ["unicycle", "gyro dist", "gyro ticks"])
+def test_straight_driving_pins_the_bias_by_time_and_never_the_yaw_rate_scale(kind):
+    """Straight at v = 0.5 m/s, ω = 0: ∂θ(t)/∂b = −t, so ∂y_k/∂b = −v·t_k²/2 (exact for arcs:
+    the midpoint rule integrates the linear heading error exactly) and ∂x/∂b = 0; the speed
+    scale moves x alone (x_k = v·t_k). The bias's column is orthogonal to every other, so
+    its standard error is σ/‖v·t_k²/2‖ over the compared rows; the yaw-rate scale's column
+    is zero (no turning): unbounded."""
+    n, v = 1201, 0.5
+    speed = np.full(n, v)
+    log, robot = {
+        "unicycle": (unicycle_log(speed, 0.0), Unicycle()),
+        "gyro dist": (gyro_log(speed, 0.0), GyroOdometry()),
+        "gyro ticks": (gyro_log(speed, 0.0, 1e-3), GyroOdometry(m_per_tick=1e-3)),
+    }[kind]
+    found = by_label(check_identifiable(log, robot, sigma=SIGMA))
+    bias, scale = ("yaw-rate bias", "yaw-rate scale") if kind == "unicycle" else ("gyro bias", "gyro scale")
+    t_k = log.t[sampled_rows(log)]
+    assert found[bias].status == "ok"
+    assert found[bias].value == pytest.approx(SIGMA / np.linalg.norm(0.5 * v * t_k**2), rel=1e-9)
+    assert found[scale].status == "fail" and found[scale].value == math.inf
+    assert "not identifiable" in found[scale].message and "turn" in found[scale].advice
+    travel = {"unicycle": "speed scale c_scale", "gyro ticks": "metres per tick m_per_tick"}.get(kind)
+    if travel is not None:
+        assert found[travel].value == pytest.approx(SIGMA / np.linalg.norm(v * t_k), rel=1e-9)
+    else:  # dist is metres already: m_per_tick plays no part and is not judged
+        m = found["metres per tick m_per_tick"]
+        assert m.status == "ok" and "not calibrated from this log" in m.message and m.value is None
+
+
+def circle(n=2400, rate=0.2):
+    return np.full(n, 0.5), np.full(n, rate)
+
+
+def with_a_stop(n=2400, rate=0.2):
+    speed, yaw = circle(n, rate)
+    stop = slice(800, 1200)  # 20 s standing: time passes, nothing turns
+    speed[stop], yaw[stop] = 0.0, 0.0
+    return speed, yaw
+
+
+def square_one_way(n=2400):
+    """Legs of 8 s and quarter turns of 4 s, all counter-clockwise, never reversing."""
+    t = PERIOD * np.arange(n)
+    turning = (t % 12) >= 8
+    return np.where(turning, 0.2, 0.5), np.where(turning, math.pi / 2 / 4, 0.0)
+
+
+def both_ways(n=2400):
+    t = PERIOD * np.arange(n)
+    return np.full(n, 0.5), 0.2 * np.sign(np.sin(2 * math.pi * t / 40))
+
+
+@pytest.mark.parametrize("robot", [Unicycle(), GyroOdometry(m_per_tick=1e-3)])
+@pytest.mark.parametrize(("motion", "separated"), [
+    (circle, False), (with_a_stop, True), (square_one_way, True), (both_ways, True),
+])
+def test_a_bias_is_pinned_by_time_and_a_scale_by_turning(robot, motion, separated):
+    """A steady turn one way: Δθ_k = scale·(ω − b)·Δt_k with ω constant, so the bias's
+    effect −scale·Δt_k is the scale's ω·Δt_k times −scale/ω: they mimic each other exactly
+    and neither is identifiable (the speed scale still is). A stop in it, straight legs
+    between quarter turns one way, or turns both ways each make the turning no longer
+    proportional to time: both are then identified, though the robot never reverses (nor,
+    but for the stop, stands still)."""
+    speed, yaw = motion()
+    log = unicycle_log(speed, yaw) if isinstance(robot, Unicycle) else gyro_log(speed, yaw, 1e-3)
+    found = check_identifiable(log, robot, sigma=SIGMA)
+    labels = list(by_label(found))
+    travel, bias, scale = labels
+    statuses = {label: f.status for label, f in by_label(found).items()}
+    assert statuses[travel] == "ok"
+    if separated:
+        assert statuses[bias] == statuses[scale] == "ok", found
+    else:
+        assert statuses[bias] == statuses[scale] == "fail", found
+        for label in (bias, scale):
+            assert "the other parameters can mimic" in by_label(found)[label].message
+        assert "steady turn one way" in by_label(found)[bias].advice
+
+
+# --- the figure is the marginal standard error of least squares ---------------------------
+
+def _wiggle(n, period=PERIOD):
+    t = period * np.arange(n)
+    return t, 0.25 * np.sin(2 * math.pi * t / 30) + 0.1 * np.sin(2 * math.pi * t / 7)
+
+
+def _cases(period=PERIOD, n=1200):
+    """(robot, log, [(label, set(robot, q) for q the parameter's change, relative-to)])."""
+    t, wiggle = _wiggle(n, period)
+    speed = 0.5 + 0.2 * np.sin(t / 5)
+    uni = Unicycle(c_scale=1.02, yaw_rate_bias=0.003, yaw_rate_scale=0.98)
+    gyro = GyroOdometry(m_per_tick=1e-3, gyro_bias=-0.002, gyro_scale=1.01)
+    car = Car(2.7, encoder_offset=0.78, steering_offset=0.01, c_scale=0.99)
+    tri = Tricycle(0.6, 1e-4, steering_offset=-0.02, c_scale=1.01)
+    diff = DiffDrive(0.3, 1e-4, 1e-4, c_left=1.01, c_right=0.99, c_wheel_base=1.02)
+    ticks = np.r_[0.0, speed[:-1] * period]
+    turn = 0.3 * np.r_[0.0, wiggle[:-1] * period] / 2
+    return {
+        "unicycle": (uni, unicycle_log(speed, wiggle, period), [
+            ("speed scale c_scale", lambda r, q: replace(r, c_scale=r.c_scale + q), 1.0),
+            ("yaw-rate bias", lambda r, q: replace(r, yaw_rate_bias=r.yaw_rate_bias + q), 1.0),
+            ("yaw-rate scale", lambda r, q: replace(r, yaw_rate_scale=r.yaw_rate_scale + q), 1.0)]),
+        "gyro": (gyro, gyro_log(speed, wiggle, 1e-3, period), [
+            ("metres per tick m_per_tick", lambda r, q: replace(r, m_per_tick=r.m_per_tick + q), 1e-3),
+            ("gyro bias", lambda r, q: replace(r, gyro_bias=r.gyro_bias + q), 1.0),
+            ("gyro scale", lambda r, q: replace(r, gyro_scale=r.gyro_scale + q), 1.0)]),
+        "gyro without ticks": (gyro, gyro_log(speed, wiggle, None, period), [
+            ("gyro bias", lambda r, q: replace(r, gyro_bias=r.gyro_bias + q), 1.0),
+            ("gyro scale", lambda r, q: replace(r, gyro_scale=r.gyro_scale + q), 1.0)]),
+        "car": (car, OdometryLog(t, {"speed": 5 * speed, "steer": 0.4 * wiggle}), [
+            ("wheel scale c_scale", lambda r, q: replace(r, c_scale=r.c_scale + q), 1.0),
+            ("steering offset", lambda r, q: replace(r, steering_offset=r.steering_offset + q), 1.0),
+            ("wheel base L", lambda r, q: replace(r, wheel_base=r.wheel_base + q), 2.7)]),
+        "tricycle": (tri, OdometryLog(t, {"ticks": ticks / 1e-4, "steer": 1.2 * wiggle}), [
+            ("traction scale c_scale", lambda r, q: replace(r, c_scale=r.c_scale + q), 1.0),
+            ("steering offset", lambda r, q: replace(r, steering_offset=r.steering_offset + q), 1.0),
+            ("wheel-to-axle distance", lambda r, q: replace(r, wheel_to_axle=r.wheel_to_axle + q), 0.6)]),
+        # E_s adds q to both wheel scales, E_d q/2 to the right and −q/2 to the left
+        "diff": (diff, OdometryLog(t, {"ticks_left": (ticks - turn) / 1e-4,
+                                       "ticks_right": (ticks + turn) / 1e-4}), [
+            ("wheel scale E_s", lambda r, q: replace(r, c_left=r.c_left + q, c_right=r.c_right + q), 1.0),
+            ("wheel-diameter ratio E_d",
+             lambda r, q: replace(r, c_left=r.c_left - q / 2, c_right=r.c_right + q / 2), 1.0),
+            ("wheel base E_b", lambda r, q: replace(r, c_wheel_base=r.c_wheel_base + q), 1.0)]),
+    }
+
+
+def finite_difference_design(robot, log, params, rows):
+    """∂(x, y at ``rows``)/∂q by central differences of the library's dead reckoning, (2n, P)."""
+    cols = []
+    for _, change, _ in params:
+        h = 1e-6
+        plus = dead_reckon_log(log, change(robot, h), pose0=np.zeros(3)).poses[rows, :2]
+        minus = dead_reckon_log(log, change(robot, -h), pose0=np.zeros(3)).poses[rows, :2]
+        cols.append(((plus - minus) / (2 * h)).reshape(-1))
+    return np.column_stack(cols)
+
+
+@pytest.mark.parametrize("case", ["unicycle", "gyro", "gyro without ticks", "car", "tricycle", "diff"])
+def test_the_figure_is_the_marginal_standard_error_of_least_squares(case):
+    robot, log, params = _cases()[case]
+    J = finite_difference_design(robot, log, params, sampled_rows(log))
+    marginal = SIGMA * np.sqrt(np.diag(np.linalg.inv(J.T @ J)))
+    conditional = SIGMA / np.linalg.norm(J, axis=0)  # the others held at their values
+    found = by_label(check_identifiable(log, robot, sigma=SIGMA))
+    assert [f for f in found if "not calibrated" not in found[f].message] == [p[0] for p in params]
+    for (label, _, relative_to), se in zip(params, marginal, strict=True):
+        assert found[label].value == pytest.approx(se / relative_to, rel=1e-5), label
+    # ... and not the conditional one, which these logs make smaller by a clear margin
+    assert np.max(marginal / conditional) > 1.5
+
+
+# --- Monte Carlo: the calibration's own scatter ------------------------------------------
+
+@pytest.mark.parametrize("case", ["unicycle", "gyro", "car", "tricycle", "diff"])
+def test_standard_errors_agree_with_the_scatter_of_the_calibration(case):
+    """The log at 1 s a row, so that calibrate_exact's trajectory rows (every row from the
+    second) are the check's; its truth dead-reckoned with the robot itself and known at the
+    start, x and y of every later row noisy by σ: the check's figure is then the standard
+    deviation of calibrate_exact(source="trajectory", heading_weight=0, fix_scale=False)'s
+    estimates to first order in σ (a differential drive's as E_s = (c_left + c_right)/2 and
+    E_d = c_right − c_left)."""
+    robot, log, params = _cases(period=1.0, n=240)[case]
+    truth = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    predicted = by_label(check_identifiable(log, robot, sigma=SIGMA))
+    model_p0 = calibrate_exact([OdometryLog(log.t, log.channels, truth)], robot, "trajectory",
+                               heading_weight=0.0, fix_scale=False).values
+    rng = np.random.default_rng(20240518)
+    draws = 400
+    fitted = np.empty((draws, 3))
+    for k in range(draws):
+        gt = truth.copy()
+        gt[1:, :2] += rng.normal(0.0, SIGMA, (len(log) - 1, 2))
+        fitted[k] = calibrate_exact([OdometryLog(log.t, log.channels, gt)], robot, "trajectory",
+                                    heading_weight=0.0, fix_scale=False).values
+    assert np.allclose(model_p0, fitted.mean(axis=0), rtol=0, atol=10 * fitted.std(axis=0).max())
+    if case == "diff":
+        fitted = np.column_stack([fitted[:, :2].mean(axis=1), fitted[:, 1] - fitted[:, 0], fitted[:, 2]])
+    tolerance = 4.0 / math.sqrt(2 * (draws - 1))  # four standard errors of a standard deviation
+    J = finite_difference_design(robot, log, params, np.arange(1, len(log)))
+    conditional = SIGMA / np.linalg.norm(J, axis=0)
+    outside = 0
+    for (label, _, relative_to), spread, cond in zip(params, fitted.std(axis=0, ddof=1), conditional,
+                                                      strict=True):
+        assert predicted[label].value * relative_to == pytest.approx(spread, rel=tolerance), label
+        outside += abs(cond / spread - 1) > tolerance
+    assert outside >= 1  # the test tells the marginal figure from the conditional one
+
+
+def test_a_compass_robot_is_not_calibrated_so_not_checked():
+    t = PERIOD * np.arange(400)
+    log = OdometryLog(t, {"speed": np.full(t.size, 0.5), "heading": 0.01 * t})
+    (found,) = check_identifiable(log, CompassOdometry())
+    assert found.status == "ok" and "does not calibrate" in found.message
