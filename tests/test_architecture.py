@@ -45,7 +45,7 @@ EDGE = ("odomkit.io", "odomkit.workflows", "odomkit.cli", "odomkit.plot", "odomk
 #: file-format libraries (they belong in ``io/``), and the edge modules themselves (imports
 #: point downwards only).
 FORBIDDEN_IN_CORE = ("matplotlib", "typer", "rich", "click", "tomllib", "tomli_w", "rosbags",
-                     "polars") + EDGE
+                     "polars", "pymap3d") + EDGE
 
 
 @dataclass(frozen=True)

@@ -190,8 +190,13 @@ def truth_from_log(log: OdometryLog) -> Truth | None:
     """The log's own ground truth (OptiOdom, Snowhite, ``gt_*`` columns) as a :class:`Truth`.
 
     Rows repeating an earlier time are dropped (the first is kept), so that the truth's
-    clock is strictly increasing. Returns None when the log carries no truth.
+    clock is strictly increasing. A log whose ``meta["truth"]`` is a :class:`Truth` (a ROS
+    bag's GPS topic: position-only, on its own clock) gives that. Returns None when the log
+    carries no truth.
     """
+    own = log.meta.get("truth")
+    if isinstance(own, Truth):
+        return own
     if log.ground_truth is None:
         return None
     t = np.asarray(log.t, dtype=float)

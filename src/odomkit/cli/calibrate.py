@@ -100,7 +100,7 @@ def calibrate_command(
                               out_robot=out_robot, ros_yaml=ros_yaml, wheel_radius=wheel_radius, plot=plot,
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
-                              overwrite=force, log_options=options, truth=per_run,
+                              overwrite=force, log_options=options, truth=per_run, own_truth=base,
                               heading_weight=heading_weight)
     if json_out:
         print_json(with_warnings(out, warned))
@@ -112,7 +112,9 @@ def _print_text(out: dict[str, Any]) -> None:
     if out["method"] == "exact":
         print(f"exact calibration from {out['source']} of {out['n_runs']} run(s)")
         for name, value in out["parameters"].items():
-            print(f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.6f}")
+            # The standard error to two significant digits: a fixed six decimals shows
+            # "± 0.000000" for a steering offset pinned to 1e-7 rad.
+            print(f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}")
         if "E_d" in out:
             print(f"  E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  E_s = {out['E_s']:.6f}  "
                   f"wheel base {out['wheel_base']:.6f} m")

@@ -61,7 +61,8 @@ BagTimeOption = Annotated[bool, typer.Option(
     "--bag-time", help="ROS bag: time messages by when the bag received them, not their header stamps.")]
 TruthTopicOption = Annotated[str | None, typer.Option(
     "--truth-topic", help="ROS bag pose topic (Odometry, PoseStamped, PoseWithCovarianceStamped) that is "
-                          "the log's ground truth, e.g. motion capture.")]
+                          "the log's ground truth, e.g. motion capture; or a GPS NavSatFix topic "
+                          "(position-only, east-north metres from the first fix).")]
 
 
 def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: int | None,

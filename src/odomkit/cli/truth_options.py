@@ -25,7 +25,8 @@ __all__ = [
 ]
 
 _TRUTH_HELP = ("Ground-truth file: TUM (t x y z qx qy qz qw), KITTI pose rows with the time first, "
-               "or text t,x,y[,theta]; default: the log's own gt_* columns.")
+               "or text t,x,y[,theta] or GPS t,lat,lon[,alt] (degrees; east-north metres from the "
+               "first fix); default: the log's own gt_* columns.")
 TruthOption = Annotated[Path | None, typer.Option("--truth", help=_TRUTH_HELP)]
 TruthListOption = Annotated[list[Path] | None, typer.Option(
     "--truth", help=_TRUTH_HELP + " Repeat it: the i-th --truth belongs to the i-th log.")]
@@ -33,7 +34,8 @@ TruthFormatOption = Annotated[str, typer.Option(
     "--truth-format", help="auto | tum | kitti | csv")]
 TruthColumnsOption = Annotated[str | None, typer.Option(
     "--truth-columns", help="Text truth columns: in order (t,x,y,_,theta; _ skips one; theta_deg "
-    "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw).")]
+    "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw); GPS: lat, lon, alt, "
+    "heading_deg_north (clockwise from north) for x, y, theta.")]
 TruthTimeUnitOption = Annotated[str, typer.Option(
     "--truth-time-unit", help="Unit of the truth's time column: s | ms | us | ns.")]
 TruthSigmaOption = Annotated[float | None, typer.Option(

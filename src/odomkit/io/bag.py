@@ -42,7 +42,16 @@ heading by linear interpolation.
 **Ground truth** (``--truth-topic /mocap``): a pose topic (Odometry, PoseStamped,
 PoseWithCovarianceStamped) becomes the log's ground truth, as a text log's ``gt_*`` columns
 do: ``track``, ``calibrate``, ``fit-noise`` and ``evaluate`` use it where a truth file is
-not given.
+not given. A GPS topic (``sensor_msgs/NavSatFix``, ``--truth-topic /fix``) is position-only
+truth on its own clock instead, as a truth file of latitude/longitude is
+(:func:`odomkit.io.truth.project_latlon`: east and north of the first fix [m]): kept at its
+fixes (``meta["truth"]``, which :func:`odomkit.truth.truth_from_log` returns), not
+interpolated at the rows. Messages without a fix (``status.status`` < 0) are left out and
+counted in a warning; an altitude that is NaN (not known) makes every height 0. Where every
+fix states its position covariance (``position_covariance_type`` > 0), its median
+horizontal σ per axis, √((c_ee + c_nn)/2), is kept as ``meta["truth_position_sigma"]``
+[m], and a command whose truth σ is not given says so (``--truth-sigma`` takes it; it is
+never set from the bag silently).
 
 **What a rate means over a step** (row k's rate holds from row k to row k+1, as in
 :mod:`odomkit.log`): a command (Twist, TwistStamped) holds from its stamp to the next one
@@ -72,6 +81,7 @@ from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError, OdomkitError
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
+from odomkit.truth import Truth
 
 __all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_topics", "is_bag", "read_bag", "read_bag_odometry",
            "require_rosbags", "TRUTH_TYPES"]
@@ -84,11 +94,13 @@ MESSAGE_TYPES = {
     "geometry_msgs/msg/TwistStamped": "TwistStamped",
     "sensor_msgs/msg/Imu": "Imu",
 }
-#: The pose messages a ground-truth topic may hold (``--truth-topic``, e.g. motion capture).
+#: The messages a ground-truth topic may hold (``--truth-topic``): poses (motion capture) or
+#: GPS fixes (NavSatFix, position-only).
 TRUTH_TYPES = {
     "nav_msgs/msg/Odometry": "Odometry",
     "geometry_msgs/msg/PoseStamped": "PoseStamped",
     "geometry_msgs/msg/PoseWithCovarianceStamped": "PoseWithCovarianceStamped",
+    "sensor_msgs/msg/NavSatFix": "NavSatFix",
 }
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 #: Messages between two reports to a ``progress`` (one report per message would cost about as much
@@ -167,7 +179,7 @@ def bag_topics(path: str | Path) -> dict[str, str]:
 def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -> str:
     readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if t in types]
     others = len(topics) - len(readable)
-    what = "topics odomkit reads" if types is MESSAGE_TYPES else "pose topics"
+    what = "topics odomkit reads" if types is MESSAGE_TYPES else "truth topics"
     text = f"{what}: " + (", ".join(readable) if readable else "none")
     return text + (f"; {others} other topic(s)" if others else "")
 
@@ -351,6 +363,49 @@ def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, sou
                                ("gt_theta", "absolute", unwrap_angle(xyt[:, 2]))])
 
 
+def _fix_truth(reader: Any, topic: str, receive_time: bool, source: str,
+               progress: Progress = NO_PROGRESS) -> tuple[Truth, float | None]:
+    """A NavSatFix topic as position-only truth on its own clock (module docstring), and the
+    median horizontal σ per axis [m] its fixes state (None unless every fix states one)."""
+    from odomkit.io.truth import project_latlon
+
+    messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
+                           topic, source, progress)
+    fixed = np.flatnonzero([int(m.status.status) >= 0 for m in messages])
+    lost = len(messages) - fixed.size
+    if lost:
+        warnings.warn(f"{source}: {topic}: {lost} of {len(messages)} NavSatFix messages have no fix "
+                      "(status < 0) and are left out", stacklevel=3)
+    if fixed.size < 2:
+        raise InputError(f"{topic}: {fixed.size} of {len(messages)} NavSatFix messages have a fix "
+                         "(status >= 0); truth needs two or more", source=source)
+    kept = [messages[i] for i in fixed]
+    geo = np.array([[m.latitude, m.longitude] for m in kept], dtype=float)
+    for col, limit, what in ((0, 90.0, "latitude"), (1, 180.0, "longitude")):
+        bad = np.flatnonzero(~(np.abs(geo[:, col]) <= limit))  # NaN too
+        if bad.size:
+            raise InputError(f"{topic}: message {fixed[bad[0]] + 1} has {what} {geo[bad[0], col]}; "
+                             f"expected degrees within ±{limit:g}", source=source)
+    alt = np.array([m.altitude for m in kept], dtype=float)
+    ns = ns[fixed]
+    repeat = np.concatenate(([False], np.diff(ns) == 0))
+    if repeat.any():
+        warnings.warn(f"{source}: {topic}: {int(repeat.sum())} fixes repeat an earlier stamp and were "
+                      "dropped (the first fix at each time is kept)", stacklevel=3)
+        kept = [m for m, r in zip(kept, repeat, strict=True) if not r]
+        geo, alt, ns = geo[~repeat], alt[~repeat], ns[~repeat]
+    name = f"{source}:{topic}"
+    # NaN altitude: "not known" (sensor_msgs/NavSatFix); then no fix's height is used.
+    xy, _ = project_latlon(geo[:, 0], geo[:, 1], alt if np.all(np.isfinite(alt)) else None, source=name)
+    sigma = None
+    if all(int(m.position_covariance_type) > 0 for m in kept):
+        cov = np.array([m.position_covariance for m in kept], dtype=float)  # row-major, east-north-up
+        per_fix = np.sqrt(0.5 * (cov[:, 0] + cov[:, 4]))
+        stated = float(np.median(per_fix))
+        sigma = stated if math.isfinite(stated) and stated > 0 else None
+    return Truth(_seconds(ns), xy, None, 0.0, name), sigma
+
+
 def _read_stream(reader: Any, topic: str, msgtype: str, joints: Sequence[str], receive_time: bool,
                  source: str, progress: Progress = NO_PROGRESS) -> _Stream:
     conns = [c for c in reader.connections if c.topic == topic]
@@ -466,7 +521,8 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     receive_time : use the time the bag received each message instead of header stamps
     truth_topic : a pose topic (:data:`TRUTH_TYPES`, e.g. motion capture) that becomes the
         log's ground truth, interpolated at the rows (θ on the unwrapped yaw); rows outside
-        its span are left out, with a warning
+        its span are left out, with a warning. A NavSatFix topic is kept as position-only
+        truth at its fixes instead: ``meta["truth"]`` (and ``meta["truth_position_sigma"]``)
     progress : Progress
         One stage, ``"reading NAME"`` of the messages of the topics read (their count in the
         bag's index), advanced every 1000 messages (:mod:`odomkit.progress`)
@@ -494,17 +550,26 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
             raise InputError("--joints applies to a JointState topic; none is read", source=source)
         read = [*chosen, *([truth] if truth is not None else [])]
         total = sum(int(c.msgcount) for c in reader.connections if c.topic in read)
+        fixes = truth is not None and TRUTH_TYPES[available[truth]] == "NavSatFix"
+        gps: Truth | None = None
+        stated: float | None = None
         with stage(progress, total, f"reading {path.name}"):
             streams = [_read_stream(reader, c, available[c], joints, receive_time, source, progress)
                        for c in chosen]
-            if truth is not None:
+            if truth is not None and fixes:
+                gps, stated = _fix_truth(reader, truth, receive_time, source, progress)
+            elif truth is not None:
                 streams.append(_truth_stream(reader, truth, available[truth], receive_time, source,
                                              progress))
     t, channels = _merge(streams, source)
     poses = None
-    if truth is not None:
+    if truth is not None and not fixes:
         poses = np.column_stack([channels.pop(c) for c in ("gt_x", "gt_y", "gt_theta")])
-    meta = {"format": "bag", "topics": chosen, "time": "bag" if receive_time else "header"}
+    meta: dict[str, object] = {"format": "bag", "topics": chosen, "time": "bag" if receive_time else "header"}
+    if gps is not None:
+        meta["truth"] = gps
+        if stated is not None:
+            meta["truth_position_sigma"] = stated
     return OdometryLog(t, channels, poses, source, meta)
 
 

@@ -18,6 +18,18 @@ Formats (``--truth-format``):
     ``theta``/``yaw``/``heading``/``gt_theta``) or named by ``--truth-columns``: in order
     for a headerless file (``t,x,y,_,theta``; ``_`` skips a column) or as a map of header
     names (``t=stamp,x=px,y=py``). Without a heading column the truth is position-only.
+
+    Or GPS fixes ``t,lat,lon[,alt][,heading_deg_north]`` [s, deg, deg, m, deg]: WGS 84
+    latitude and longitude (headers ``lat``/``latitude``, ``lon``/``lng``/``long``/``longitude``,
+    ``alt``/``altitude``/``height``, height above the ellipsoid, 0 when absent; or
+    ``--truth-columns t=stamp,lat=LAT,lon=LON``), projected onto the local east-north plane
+    of the first fix in time (:func:`project_latlon`: x east, y north [m], origin that fix).
+    Their heading, if any, is ``heading_deg_north``: degrees clockwise from true north at the
+    fix, as a compass or a two-antenna GNSS receiver gives it (the body's heading, not the
+    course over ground), turned into odomkit's θ (counter-clockwise from x = east). A
+    ``theta``/``yaw``/``heading`` column in such a file is refused: its convention is unknown.
+    A file with both x, y and latitude/longitude columns is refused; so are a latitude
+    beyond ±90° and a longitude beyond ±180°.
 ``auto``
     A header means ``csv``; otherwise 8 columns mean ``tum``, 13 (or 12) ``kitti``, 3 or 4
     ``csv``.
@@ -34,9 +46,10 @@ from __future__ import annotations
 import math
 import warnings
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
@@ -44,17 +57,31 @@ from odomkit.io.table import to_seconds
 from odomkit.io.text import content_lines, is_number, read_text, seconds_per_unit, sniff_layout, split_fields
 from odomkit.truth import Truth
 
-__all__ = ["TRUTH_FORMATS", "parse_truth_columns", "read_truth"]
+__all__ = ["GEO_SPAN_WARNING", "project_latlon", "TRUTH_FORMATS", "parse_truth_columns", "read_truth"]
 
 TRUTH_FORMATS = ("auto", "tum", "kitti", "csv")
-_TARGETS = ("t", "x", "y", "theta", "theta_deg")
+_TARGETS = ("t", "x", "y", "theta", "theta_deg", "lat", "lon", "alt", "heading_deg_north")
 _HEADER_NAMES = {
     "t": ("t", "time", "timestamp", "stamp", "time_s"),
     "x": ("x", "gt_x", "x_gt", "pos_x", "tx"),
     "y": ("y", "gt_y", "y_gt", "pos_y", "ty"),
     "theta": ("theta", "gt_theta", "theta_gt", "yaw", "heading", "th"),
     "theta_deg": ("theta_deg", "yaw_deg", "heading_deg"),
+    "lat": ("lat", "latitude"),
+    "lon": ("lon", "lng", "long", "longitude"),
+    "alt": ("alt", "altitude", "height"),
+    "heading_deg_north": ("heading_deg_north",),
 }
+#: Fixes farther than this from the first [m] get a warning: the east-north plane of the first
+#: fix (tangent to the earth there, an orthographic projection) shortens a step taken at a
+#: distance d from the first fix, along the line to it, by 1 − cos(d/R) (R the earth's
+#: radius; across that line the scale stays 1): 4.9e-6 at 20 km (against Vincenty's
+#: geodesic distances at 45° latitude: 4.90e-6 to 4.94e-6), 1e-5 at 28 km, 3.1e-5 at 50 km.
+GEO_SPAN_WARNING = 20_000.0
+#: The earth's mean radius (IUGG) [m]: only for the figure in that warning.
+_MEAN_RADIUS = 6_371_008.8
+_GEO_COLUMNS = "t=TIME,lat=LAT,lon=LON"
+_GEO_HINT = f"--truth-columns {_GEO_COLUMNS}"
 
 
 def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
@@ -138,13 +165,154 @@ def _csv_columns(path: Path, header: list[str] | None, ncols: int,
     else:
         raise InputError(f"{ncols} columns and no header: name them with --truth-columns "
                          "(e.g. t,x,y,theta) or give --truth-format tum|kitti", source=str(path))
+    explicit = columns is not None
+    geo = [k for k in ("lat", "lon") if k in index]
+    if not geo:
+        if "alt" in index and not explicit:
+            del index["alt"]  # a height beside x, y (it was never read): not a GPS file
+        extra = [k for k in ("alt", "heading_deg_north") if k in index]
+        if extra:
+            raise InputError(f"{extra[0]} goes with latitude/longitude columns (lat, lon), and the file "
+                             f"has none; x, y truth takes its heading as theta (rad, counter-clockwise "
+                             f"from x) or theta_deg", source=str(path))
+    else:
+        _check_geo_columns(path, header, index)
+        return index
     missing = [k for k in ("t", "x", "y") if k not in index]
     if missing:
         raise InputError(f"no column for {', '.join(missing)} (header {header}); name the columns "
-                         "with --truth-columns, e.g. t=time,x=px,y=py,theta=yaw", source=str(path))
+                         "with --truth-columns, e.g. t=time,x=px,y=py,theta=yaw (or "
+                         f"{_GEO_HINT} for GPS fixes)", source=str(path))
     if "theta" in index and "theta_deg" in index:
         raise InputError("give theta or theta_deg, not both", source=str(path))
     return index
+
+
+def _column_name(header: list[str] | None, index: int) -> str:
+    return repr(header[index]) if header is not None else f"column {index + 1}"
+
+
+def _check_geo_columns(path: Path, header: list[str] | None, index: dict[str, int]) -> None:
+    """A latitude/longitude file's columns: t, lat and lon, no x or y, and a heading only
+    as ``heading_deg_north``."""
+    plane = [k for k in ("x", "y") if k in index]
+    if plane:
+        both = ", ".join(f"{k} ({_column_name(header, index[k])})" for k in (*plane, "lat", "lon")
+                         if k in index)
+        raise InputError(f"the file has both x, y and latitude/longitude columns: {both}; name the "
+                         f"ones to read with --truth-columns (t=TIME,x=X,y=Y or {_GEO_COLUMNS})",
+                         source=str(path))
+    missing = [k for k in ("t", "lat", "lon") if k not in index]
+    if missing:
+        raise InputError(f"no column for {', '.join(missing)} (header {header}); name the columns "
+                         f"with {_GEO_HINT}", source=str(path))
+    angles = [k for k in ("theta", "theta_deg") if k in index]
+    if angles:
+        col = index[angles[0]]
+        if header is not None:
+            mapped = ",".join(f"{k}={header[index[k]]}" for k in ("t", "lat", "lon", "alt") if k in index)
+            hint = f"--truth-columns {mapped},heading_deg_north={header[col]}"
+        else:
+            order = {i: k for k, i in index.items()} | {col: "heading_deg_north"}
+            hint = "--truth-columns " + ",".join(order.get(i, "_") for i in range(max(order) + 1))
+        raise InputError(
+            f"a latitude/longitude file's heading must say its convention, and {_column_name(header, col)} "
+            "does not: if it is degrees clockwise from true north (a compass's, a GNSS receiver's), "
+            f"read it as heading_deg_north ({hint}) and odomkit turns it into its θ (counter-clockwise "
+            "from east); otherwise convert it to that, or leave it out (position-only truth)",
+            source=str(path))
+
+
+def _check_geo_range(path: Path, rows: list[tuple[int, list[str]]], data: NDArray[np.float64],
+                     header: list[str] | None, index: dict[str, int]) -> None:
+    """|latitude| <= 90° and |longitude| <= 180°, else one line naming the row and column."""
+    for key, limit, what in (("lat", 90.0, "latitude"), ("lon", 180.0, "longitude")):
+        col = index[key]
+        bad = np.flatnonzero(np.abs(data[:, col]) > limit)
+        if bad.size:
+            name = key if header is None else header[col]
+            raise InputError(f"column {col + 1} ({name}) is {data[bad[0], col]:g}; a {what} is degrees "
+                             f"within ±{limit:g}", source=str(path), line=rows[bad[0]][0])
+
+
+def _require_pymap3d() -> Any:
+    """The ``pymap3d`` package (WGS 84 geodesy), or one line saying how to install it."""
+    try:
+        import pymap3d
+    except ImportError:
+        raise InputError("reading latitude/longitude needs pymap3d: pip install 'odomkit[gps]'") from None
+    return pymap3d
+
+
+def project_latlon(
+    lat: ArrayLike,
+    lon: ArrayLike,
+    alt: ArrayLike | None = None,
+    heading_north: ArrayLike | None = None,
+    source: str = "<memory>",
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """GPS fixes onto the local east-north plane of the first fix (``pymap3d``, WGS 84).
+
+    Each fix is turned into earth-centred coordinates and rotated into the east-north-up
+    frame of the first fix (:func:`pymap3d.geodetic2enu`); east and north are kept, up is
+    dropped: an orthographic projection onto the plane tangent to the ellipsoid at the
+    first fix. Distances there are true at the first fix and short by 1 − cos(d/R) along
+    the line to it at a distance d (:data:`GEO_SPAN_WARNING`, which warns beyond 20 km).
+
+    Parameters
+    ----------
+    lat, lon : array_like, shape (K,)
+        Geodetic latitude and longitude, WGS 84 [deg], east and north positive.
+    alt : array_like, shape (K,), optional
+        Height above the WGS 84 ellipsoid [m]; None: 0 for every fix.
+    heading_north : array_like, shape (K,), optional
+        Heading at each fix [deg], clockwise from true north there (a compass's or GNSS
+        receiver's). It is turned into the plane exactly: the direction is rotated from the
+        fix's own east-north-up frame into the first fix's (:func:`pymap3d.enu2ecefv`,
+        :func:`pymap3d.ecef2enuv`), which takes in the meridians' convergence (about
+        Δλ·sin φ: 0.3° at 20 km east of the first fix at 60° latitude).
+    source : str
+        Where the fixes came from (messages).
+
+    Returns
+    -------
+    xy : ndarray, shape (K, 2)
+        East and north of the first fix [m] (x east, y north; the first row is 0, 0).
+    theta : ndarray, shape (K,) or None
+        Heading counter-clockwise from x = east [rad], continuous (unwrapped); None
+        without ``heading_north``.
+
+    Raises
+    ------
+    InputError
+        ``pymap3d`` is not installed (the ``gps`` extra).
+
+    Warns
+    -----
+    UserWarning
+        A fix farther than :data:`GEO_SPAN_WARNING` from the first, with the scale error
+        there.
+    """
+    pm = _require_pymap3d()
+    lat = np.asarray(lat, dtype=float)
+    lon = np.asarray(lon, dtype=float)
+    h = np.zeros_like(lat) if alt is None else np.asarray(alt, dtype=float)
+    east, north, _ = pm.geodetic2enu(lat, lon, h, lat[0], lon[0], h[0])
+    xy = np.column_stack((east, north)).astype(float)
+    reach = float(np.max(np.hypot(xy[:, 0], xy[:, 1])))
+    if reach > GEO_SPAN_WARNING:
+        short = 1.0 - math.cos(reach / _MEAN_RADIUS)
+        warnings.warn(f"{source}: the fixes reach {reach / 1e3:.1f} km from the first, which is the origin "
+                      f"of the east-north plane they are projected onto; distances there are short by up to "
+                      f"{short:.1e} of their length (1 - cos(d/R)); split the drive into parts nearer "
+                      "their first fix if that matters", stacklevel=3)
+    if heading_north is None:
+        return xy, None
+    psi = np.radians(np.asarray(heading_north, dtype=float))
+    # The heading as a unit vector in the fix's own east-north-up frame, then in the first fix's.
+    ex, ey, ez = pm.enu2ecefv(np.sin(psi), np.cos(psi), np.zeros_like(psi), lat, lon)
+    e, n, _ = pm.ecef2enuv(ex, ey, ez, lat[0], lon[0])
+    return xy, unwrap_angle(np.arctan2(n, e))
 
 
 def read_truth(
@@ -168,7 +336,8 @@ def read_truth(
     Returns
     -------
     Truth with strictly increasing times [s] and, unless the file is position-only, a
-    continuous heading [rad].
+    continuous heading [rad]. GPS fixes (latitude/longitude columns) are east and north of
+    the first fix [m] (:func:`project_latlon`).
     """
     path = Path(path)
     if not path.is_file():
@@ -200,8 +369,10 @@ def read_truth(
         raise InputError("KITTI pose rows carry no time, and truth needs a clock: put the time first "
                          "(13 numbers: t r11 r12 r13 px r21 r22 r23 py r31 r32 r33 pz)", source=str(path))
     want = {"tum": 8, "kitti": 13}.get(fmt, ncols)
-    data = _table(path, [(n, split_fields(s, delimiter)) for n, s in lines], want)
+    rows = [(n, split_fields(s, delimiter)) for n, s in lines]
+    data = _table(path, rows, want)
     theta: NDArray[np.float64] | None
+    geo, north = None, False  # GPS fixes (lat, lon, alt, heading) and whether the heading is given
     if fmt == "tum":
         t, xy = data[:, 0], data[:, 1:3]
         qx, qy, qz, qw = data[:, 4], data[:, 5], data[:, 6], data[:, 7]
@@ -218,22 +389,37 @@ def read_truth(
         theta = np.arctan2(data[:, 5], data[:, 1])  # atan2(r21, r11)
     else:
         index = _csv_columns(path, header, ncols, spec)
-        t, xy = data[:, index["t"]], data[:, [index["x"], index["y"]]]
-        theta = (data[:, index["theta"]] if "theta" in index
-                 else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
+        t = data[:, index["t"]]
+        if "lat" in index:
+            _check_geo_range(path, rows, data, header, index)
+            north = "heading_deg_north" in index
+            # lat, lon, alt, heading: sorted and thinned with the times, projected after (the
+            # origin is the first fix in time); xy and θ are set from them then.
+            geo = np.column_stack([data[:, index[k]] if k in index else np.zeros(len(t))
+                                   for k in ("lat", "lon", "alt", "heading_deg_north")])
+            xy, theta = geo[:, :2], None
+        else:
+            xy = data[:, [index["x"], index["y"]]]
+            theta = (data[:, index["theta"]] if "theta" in index
+                     else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
     t = to_seconds(t, seconds)
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):
         warnings.warn(f"{path}: truth times are not in order; rows were sorted by time", stacklevel=2)
         t, xy = t[order], xy[order]
         theta = None if theta is None else theta[order]
+        geo = None if geo is None else geo[order]
     keep = np.concatenate(([True], np.diff(t) > 0))
     if not keep.all():
         warnings.warn(f"{path}: {int(np.count_nonzero(~keep))} truth rows repeat an earlier time and "
                       "were dropped (the first fix at each time is kept)", stacklevel=2)
         t, xy = t[keep], xy[keep]
         theta = None if theta is None else theta[keep]
+        geo = None if geo is None else geo[keep]
     if not math.isfinite(sigma) or sigma < 0:
         raise InputError(f"--truth-sigma must be a non-negative number of metres, got {sigma!r}")
+    if geo is not None:
+        xy, theta = project_latlon(geo[:, 0], geo[:, 1], geo[:, 2],
+                                   geo[:, 3] if north else None, str(path))
     return Truth(t.copy(), np.ascontiguousarray(xy, dtype=float),
                  None if theta is None else unwrap_angle(theta), float(sigma), str(path))

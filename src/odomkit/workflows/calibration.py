@@ -9,7 +9,7 @@ Nothing existing is overwritten unless ``overwrite=True`` (CLI ``--force``).
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -32,6 +32,7 @@ from odomkit.io.robotfile import read_robot, read_robot_name, read_truth_table, 
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import DiffDrive, Tricycle
+from odomkit.truth import Truth
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, load_truth
@@ -59,6 +60,7 @@ def calibrate_files(
     overwrite: bool = False,
     log_options: LogOptions | None = None,
     truth: Sequence[TruthOptions] | None = None,
+    own_truth: TruthOptions | None = None,
     plot: str | Path | None = None,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
@@ -90,6 +92,9 @@ def calibrate_files(
         and fit each run's start pose with the robot's parameters
         (:func:`odomkit.calibrate.positions.calibrate_positions`; position-only, noisy truth
         such as GPS is enough). ``--from`` and ``--heading-weight`` do not apply.
+    own_truth : how to take the logs' own position-only truth (a ROS bag's GPS topic,
+        ``--truth-topic``: σ, clock offset) where ``truth`` is None; such logs are then
+        calibrated from their fixes as with ``truth``.
     plot : .png, .svg or .pdf file, optional
         Draw the runs before and after calibration against the truth and, with ``side``,
         UMBmark's return errors (:func:`odomkit.workflows.figures.calibration_figure`).
@@ -108,13 +113,7 @@ def calibrate_files(
 
         check_plot_file(plot)
     if truth is not None:
-        if method != "exact":
-            raise InputError("--truth applies to --method exact")
-        stray = (["--from"] if source is not None else []) + [
-            _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
-        if stray:
-            raise InputError(f"{', '.join(stray)} does not apply with --truth: every truth fix is compared "
-                             "as a position, and each run's start pose is fitted")
+        _refuse_trajectory_flags(method, source, exact_kwargs)
     if method not in ("exact", "umbmark"):
         raise ModelError(f"--method must be 'exact' or 'umbmark', got {method!r}")
     if method == "umbmark":
@@ -142,6 +141,11 @@ def calibrate_files(
         raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
                          source=str(robot_path))
     runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    if truth is None and method == "exact" and any(isinstance(log.meta.get("truth"), Truth) for log in runs):
+        # A bag's GPS topic (--truth-topic): position-only fixes on their own clock, compared
+        # one by one as --truth files are.
+        _refuse_trajectory_flags(method, source, exact_kwargs)
+        truth = [own_truth or TruthOptions()] * len(runs)
     truth_table = read_truth_table(robot_path)  # kept in --out-robot; its offset refitted with --truth
     with numeric_guard("the calibration"):
         if method == "umbmark":
@@ -206,6 +210,18 @@ def calibrate_files(
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any]) -> None:
+    """Calibration from truth fixes (``--truth``, or a bag's GPS topic) takes none of the
+    trajectory fit's flags: one line naming the ones given."""
+    if method != "exact":
+        raise InputError("--truth applies to --method exact")
+    stray = (["--from"] if source is not None else []) + [
+        _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
+    if stray:
+        raise InputError(f"{', '.join(stray)} does not apply with --truth: every truth fix is compared "
+                         "as a position, and each run's start pose is fitted")
 
 
 def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,

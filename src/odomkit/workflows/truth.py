@@ -3,6 +3,7 @@ a truth file, or the log's own ``gt_*`` columns."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 from pathlib import Path
@@ -87,6 +88,11 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     if found is None:
         return None
     truth: Truth = found
+    stated = None if options.path is not None or log is None else log.meta.get("truth_position_sigma")
+    if isinstance(stated, float) and not sigma:  # a bag's GPS fixes state their σ (io/bag.py)
+        warnings.warn(f"{truth.source}: the fixes state their position covariance, median horizontal "
+                      f"sigma {stated:.3g} m per axis, which odomkit does not use on its own: "
+                      f"--truth-sigma {stated:.3g} takes it", stacklevel=2)
     if options.time_offset:
         truth = replace(truth, t=truth.t - options.time_offset)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
