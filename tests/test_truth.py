@@ -283,3 +283,33 @@ def test_the_aligned_heading_is_the_bodys_for_a_reversing_robot_and_refuses_a_st
     standing = np.zeros((t.size, 3))
     assert heading_by_alignment(truth, 5.0, t, standing) is None
     assert heading_by_alignment(truth, 5.0, t[:20], back[:20]) is None  # no fixes inside the track there
+
+
+def test_dense_noisy_fixes_widen_the_heading_fit_until_the_heading_is_known():
+    """A 10 Hz GPS with 1.5 m noise on a car at 10 m/s gives no usable heading over the 1 s a
+    motion capture needs (σ about 0.4 rad or refused); the fit widens (1, 2, 4, 8 s) until σ
+    is below HEADING_SIGMA_SOUGHT, and the headings stay honest: their z² averages about 1
+    over 200 draws, both fitted to the fixes alone and aligned to the odometry's path."""
+    from odomkit.truth import HEADING_SIGMA_SOUGHT, heading_by_alignment, heading_spans, start_heading
+
+    rng = np.random.default_rng(11)
+    t = np.arange(0.0, 20.0, 0.1)
+    omega, v = 0.05, 10.0  # a gentle curve
+    theta = 0.3 + omega * t
+    x = v / omega * (np.sin(theta) - np.sin(0.3))
+    y = -v / omega * (np.cos(theta) - np.cos(0.3))
+    odometry = np.column_stack((x, y, theta))  # a perfect odometry, in the truth's frame
+    assert heading_spans(Truth(t, odometry[:, :2]))[:4] == (1.0, 2.0, 4.0, 8.0)
+    z2_alone, z2_aligned = [], []
+    for _ in range(200):
+        fixes = Truth(t, odometry[:, :2] + rng.normal(0.0, 1.5, (t.size, 2)), sigma=1.5)
+        alone = heading_from_positions(fixes, 10.0)
+        one_second = heading_from_positions(fixes, 10.0, span=1.0)
+        assert one_second is None or one_second[1] > 0.1**2  # no use at a mocap's span
+        assert alone is not None and alone[1] <= HEADING_SIGMA_SOUGHT**2
+        z2_alone.append((alone[0] - theta[100]) ** 2 / alone[1])
+        aligned = heading_by_alignment(fixes, 10.0, t, odometry)
+        assert aligned == start_heading(fixes, 10.0, t, odometry)
+        z2_aligned.append((aligned[0] - theta[100]) ** 2 / aligned[1])
+    # χ²₁ mean 1 with standard error √2/√200 = 0.1; the quadratic's curvature bias is small here
+    assert 0.7 < np.mean(z2_alone) < 1.3 and 0.7 < np.mean(z2_aligned) < 1.3

@@ -423,7 +423,7 @@ def _time_column_by_hand(case, log, robot, poses, truth, w):
     offset is left out: windows._pose_rates) but at a start whose heading is fitted to
     position-only truth, where the fixes' clock turns that heading by ω·δ; a start pose error
     (dx, dy, dθ) reaches the end as (dx − dθ·Δy, dy + dθ·Δx, dθ), Δ = end − start."""
-    from odomkit.truth import heading_by_alignment
+    from odomkit.truth import start_heading
 
     steps = body_steps(robot, log)
     start = poses[w.start].copy()
@@ -431,7 +431,7 @@ def _time_column_by_hand(case, log, robot, poses, truth, w):
         start[2] = steps.inputs["heading"][w.start]
     elif case == "position_only":  # the odometry's path (any frame) turned onto the fixes
         whole = dead_reckon(steps.dd, steps.dtheta, np.array([5.0, -3.0, 1.0]))
-        start[2] = heading_by_alignment(truth, float(log.t[w.start]), log.t, whole)[0]
+        start[2] = start_heading(truth, float(log.t[w.start]), log.t, whole)[0]
     track = dead_reckon(steps.dd[w.start:w.end], steps.dtheta[w.start:w.end], start)
     u_a = (track[4] - track[0]) / (log.t[w.start + 4] - log.t[w.start])
     u_b = (track[-1] - track[-5]) / (log.t[w.end] - log.t[w.end - 4])

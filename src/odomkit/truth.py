@@ -11,6 +11,7 @@ start from truth can still be given one.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import partial
 
@@ -22,7 +23,8 @@ from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
-__all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "MAX_HEADING_SIGMA",
+__all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
+           "HEADING_SIGMA_SOUGHT", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "MAX_RESIDUAL_SIGMAS", "no_overlap", "start_heading", "start_pose", "Truth", "truth_at",
            "truth_from_log", "TruthSamples"]
 
@@ -34,6 +36,14 @@ MAX_HEADING_SIGMA = 0.4
 #: too sharp for a quadratic). With the 5–7 fixes of a fit the residual has 4–8 degrees of
 #: freedom, so honest fixes exceed 3σ with a probability below 1e-6.
 MAX_RESIDUAL_SIGMAS = 3.0
+#: A heading fit of :func:`heading_from_positions` without a given span widens its span
+#: (doubling it, up to :data:`WIDEST_HEADING_SPAN`) until the heading's standard deviation
+#: is below this [rad]: dense fixes of a noisy truth (a 10 Hz GPS with 1.5 m noise) give
+#: no usable heading over the 1 s a motion capture needs, and over 8 s a good one.
+HEADING_SIGMA_SOUGHT = 0.05
+#: The widest span [s] a heading fit widens to (a sparse truth's own span may be wider:
+#: it is kept, not widened).
+WIDEST_HEADING_SPAN = 10.0
 
 
 @dataclass(frozen=True)
@@ -213,10 +223,21 @@ def heading_span(truth: Truth, min_fixes: int = 5) -> float:
     return max(1.0, (max(int(min_fixes), 4) + 1) * spacing)
 
 
-def _fit_span(truth: Truth, span: float | None, min_fixes: int) -> float:
-    """A heading fit's width of fixes [s]: ``span``, or :func:`heading_span` when None."""
-    return validate.positive(heading_span(truth, min_fixes) if span is None else span, "span", unit="s",
-                             error=InputError)
+def heading_spans(truth: Truth, min_fixes: int = 5) -> tuple[float, ...]:
+    """The widths [s] a heading fit without a given span tries, in order: :func:`heading_span`,
+    then doubled while within :data:`WIDEST_HEADING_SPAN` (a 10 Hz truth: 1, 2, 4, 8 s; a
+    1 Hz GPS: its 6 s only)."""
+    spans = [heading_span(truth, min_fixes)]
+    while 2 * spans[-1] <= WIDEST_HEADING_SPAN:
+        spans.append(2 * spans[-1])
+    return tuple(spans)
+
+
+def _fit_spans(span: float | None, truth: Truth, min_fixes: int) -> tuple[float, ...]:
+    """The widths [s] a heading fit tries: ``span`` alone, or :func:`heading_spans`."""
+    if span is None:
+        return heading_spans(truth, min_fixes)
+    return (validate.positive(span, "span", unit="s", error=InputError),)
 
 
 def _residual_limit(truth: Truth, given: float | None) -> float:
@@ -253,8 +274,10 @@ def heading_from_positions(
     time : float
         Time of the heading [s].
     span : float, optional
-        Width of the window of fixes [s]; default :func:`heading_span` (1 s, wider for
-        sparse fixes such as a 1 Hz GPS, which would otherwise never give a heading).
+        Width of the window of fixes [s]; default: :func:`heading_spans` in turn, from
+        :func:`heading_span` (1 s, wider for sparse fixes such as a 1 Hz GPS, which would
+        otherwise never give a heading) doubling up to :data:`WIDEST_HEADING_SPAN` until
+        the heading's σ is below :data:`HEADING_SIGMA_SOUGHT` (dense, noisy fixes).
     min_fixes : int
         Fewest fixes to fit (at least 4, so the residual has a degree of freedom).
     max_residual : float, optional
@@ -275,7 +298,32 @@ def heading_from_positions(
     >>> round(h, 12), var < 1e-20
     (0.785398163397, True)
     """
-    span = _fit_span(truth, span, min_fixes)
+    return _widening(lambda width: _quadratic_heading(truth, time, width, min_fixes, max_residual),
+                     _fit_spans(span, truth, min_fixes))
+
+
+def _widening(fit: Callable[[float], tuple[float, float] | None], spans: Sequence[float]
+              ) -> tuple[float, float] | None:
+    """The first of ``fit(width)`` over ``spans`` whose heading σ is below
+    :data:`HEADING_SIGMA_SOUGHT`, else the most precise one (None where none fits).
+
+    A wider span has more fixes and more travel (a heading's σ falls about as span^-1.5),
+    but holds more of what the fit leaves out (the quadratic path's misfit, the odometry's
+    own drift in an alignment): so no wider than the precision sought needs.
+    """
+    best: tuple[float, float] | None = None
+    for width in spans:
+        found = fit(width)
+        if found is not None and (best is None or found[1] < best[1]):
+            best = found
+        if best is not None and best[1] <= HEADING_SIGMA_SOUGHT**2:
+            break
+    return best
+
+
+def _quadratic_heading(truth: Truth, time: float, span: float, min_fixes: int,
+                       max_residual: float | None) -> tuple[float, float] | None:
+    """One quadratic fit of :func:`heading_from_positions` over ±``span``/2."""
     min_fixes = max(int(min_fixes), 4)
     near = np.flatnonzero(np.abs(truth.t - time) <= span / 2)
     if near.size < min_fixes:
@@ -341,7 +389,8 @@ def heading_by_alignment(
     track_poses : array_like, shape (N, 3)
         The odometry's poses [m, m, rad] in any frame (e.g. dead-reckoned from the origin).
     span, min_fixes, max_residual
-        As in :func:`heading_from_positions` (``min_fixes`` at least 3 here).
+        As in :func:`heading_from_positions` (``min_fixes`` at least 3 here): without a
+        span the alignment widens as that fit does, each by its own precision.
 
     Returns
     -------
@@ -360,7 +409,16 @@ def heading_by_alignment(
     """
     t_odo = np.asarray(track_t, dtype=float)
     poses = np.asarray(track_poses, dtype=float)
-    span = _fit_span(truth, span, min_fixes)
+    if not t_odo[0] <= time <= t_odo[-1]:
+        return None  # the odometry's heading there is unknown (np.interp would clamp it)
+    return _widening(
+        lambda width: _aligned_heading(truth, time, t_odo, poses, width, min_fixes, max_residual),
+        _fit_spans(span, truth, min_fixes))
+
+
+def _aligned_heading(truth: Truth, time: float, t_odo: NDArray[np.float64], poses: NDArray[np.float64],
+                     span: float, min_fixes: int, max_residual: float | None) -> tuple[float, float] | None:
+    """One alignment of :func:`heading_by_alignment` over the fixes within ±``span``/2."""
     near = np.flatnonzero((np.abs(truth.t - time) <= span / 2) & (truth.t >= t_odo[0])
                           & (truth.t <= t_odo[-1]))
     if near.size < max(int(min_fixes), 3):

@@ -99,26 +99,49 @@ def test_track_initial_cov_three_or_nine_numbers(run_cli, tmp_path):
         np.testing.assert_allclose(got, want, rtol=1e-15)
 
 
+def _standing(path, seconds):
+    """The truth file at ``path`` with its robot held at its first position for ``seconds``."""
+    data = np.loadtxt(path, delimiter=",", skiprows=1)
+    data[data[:, 0] - data[0, 0] < seconds, 1:3] = data[0, 1:3]
+    np.savetxt(path, data, delimiter=",", header="t,x,y", comments="")
+    return path
+
+
 def test_track_position_only_truth_fits_the_start_heading(run_cli, tmp_path):
+    """The robot stands still for its first second; the fixes over the next seconds (the
+    heading fit widens its span until the heading is known to 0.05 rad) give the heading it
+    stands at, within the variance the track starts with."""
     gt = _gt(tmp_path, shift=(0.0, 0.0, 1.0), heading=False)
-    # the robot stands still for its first second: no heading can be fitted there
-    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--truth", gt, "--json")
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--truth", gt, "--out", tmp_path / "a.csv")
+    assert code == 0, err
+    first = np.genfromtxt(tmp_path / "a.csv", delimiter=",", names=True)[0]
+    true = np.loadtxt(RUN, delimiter=",")[0, 3] + 1.0  # the run's own heading, turned as the fixes
+    assert abs(first["theta"] - true) < 3 * np.sqrt(first["cov_thetatheta"]) + 1e-3
+    assert abs(first["theta"] - true) < 0.05
+    # Fixes that stand for 6 s support no heading within the widest span: the user must say.
+    code, _, err = run_cli("track", RUN, "--robot", ROBOT, "--truth", _standing(gt, 6.0), "--json")
     assert code == 2 and "give --initial-pose" in err and len(err.strip().splitlines()) == 1
 
 
-def test_position_only_truth_in_the_log_form_starts_once_the_robot_moves(run_cli, tmp_path):
+def test_position_only_truth_in_the_log_form_starts_once_the_fixes_give_a_heading(run_cli, tmp_path):
     gt = _gt(tmp_path, heading=False)
     code, out, err = run_cli("evaluate", RUN, "--robot", ROBOT, "--truth", gt, "--window", "10s",
                              "--truth-sigma", "0.001", "--json")
     assert code == 0, err
     got = json.loads(out)
     assert got["rpe"]["1"] is None and got["windows"] > 0
-    assert any("starts at 1 s" in w for w in got["warnings"])
+    # standing for its first second, the robot still gets its heading from the fixes after it
+    assert got["rows_skipped"] == 0 and not any("starts at" in w for w in got["warnings"])
+    code, out, err = run_cli("evaluate", RUN, "--robot", ROBOT, "--truth", _standing(gt, 6.0), "--window",
+                             "10s", "--truth-sigma", "0.001", "--json")
+    assert code == 0, err
+    late = json.loads(out)
+    assert any("starts at" in w for w in late["warnings"]) and late["rows_skipped"] > 20
     assert "odomkit: warning:" in err  # the same warnings on stderr
     # the truth's own file, with heading, skips nothing
     full = json.loads(run_cli("evaluate", RUN, "--robot", ROBOT, "--truth", _gt(tmp_path, name="h.csv"),
                               "--json")[1])
-    assert full["rows_skipped"] == 0 and got["rows_skipped"] == 20  # the first second, standing
+    assert full["rows_skipped"] == 0
 
 
 @pytest.mark.parametrize(("args", "message"), [
