@@ -219,3 +219,20 @@ def test_fit_amcl_applies_the_robot_files_offset(run_cli, tmp_path):
     from_file, flag = fit(), fit("--truth-time-offset", "0.4")
     assert from_file["log_likelihood"] == flag["log_likelihood"]
     assert from_file["alpha"] == flag["alpha"]
+
+
+def test_calibrate_prints_the_fitted_clock_offset_in_its_text(run_cli, tmp_path):
+    """The text output shows the fitted offset with its standard error, equal to the JSON's,
+    and a given one as given: a GPS user reads it without --json."""
+    files = drive(tmp_path, 0.3)
+    robot = robot_file(tmp_path, "car.toml", NOMINAL)
+    args = ("calibrate", files["log"], "--robot", robot, "--truth", files["gps"], "--columns", COLUMNS)
+    code, text, err = run_cli(*args)
+    assert code == 0, err
+    fitted = ok_json(run_cli, "calibrate", files["log"], "--robot", robot, "--truth", files["gps"])
+    offset = fitted["truth_time_offset"]
+    line = next(x for x in text.splitlines() if "truth clock" in x)
+    assert f"{offset['value']:+.6f} s ± {offset['std_error']:.2g}" in line
+    assert abs(offset["value"] - 0.3) < 0.01
+    code, text, _ = run_cli(*args, "--truth-time-offset", "0.25")
+    assert code == 0 and "+0.250000 s (given)" in text

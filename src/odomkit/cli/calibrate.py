@@ -115,6 +115,10 @@ def _print_text(out: dict[str, Any]) -> None:
             # The standard error to two significant digits: a fixed six decimals shows
             # "± 0.000000" for a steering offset pinned to 1e-7 rad.
             print(f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}")
+        offset = out.get("truth_time_offset")
+        if offset is not None:  # a fix stamped t is the pose at log time t - offset
+            how = f"± {offset['std_error']:.2g}" if offset.get("fitted") else "(given)"
+            print(f"  {'truth clock':16s} {offset['value']:+.6f} s {how}  (the truth's fixes lag the log by this)")
         if "E_d" in out:
             print(f"  E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  E_s = {out['E_s']:.6f}  "
                   f"wheel base {out['wheel_base']:.6f} m")
