@@ -313,3 +313,23 @@ def test_dense_noisy_fixes_widen_the_heading_fit_until_the_heading_is_known():
         z2_aligned.append((aligned[0] - theta[100]) ** 2 / aligned[1])
     # χ²₁ mean 1 with standard error √2/√200 = 0.1; the quadratic's curvature bias is small here
     assert 0.7 < np.mean(z2_alone) < 1.3 and 0.7 < np.mean(z2_aligned) < 1.3
+
+
+@pytest.mark.parametrize(("rate", "sigma", "speed"), [(100.0, 0.001, 0.5), (1.0, 1.0, 10.0), (10.0, 1.5, 10.0)])
+def test_the_scatter_of_the_fixes_estimates_their_own_noise(rate, sigma, speed):
+    """scatter_sigma: fixes of a motion capture (1 mm at 100 Hz, a robot at 0.5 m/s) and of a
+    GPS (1 m at 1 Hz, 1.5 m at 10 Hz, a car at 10 m/s on a gentle curve) give back their
+    noise σ within the sampling error of a pooled variance (relative SE of σ: 1/√(2·dof))."""
+    from odomkit.truth import scatter_sigma
+
+    rng = np.random.default_rng(5)
+    t = np.arange(0.0, 600.0, 1.0 / rate)[:20000]
+    theta = 0.02 * t + 0.3 * np.sin(t / 30.0)
+    # the path: speed along the heading (integrated finely enough for its curvature)
+    x = np.cumsum(speed * np.cos(theta)) / rate
+    y = np.cumsum(speed * np.sin(theta)) / rate
+    fixes = Truth(t, np.column_stack((x, y)) + rng.normal(0.0, sigma, (t.size, 2)))
+    got = scatter_sigma(fixes)
+    dof = 2 * (t.size // 5) * 2
+    assert got == pytest.approx(sigma, rel=4 / np.sqrt(2 * dof) + 0.01)
+    assert scatter_sigma(Truth(t[:9], fixes.xy[:9])) is None  # one block only
