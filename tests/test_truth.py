@@ -315,7 +315,8 @@ def test_dense_noisy_fixes_widen_the_heading_fit_until_the_heading_is_known():
     assert 0.7 < np.mean(z2_alone) < 1.3 and 0.7 < np.mean(z2_aligned) < 1.3
 
 
-@pytest.mark.parametrize(("rate", "sigma", "speed"), [(100.0, 0.001, 0.5), (1.0, 1.0, 10.0), (10.0, 1.5, 10.0)])
+@pytest.mark.parametrize(("rate", "sigma", "speed"),
+                         [(100.0, 0.001, 0.5), (1.0, 1.0, 10.0), (10.0, 1.5, 10.0)])
 def test_the_scatter_of_the_fixes_estimates_their_own_noise(rate, sigma, speed):
     """scatter_sigma: fixes of a motion capture (1 mm at 100 Hz, a robot at 0.5 m/s) and of a
     GPS (1 m at 1 Hz, 1.5 m at 10 Hz, a car at 10 m/s on a gentle curve) give back their

@@ -25,8 +25,8 @@ from odomkit.log import OdometryLog
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
-           "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma", "start_heading", "start_pose", "Truth", "truth_at",
-           "truth_from_log", "TruthSamples"]
+           "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma", "start_heading", "start_pose", "Truth",
+           "truth_at", "truth_from_log", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).

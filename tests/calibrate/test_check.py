@@ -187,3 +187,36 @@ def test_tricycle_steering_sign_against_truth():
     assert statuses(check_channels(log, robot, truth), "channels") == ["ok"]
     found = check_channels(flipped, robot, truth)
     assert statuses(found, "channels") == ["fail"] and "steering sign flipped" in found[0].message
+
+
+def test_a_log_that_cannot_tell_the_mappings_apart_is_a_warning():
+    """Driving dead straight, a flipped steering sign changes nothing the truth sees: the
+    mapping is not confirmed, so the finding is a warning (it was an "ok" with a note)."""
+    robot = Tricycle(0.15, 1e-4)
+    t = PERIOD * np.arange(400)
+    log = OdometryLog(t, {"ticks": np.full(t.size, 200.0), "steer": np.zeros(t.size)})
+    found = check_channels(log, robot, truth_of(log, robot))
+    assert statuses(found, "channels") == ["warn"], found
+    assert "the steering sign flipped" in found[0].message and "tell the mappings apart" in found[0].message
+
+
+def test_no_check_passes_a_figure_that_is_not_a_number():
+    """A NaN compares False with every limit, so a check that does not look for it passes
+    it: the travel and turning ("the robot travels nan m") and the channels against truth
+    did. Each must now say the figure is not a number, never "ok"."""
+    left, right = square_both_ways()
+    truth = truth_of(make_log(left, right))
+    spoilt = left.copy()
+    spoilt[100] = np.nan
+    log = make_log(spoilt, right)
+    found = [*check_time(log), *check_counters(log), *check_stuck(log, ROBOT, truth),
+             *check_channels(log, ROBOT, truth), *check_channels(log, ROBOT, spin="ccw"),
+             *check_motion(log, ROBOT), *check_identifiable(log, ROBOT)]
+    for f in found:
+        assert not (f.status == "ok" and "nan" in f.message.lower()), f
+    assert statuses(found, "channels") == ["warn", "warn"]
+    assert statuses(found, "distance") == ["warn"] and statuses(found, "turning") == ["warn"]
+    t = log.t.copy()
+    t[5] = np.nan
+    found = check_time(OdometryLog(t, make_log(left, right).channels))
+    assert statuses(found, "time") == ["fail"] and "row(s) 6" in found[0].message

@@ -14,7 +14,8 @@ log's own numbers and, where something is missing or wrong, what to do about it:
 * :func:`check_stuck` — a wheel (or any distance channel) reading nothing while the other
   wheel, or the truth, moves;
 * :func:`check_channels` — left and right swapped or a sign flipped: against the truth
-  (the channel mapping that reproduces the truth's motion best), or from a spin in a known
+  (the channel mapping that reproduces the truth's motion best: its travel and turn with a
+  heading truth, its path's shape with a position-only one), or from a spin in a known
   direction, or, with neither, the hint a flipped sign leaves (a robot that spins all
   the time);
 * :func:`check_motion` — distance and turning both ways;
@@ -37,7 +38,7 @@ from numpy.typing import NDArray
 
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.robot import DiffDrive, Robot, Tricycle
-from odomkit.truth import Truth, truth_at
+from odomkit.truth import Truth, scatter_sigma, truth_at
 
 if TYPE_CHECKING:
     from odomkit.calibrate.residuals import CalibratedRobot
@@ -111,6 +112,10 @@ def check_time(log: OdometryLog) -> list[Finding]:
     if len(log) < 2:
         return [Finding("time", "fail", f"the log has {len(log)} row(s): nothing to calibrate from",
                         "record a longer log")]
+    bad = np.flatnonzero(~np.isfinite(log.t))
+    if bad.size:  # every comparison with NaN is False: the checks below would pass it
+        return [Finding("time", "fail", f"time is NaN or infinite at row(s) {_rows(bad)}: the time checks "
+                        "need numbers", "drop or interpolate those rows before calibrating")]
     dt = np.diff(log.t)
     found = []
     back = np.flatnonzero(dt < 0)
@@ -141,6 +146,7 @@ def check_counters(log: OdometryLog) -> list[Finding]:
     found = []
     for name in sorted(c for c in log.channels if c.startswith("ticks")):
         x = np.asarray(log.channels[name][1:], dtype=float)
+        x = x[np.isfinite(x)]  # a NaN is check_values' finding; here it would hide every spike
         if x.size < 10:
             continue
         typical = max(float(np.percentile(np.abs(x), 99)), 1.0)
@@ -291,6 +297,21 @@ def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
     return OdometryLog(log.t, ch, None, log.source, log.meta)
 
 
+def _reversed(change: dict[str, Any]) -> dict[str, Any]:
+    """The mapping that drives ``change``'s steps backwards with the same turn per step.
+
+    A differential drive's wheels swapped and both negated; a distance sign flipped, and
+    with it a steering angle's (whose turn is distance × tan δ / L), not a yaw rate's or
+    heading's (whose turn does not depend on the distance).
+    """
+    if "swap" in change:
+        return {"swap": not change["swap"], "left": -change["right"], "right": -change["left"]}
+    out = dict(change, distance=-change["distance"])
+    if "steer" in out:
+        out["steer"] = -out["steer"]
+    return out
+
+
 def _motion(log: OdometryLog, robot: Robot, every: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(Δd, Δθ) over windows of ``every`` steps; for a measured heading, its change."""
     from odomkit.kinematics import body_steps
@@ -304,20 +325,15 @@ def _motion(log: OdometryLog, robot: Robot, every: int) -> tuple[NDArray[np.floa
 
 def _truth_motion(truth: Truth, t: NDArray[np.float64], every: int, max_gap: float | None
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
-    """The truth's forward travel and turn over the same windows (NaN-free where valid)."""
+    """A heading truth's forward travel and turn over the same windows (zero where not valid)."""
     n = ((t.size - 1) // every) * every
     times = t[: n + 1 : every]
     s = truth_at(truth, times, max_gap)
     p = s.poses
     d = np.diff(p[:, :2], axis=0)
-    if truth.has_heading:
-        mid = 0.5 * (p[:-1, 2] + p[1:, 2])
-        forward = d[:, 0] * np.cos(mid) + d[:, 1] * np.sin(mid)
-        turn = np.diff(p[:, 2])
-    else:  # the direction of travel: no reversing can be told, so compare sizes of moves only
-        forward = np.hypot(d[:, 0], d[:, 1])
-        heading = np.unwrap(np.arctan2(d[:, 1], d[:, 0]))
-        turn = np.concatenate(([0.0], np.diff(heading)))
+    mid = 0.5 * (p[:-1, 2] + p[1:, 2])
+    forward = d[:, 0] * np.cos(mid) + d[:, 1] * np.sin(mid)
+    turn = np.diff(p[:, 2])
     ok = s.valid[:-1] & s.valid[1:]
     return np.where(ok, forward, 0.0), np.where(ok, turn, 0.0), ok
 
@@ -327,9 +343,19 @@ def check_channels(log: OdometryLog, robot: Robot, truth: Truth | None = None, *
     """Are the channels mapped right (left/right, signs)?
 
     With truth: every mapping a robot's log can get wrong (differential: swapped, either
-    sign flipped; otherwise each sign) is dead-reckoned over half-second windows and
-    compared with the truth's travel and turn; a mapping that fits the truth clearly
-    better (under half the misfit) than the one given is reported. With ``spin``
+    sign flipped; otherwise each sign) is compared with the truth, and a mapping that fits
+    it clearly better (under half the misfit) than the one given is reported; the one given
+    passes only if every other misfits at least 4 times as much (else a warning: the log
+    cannot tell them apart). A truth with heading: each mapping dead-reckoned over
+    half-second windows against the truth's travel and turn. A position-only truth (a GPS):
+    each mapping's path dead-reckoned and, stretch by stretch of the fixes (a few seconds to
+    tens, long enough that the fixes' noise is small against the path and that it turns),
+    turned and shifted onto the fixes (Umeyama's SE(2) alignment); its misfit is the
+    residual sum of squares over the fixes' spread about each stretch's centre. Such a
+    truth cannot tell which way the robot drove, so each mapping and its twin driving the
+    same path backwards (a car's distance and steering signs both flipped, a unicycle's
+    speed sign, a differential drive's wheels swapped and both negated) count as one, named
+    by the one driving forwards. With ``spin``
     ("ccw" or "cw": the log is a spin in place that way) a differential robot's wheels
     must turn opposite ways, the right one forward for ccw. With neither, only the mark a
     flipped wheel sign leaves is looked for: wheels turning opposite ways almost all the
@@ -370,6 +396,9 @@ def _channels_from_spin(log: OdometryLog, robot: Robot, spin: str) -> list[Findi
         return [Finding("channels", "ok", f"a spin checks a differential drive's wheels; this is a "
                         f"{robot.type_name} robot")]
     left, right = (float(np.sum(x)) for x in _wheel_travel(log, robot))
+    if not (math.isfinite(left) and math.isfinite(right)):
+        return [Finding("channels", "warn", f"the wheels' travel over the spin is not a number (left {left}, "
+                        f"right {right}): channels not checked", "check the log's values")]
     sign = 1.0 if spin == "ccw" else -1.0  # ccw: right wheel forward, left backward
     r_ok, l_ok = sign * right > 0, sign * left < 0
     said = f"over the {spin} spin the left wheel travels {left:+.4g} m and the right {right:+.4g} m"
@@ -386,40 +415,205 @@ def _channels_from_spin(log: OdometryLog, robot: Robot, spin: str) -> list[Findi
 
 def _channels_against_truth(log: OdometryLog, robot: Robot, truth: Truth,
                             max_gap: float | None) -> list[Finding]:
+    if not truth.has_heading:
+        return _channels_against_positions(log, robot, truth, max_gap)
     dt = np.diff(log.t)
     period = float(np.median(dt[dt > 0])) if np.any(dt > 0) else 1.0
     every = max(1, int(round(0.5 / period)))
     fwd, turn, ok = _truth_motion(truth, log.t, every, max_gap)
     if ok.sum() < 4 or np.sum(np.abs(fwd[ok])) < 0.05:
-        return [Finding("channels", "ok", "the truth barely moves while it overlaps the log: channels not "
+        return [Finding("channels", "warn", "the truth barely moves while it overlaps the log: channels not "
                         "checked", "record motion inside the truth's coverage")]
     scores = []
     for words, change in _hypotheses(robot, log):
         dd, dth = _motion(_remapped(log, change), robot, every)
         dd, dth = dd[ok], dth[ok]
-        if not truth.has_heading:
-            dd = np.abs(dd)
         # Each misfit relative to the motion itself, plus a floor of 5 mm and 0.01 rad a
         # window so that a log that hardly turns is not judged on the truth's jitter.
         m = int(ok.sum())
         e_d = np.sum((dd - fwd[ok]) ** 2) / (np.sum(fwd[ok] ** 2) + m * 0.005**2)
         e_t = np.sum((dth - turn[ok]) ** 2) / (np.sum(turn[ok] ** 2) + m * 0.01**2)
-        scores.append((float(e_d + e_t), words))
-    given = scores[0][0]
-    best, words = min(scores)
-    if words != "as given" and best < 0.5 * given:
-        return [Finding("channels", "fail", f"the channels look mapped wrong: with {words} the odometry "
-                        f"matches the truth (misfit {best:.3g}) far better than as given ({given:.3g})",
-                        f"fix the channel mapping ({words}) and check again", given)]
+        scores.append((float(e_d + e_t), words, ""))
+    return [_verdict(scores[0][0], scores[1:], floor=0.05, what="the truth",
+                     close_why="the log turns too little to tell the mappings apart",
+                     close_advice="drive turns both ways, then check again",
+                     poor_advice="check the robot file (wheel size, wheel base) and the truth's clock")]
+
+
+def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float, what: str, close_why: str,
+             close_advice: str, poor_advice: str, detail: str = "") -> Finding:
+    """The one decision rule of the channel check, for either kind of truth.
+
+    ``given`` is the misfit of the mapping as given and ``others`` (misfit, words, note)
+    those of the other mappings (0 is a perfect match, 1 as large as the motion itself;
+    the note is said where that mapping is named). A mapping under half the given one's
+    misfit is named (fail); else a given misfit above 0.5 is a poor match (warn); else the
+    given mapping passes only when every other misfits at least 4 times as much (and at
+    least 4 × ``floor``): closer than that, this log and truth cannot tell them apart
+    (warn, never ok). A misfit that is not a number is a warn that says so.
+    """
+    if math.isnan(given) or any(math.isnan(m) for m, _, _ in others):
+        return Finding("channels", "warn", f"the channel mappings' misfits against {what} could not be "
+                       f"computed (not a number){detail}: channels not checked",
+                       "check the log's and the truth's values")
+    if not others:
+        return Finding("channels", "warn", f"{what} cannot tell any other channel mapping from the one "
+                       f"given (misfit {given:.3g}){detail}", close_advice, given)
+    best, words, note = min(others)
+    if best < 0.5 * given:
+        return Finding("channels", "fail", f"the channels look mapped wrong: with {words} the odometry "
+                       f"matches {what} (misfit {best:.3g}) far better than as given ({given:.3g}){detail}"
+                       f"{note}", f"fix the channel mapping ({words}) and check again", given)
     if given > 0.5:
-        return [Finding("channels", "warn", f"the odometry matches the truth poorly (misfit {given:.3g}; 0 "
-                        "is a perfect match) and no other channel mapping does better",
-                        "check the robot file (wheel size, wheel base) and the truth's clock", given)]
-    other, other_words = sorted(s for s in scores if s[1] != "as given")[0]
-    close = (": the log turns too little to tell the mappings apart well" if other < 4 * max(given, 0.05)
-             else "")
-    return [Finding("channels", "ok", f"the channels as given match the truth (misfit {given:.3g}; the best "
-                    f"other mapping, {other_words}, misfits {other:.3g}){close}", value=given)]
+        return Finding("channels", "warn", f"the odometry matches {what} poorly (misfit {given:.3g}; 0 "
+                       f"is a perfect match) and no other channel mapping does better{detail}", poor_advice,
+                       given)
+    if best < 4 * max(given, floor):
+        return Finding("channels", "warn", f"the channels as given match {what} (misfit {given:.3g}), but "
+                       f"the best other mapping, {words}, misfits only {best:.3g}{detail}: {close_why}",
+                       close_advice, given)
+    return Finding("channels", "ok", f"the channels as given match {what} (misfit {given:.3g}; the best "
+                   f"other mapping, {words}, misfits {best:.3g}){detail}", value=given)
+
+
+# --- channels against position-only truth -------------------------------------------------
+
+# A stretch of truth that a mapping's path is aligned to holds at least this many fixes.
+_MIN_FIXES = 5
+# The stretch lengths tried [s], shortest first (see _stretches): the shortest whose fixes
+# spread _EXTENT_PER_SIGMA times their noise σ (RMS distance about the centre, so the noise,
+# 2σ² a fix, adds at most 0.02 to a misfit) and whose path turns _TURN_PER_STRETCH rad. On
+# simulated cars (10 m/s, 1-5 Hz GPS, 0.5-3 m noise) and small robots (50 Hz, 1 cm) that
+# picked 2-33 s, where a flipped turn sign or swapped wheels misfit 10-150 times the right
+# mapping; 2 s stretches everywhere gave as little as 2 times, 32 s ones 6 (drift).
+_STRETCHES = (2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+_EXTENT_PER_SIGMA = 10.0
+_TURN_PER_STRETCH = 1.0  # [rad]
+
+
+def _runs(truth: Truth, t: NDArray[np.float64], max_gap: float | None) -> list[NDArray[np.intp]]:
+    """Indices of the fixes inside the log's span, cut where truth_at would not bridge a gap."""
+    inside = np.flatnonzero((truth.t >= t[0]) & (truth.t <= t[-1]))
+    if inside.size < 2:
+        return []
+    bridged = truth_at(truth, 0.5 * (truth.t[inside[:-1]] + truth.t[inside[1:]]), max_gap).valid
+    return [run for run in np.split(inside, np.flatnonzero(~bridged) + 1) if run.size >= _MIN_FIXES]
+
+
+def _stretches(truth: Truth, runs: list[NDArray[np.intp]], sigma: float, heading: NDArray[np.float64]
+               ) -> tuple[list[NDArray[np.intp]], float]:
+    """The fixes cut into stretches of one length, and that length [s].
+
+    Short stretches keep the odometry's own drift (a wrong wheel base, a steering offset)
+    small. Long ones make the truth's noise small against the path, and turn more, which
+    is what tells a turn sign: a path and its mirror image differ only where it bends. Of
+    :data:`_STRETCHES`, the shortest is taken whose stretches (by their median) have fixes
+    spread :data:`_EXTENT_PER_SIGMA` σ RMS about their centre and turn :data:`_TURN_PER_STRETCH`
+    (the odometry's ``heading`` at the fixes, summed absolute changes); failing the turn, the
+    shortest that spreads; failing both, the longest.
+    """
+    spreads, turns = [], []
+    tried: list[list[NDArray[np.intp]]] = []
+    for length in _STRETCHES:
+        chosen = []
+        for run in runs:
+            span = truth.t[run[-1]] - truth.t[run[0]]
+            pieces = max(1, min(int(round(span / length)), run.size // _MIN_FIXES))
+            cut = np.minimum(((truth.t[run] - truth.t[run[0]]) / span * pieces).astype(int), pieces - 1)
+            chosen += [run[cut == k] for k in range(pieces) if np.count_nonzero(cut == k) >= _MIN_FIXES]
+        tried.append(chosen)
+        extent = [math.sqrt(_spread(truth.xy[s]) / s.size) for s in chosen]
+        spreads.append(bool(extent) and float(np.median(extent)) >= _EXTENT_PER_SIGMA * sigma)
+        turns.append(bool(chosen) and float(np.median([np.sum(np.abs(np.diff(heading[s]))) for s in chosen]))
+                     >= _TURN_PER_STRETCH)
+    k = next((k for k, ok in enumerate(zip(spreads, turns, strict=True)) if all(ok)),
+             next((k for k, ok in enumerate(spreads) if ok), len(_STRETCHES) - 1))
+    durations = [truth.t[s[-1]] - truth.t[s[0]] for s in tried[k]]
+    return tried[k], float(np.median(durations)) if durations else 0.0
+
+
+def _aligned_rss(source: NDArray[np.float64], target: NDArray[np.float64]) -> float:
+    """Σ |target − (R source + c)|² [m²] after the best rotation and shift
+    (:func:`odomkit.evaluate.align_track`, Umeyama's SE(2) alignment)."""
+    from odomkit.errors import ModelError
+    from odomkit.evaluate import align_track
+
+    n = source.shape[0]
+    if not np.all(np.isfinite(source)):
+        return math.inf  # a path that overflowed fits nothing (and would stop the SVD)
+    try:
+        moved, _ = align_track(np.column_stack((source, np.zeros(n))),
+                               np.column_stack((target, np.full(n, np.nan))), "se2")
+    except ModelError:
+        # One of the two does not spread (or they are perpendicular in every pair): no
+        # rotation helps, the centres meet and each keeps its own spread.
+        return _spread(source) + _spread(target)
+    return float(np.sum((moved[:, :2] - target) ** 2))
+
+
+def _spread(points: NDArray[np.float64]) -> float:
+    return float(np.sum((points - points.mean(axis=0)) ** 2))
+
+
+def _channels_against_positions(log: OdometryLog, robot: Robot, truth: Truth,
+                                max_gap: float | None) -> list[Finding]:
+    """The channel check against position-only truth: each mapping's dead-reckoned path,
+    stretch by stretch, turned and shifted onto the fixes (the truth has no heading to
+    compare turns with, and the direction of travel between noisy fixes is mostly noise)."""
+    from odomkit.track import dead_reckon_log
+
+    runs = _runs(truth, log.t, max_gap)
+    if not runs:
+        return [Finding("channels", "warn", f"the truth has no {_MIN_FIXES} fixes in a row (without a gap) "
+                        "inside the log's time span: channels not checked",
+                        "record truth that covers the log, or check --max-gap and the truth's clock")]
+    hypotheses = _hypotheses(robot, log)
+    words = [w for w, _ in hypotheses]
+    at_fixes, forward = [], []
+    for _, change in hypotheses:
+        track = dead_reckon_log(_remapped(log, change), robot, pose0=np.zeros(3))
+        at_fixes.append(np.column_stack([np.interp(truth.t, log.t, track.poses[:, k]) for k in range(3)]))
+        travel = float(np.sum(np.abs(track.steps.dd)))
+        forward.append(float(np.sum(track.steps.dd)) / travel if travel > 0 else 0.0)
+    # The fixes' own noise (odomkit.truth.scatter_sigma), no less than the stated σ.
+    noise = max(truth.sigma, scatter_sigma(truth) or 0.0)
+    stretches, length = _stretches(truth, runs, noise, at_fixes[0][:, 2])
+    fixes = [truth.xy[s] for s in stretches]
+    spread = sum(_spread(x) for x in fixes)
+    if spread == 0.0:  # no stretch, or fixes all in one place
+        return [Finding("channels", "warn", "the truth does not move while it overlaps the log: channels not "
+                        "checked", "record motion inside the truth's coverage")]
+    misfit = [sum(_aligned_rss(path[s, :2], x) for s, x in zip(stretches, fixes, strict=True)) / spread
+              for path in at_fixes]
+    # A position-only truth cannot tell which way the robot drove: each mapping's twin that
+    # drives the same steps backwards, turning alike, draws the same path turned by π. Of
+    # each pair the one driving forwards (net) stands for both.
+    twin = [next(k for k, (_, c) in enumerate(hypotheses) if c == _reversed(change))
+            for _, change in hypotheses]
+    named = sorted({max((h, twin[h]), key=lambda i: (forward[i], -i))
+                    for h in range(len(hypotheses)) if h not in (0, twin[0])})
+    others = [(misfit[h], words[h], f"; a position-only truth cannot tell {words[h]} from {words[twin[h]]}"
+               if twin[h] != h else "") for h in named]
+    # The residual RMS per axis of the best mapping: RSS over 2n − 3 degrees of freedom a stretch.
+    best, n = min(misfit), sum(x.shape[0] for x in fixes)
+    leaves = (f"the best leaves {math.sqrt(best * spread / (2 * n - 3 * len(fixes))):.3g} m RMS per axis, "
+              if math.isfinite(best) else "")
+    detail = (f" (each mapping's path turned and shifted onto {len(fixes)} stretch(es) of about {length:.2g} "
+              f"s of fixes: {leaves}the fixes spread {math.sqrt(spread / n):.3g} m RMS)")
+    found = _verdict(misfit[0], others, floor=0.0, what="the truth's positions", detail=detail,
+                     close_why="the log turns too little, or the truth is too short or too noisy, to "
+                     "tell the mappings apart",
+                     close_advice="drive turns both ways inside the truth's coverage (or give a truth with "
+                     "heading), then check again",
+                     poor_advice="check the robot file and the truth's clock; a truth whose noise is as "
+                     "large as the path it covers cannot check the channels")
+    if found.status == "ok" and twin[0] != 0 and forward[0] < 0 < forward[twin[0]]:
+        other = words[twin[0]]
+        return [Finding("channels", "warn", found.message + f"; but as given the odometry drives backwards "
+                        f"({-100 * forward[0]:.0f} % of its travel, net), and with {other} it would match as "
+                        "well driving forwards: a position-only truth cannot tell the two apart",
+                        f"if the robot drove forwards, fix the channel mapping ({other})", found.value)]
+    return [found]
 
 
 # --- motion and identifiability ----------------------------------------------------------
@@ -433,6 +627,11 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
     ccw = float(np.sum(np.clip(steps.dtheta, 0, None)))
     cw = abs(float(np.sum(np.clip(steps.dtheta, None, 0))))
     found = []
+    if not all(math.isfinite(x) for x in (travel, ccw, cw)):
+        return [Finding(check, "warn", f"the odometry's {what} is not a number (travel {travel:.4g} m, "
+                        f"turning {ccw:.3g} rad counter-clockwise and {cw:.3g} rad clockwise): not checked",
+                        "check the log's values and the robot file") for check, what in
+                (("distance", "travel"), ("turning", "turning"))]
     if travel < 0.2:
         found.append(Finding("distance", "fail", f"the robot travels {travel:.3g} m: too little to calibrate "
                              "from", "drive at least 2 m"))
@@ -593,8 +792,8 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | None = Non
         # Times of 1e200 s overflow the sensitivities; LAPACK's SVD would fail on them (and
         # print its own complaints), so this is a finding, not a least-squares fit.
         return [Finding("identifiable", "fail", "the sensitivities to the calibration parameters "
-                        "overflow (not finite): the times or the motion are far out of range",
-                        "check the log's time unit and its columns")]
+                        "are not finite: a value that is not a number, or times or motion so far out of "
+                        "range that they overflow", "check the log's values, its time unit and its columns")]
     found = [Finding("identifiable", "ok", f"{label}: not calibrated from this log ({why}): calibrate "
                      "holds it at the robot file's value") for label, why in unused.items()]
     norms = np.linalg.norm(A, axis=0)
@@ -606,6 +805,10 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | None = Non
         unit, weak, unidentified = _LIMITS[par.kind]
         shown = f"±{100 * se:.2g} %" if unit == "%" else f"±{se:.2g} {unit}"
         shown = "unbounded" if not math.isfinite(se) else shown
+        if math.isnan(se):
+            found.append(Finding("identifiable", "warn", f"{par.label}: its standard error could not be "
+                                 "computed (not a number): not checked", "check the log's values"))
+            continue
         ratio = unique / norms[i] if norms[i] > 0 else 0.0
         why = (" (its effect on the track is almost all one that the other parameters can mimic)"
                if ratio < 0.1 and norms[i] > 0 else "")
