@@ -334,3 +334,14 @@ def test_progress_reports_every_stage_to_its_end(tmp_path):
     assert seen.stages and all(s.closed for s in seen.stages)
     assert all(s.done == s.total for s in seen.stages if s.total is not None)
     assert seen.stages[-1].description.startswith("report:") and seen.stages[-1].total == 4
+
+
+def test_the_calibration_section_names_the_parameters_it_fitted(with_truth):
+    """The calibration paragraph names the robot's own calibration parameters (a car's or a
+    unicycle's are no wheel sizes), the ones in its table."""
+    result, page, _ = with_truth
+    text = " ".join(" ".join(page.text).split())
+    fitted = [key.split(".", 1)[1] for key in page.cells if key.startswith("calibration.")
+              and not key.startswith("calibration.std_error.") and key.count(".") == 1]
+    assert fitted and f"The robot's systematic errors ({', '.join(fitted[:3])}" in text
+    assert "unequal wheel sizes" not in text

@@ -276,10 +276,11 @@ def _honesty_section(scored: list[Scored], ev: dict[str, Any], window: str | Non
 def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before: dict[str, Any],
                          after: dict[str, Any] | None, run: TrackRun, run_after: TrackRun | None,
                          figures: ReportFigures) -> Section:
+    names = ", ".join((cal or {}).get("parameters", {})) or "its calibration parameters"
     blocks: list[Any] = [Paragraph(
-        "The robot's systematic errors (unequal wheel sizes E_d, a wrong wheel base E_b) are fitted to "
-        "this log's truth (odomkit calibrate); the metrics are then computed again with the corrected "
-        "robot. On the log it was fitted to, 'after' is optimistic: check it on another log.")]
+        f"The robot's systematic errors ({names}) are fitted to this log's truth (odomkit "
+        "calibrate); the metrics are then computed again with the corrected robot. On the log it was "
+        "fitted to, 'after' is optimistic: check it on another log.")]
     if cal is None or after is None:
         blocks.append(Paragraph(f"No calibration: {problem}", "warning"))
         return Section("calibration", "Calibration before and after", tuple(blocks))
