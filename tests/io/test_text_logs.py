@@ -266,3 +266,27 @@ def test_a_header_in_odomkits_own_names_needs_no_columns(tmp_path):
     np.savetxt(bare, rows[:, :3], delimiter=",")
     with pytest.raises(InputError, match="needs --columns.*no header"):
         load_log(bare, robot, LogOptions())
+
+
+def test_a_ros_twist_header_is_read_and_the_columns_hint_is_the_robots_own(tmp_path):
+    """``stamp,linear_x,angular_z`` (a Twist as ROS tools export it) reads as speed and yaw
+    rate, the same as the mapped form; where --columns is needed the example names the
+    robot's own channels (a unicycle's speed and yaw rate, not a diff's ticks)."""
+    from odomkit.robot import ROBOT_TYPES
+    from odomkit.workflows.logs import COLUMN_EXAMPLES
+
+    t = np.arange(0.0, 5.0, 0.1)
+    rows = np.column_stack((t, 0.3 + 0 * t, 0.1 * np.sin(t)))
+    ros = tmp_path / "ros.csv"
+    np.savetxt(ros, rows, delimiter=",", header="stamp,linear_x,angular_z", comments="")
+    robot = Unicycle()
+    plain = load_log(ros, robot, LogOptions())
+    mapped = load_log(ros, robot, LogOptions(columns="t=stamp,speed=linear_x,yaw_rate=angular_z"))
+    for name in ("speed", "yaw_rate"):
+        np.testing.assert_array_equal(plain.channels[name], mapped.channels[name])
+    short = tmp_path / "vw.csv"
+    np.savetxt(short, rows, delimiter=",", header="t,v,w", comments="")
+    with pytest.raises(InputError, match=r"header names \(t=time,speed=V,yaw_rate=W\) or the columns in "
+                                         r"order \(t,speed,yaw_rate\)"):
+        load_log(short, robot, LogOptions())
+    assert set(COLUMN_EXAMPLES) == set(ROBOT_TYPES)

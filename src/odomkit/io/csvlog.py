@@ -75,18 +75,28 @@ def parse_columns(text: str) -> dict[str, str] | list[str]:
 TIME_NAMES = ("t", "time", "timestamp", "stamp")
 
 
-def _columns_from_header(header: Sequence[str] | None, source: str) -> dict[str, str]:
+#: Header names of other tools read as odomkit's channel (a ROS Twist's forward speed and
+#: turn rate, as ``rostopic echo -p`` or a bag export writes them): unambiguous, unlike a
+#: bare ``v`` or ``w``, which still ask for ``--columns``.
+HEADER_ALIASES = {"linear_x": "speed", "linear.x": "speed", "twist.linear.x": "speed",
+                  "field.linear.x": "speed", "angular_z": "yaw_rate", "angular.z": "yaw_rate",
+                  "twist.angular.z": "yaw_rate", "field.angular.z": "yaw_rate"}
+
+
+def _columns_from_header(header: Sequence[str] | None, source: str,
+                         example: str = "t=time,ticks_left=L,ticks_right=R") -> dict[str, str]:
     """The ``columns`` mapping of a header that names every column by odomkit's own names
     (a time column of :data:`TIME_NAMES`, channels such as ``speed``, ``yaw_rate``,
     ``ticks_left``, and ``gt_x``, ``gt_y``, ``gt_theta``); otherwise the error asking for
     ``--columns``. Only a header wholly in these names is read so: a column it does not
     know could be a misspelt channel, which guessing would silently drop."""
-    hint = ("a text log needs --columns: header names (t=time,ticks_left=L,ticks_right=R) or the "
-            "columns in order (t,ticks_left,ticks_right)")
+    in_order = ",".join(part.split("=")[0] for part in example.split(","))
+    hint = f"a text log needs --columns: header names ({example}) or the columns in order ({in_order})"
     if header is None:
         raise InputError(hint + "; this log has no header", source=source)
     times = [name for name in header if name.lower() in TIME_NAMES]
-    known = [name for name in header if name in KNOWN_CHANNELS or name in GROUND_TRUTH_FIELDS]
+    known = [name for name in header
+             if name in KNOWN_CHANNELS or name in GROUND_TRUTH_FIELDS or name.lower() in HEADER_ALIASES]
     unknown = [name for name in header if name not in times and name not in known]
     if len(times) != 1 or not known or unknown:
         why = (f"its header names {', '.join(repr(u) for u in unknown)}, not odomkit's own names" if unknown
@@ -94,7 +104,7 @@ def _columns_from_header(header: Sequence[str] | None, source: str) -> dict[str,
                else "its header names more than one time column" if len(times) > 1
                else "its header names no channel")
         raise InputError(f"{hint}; {why}", source=source)
-    return {"t": times[0], **{name: name for name in known}}
+    return {"t": times[0], **{HEADER_ALIASES.get(name.lower(), name): name for name in known}}
 
 
 def _check_targets(targets: Sequence[str], source: str) -> None:
@@ -155,6 +165,7 @@ def read_csv_log(
     time_unit: str | float = "s",
     cumulative: bool = False,
     wrap_bits: int | None = None,
+    example: str = "t=time,ticks_left=L,ticks_right=R",
 ) -> OdometryLog:
     """Read a text log (plain or gzip): delimiter and header found by
     :func:`odomkit.io.text.sniff_layout`, columns named by ``columns``.
@@ -163,7 +174,8 @@ def read_csv_log(
     ----------
     path : the file
     columns : which column holds what; None: the header's own names, where it names every
-        column by odomkit's (``t,speed,yaw_rate``; :data:`TIME_NAMES` for time). A sequence
+        column by odomkit's (``t,speed,yaw_rate``; :data:`TIME_NAMES` for time; a ROS Twist's
+        ``linear_x``, ``angular_z``: :data:`HEADER_ALIASES`). A sequence
         names the columns in order
         (``["t", "ticks_left", "_", "ticks_right"]``; ``_`` skips one; columns after the
         last name are ignored; a header line, if any, is skipped); a mapping goes from
@@ -175,6 +187,8 @@ def read_csv_log(
     cumulative : increment channels hold cumulative counts, differenced here (integer
         counts exactly, in 64-bit integer arithmetic)
     wrap_bits : unwrap cumulative counters of this width (16 or 32 typically; 64 exact)
+    example : the ``--columns`` mapping a missing-columns error suggests (the robot's own
+        channels: :data:`odomkit.workflows.logs.COLUMN_EXAMPLES`)
 
     Raises
     ------
@@ -199,7 +213,7 @@ def read_csv_log(
     text = read_text(path)
     layout = sniff_layout(text, source)
     if columns is None:
-        columns = _columns_from_header(layout.header, source)
+        columns = _columns_from_header(layout.header, source, example)
     _check_targets(list(columns), source)
     if isinstance(columns, Mapping):
         layout, index = _by_header(columns, layout, text, source)

@@ -22,9 +22,19 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.robot import Robot
 
-__all__ = ["LOG_FORMATS", "LogOptions", "detect_format", "load_log"]
+__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log"]
 
 LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom", "bag")
+
+#: The ``--columns`` mapping a text log without one is asked for, in each vehicle's channels.
+COLUMN_EXAMPLES = {
+    "diff": "t=time,ticks_left=L,ticks_right=R",
+    "tricycle": "t=time,ticks=N,steer=ANGLE",
+    "car": "t=time,speed=V,steer=ANGLE",
+    "unicycle": "t=time,speed=V,yaw_rate=W",
+    "gyro": "t=time,ticks=N,yaw_rate=GYRO",
+    "compass": "t=time,ticks=N,heading=COMPASS",
+}
 
 # Counter widths whose wrap-around can be undone (odomkit.io.table.COUNTER_BITS, repeated
 # here so that importing this module loads no reader; tests/io checks they agree).
@@ -164,7 +174,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
     from odomkit.io.csvlog import parse_columns, read_csv_log
     from odomkit.io.halmstad import read_khepera, read_snowhite
     from odomkit.io.optiodom import read_run
-    from odomkit.robot import DiffDrive
+    from odomkit.robot import DiffDrive, robot_type_name
 
     options = options or LogOptions()
     path = Path(path)
@@ -189,6 +199,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         else:
             # Without --columns, a header in odomkit's own names (t,speed,yaw_rate) is enough.
             log = read_csv_log(path, parse_columns(options.columns) if options.columns else None,
-                               cumulative=options.cumulative,
-                               wrap_bits=options.wrap_bits, time_unit=options.time_unit)
+                               cumulative=options.cumulative, wrap_bits=options.wrap_bits,
+                               time_unit=options.time_unit,
+                               example=COLUMN_EXAMPLES[robot_type_name(robot)])
         return log.decimate(options.decimate)
