@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -49,14 +49,17 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
 
 __all__ = [
+    "START_STRIDE",
     "TRUTH_NOISE",
     "Window",
     "WindowBasis",
     "WindowErrors",
     "WindowSpec",
     "cumulative_travel",
+    "late_start_note",
     "log_window_basis",
     "parse_window",
+    "run_start",
     "split_windows",
     "truth_stretches",
     "why_no_windows",
@@ -221,6 +224,105 @@ def truth_stretches(axis: NDArray[np.float64], length: float) -> list[tuple[int,
     firsts = np.concatenate(([0], breaks + 1)).tolist()
     lasts = np.concatenate((breaks, [axis.size - 1])).tolist()
     return list(zip(firsts, lasts, strict=True))
+
+
+#: How far apart [s] :func:`run_start` first tries rows for a start heading (then it looks
+#: back row by row): trying every row of a long log that stands still costs a heading fit a row.
+START_STRIDE = 0.5
+
+
+def run_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike | None = None,
+              max_gap: float | None = 0.5, *, hint: str = ""
+              ) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
+    """The first row from which a run can start from the truth: the row, its truth pose and
+    that pose's covariance (:func:`odomkit.truth.start_pose`).
+
+    The whole run of ``odomkit evaluate``, the whole-log window (``--window`` not given) of
+    ``evaluate`` and ``fit-noise``, and ``odomkit track --truth`` all start here. It is the
+    first row with valid truth, unless the truth has no heading and its positions give none
+    there (:func:`odomkit.truth.start_heading`: a GPS that starts with the log has fixes on
+    one side of its first rows only; or the fixes stray from a smooth path, or the robot
+    stands still); then it is the first row after it where they give one. Rows are tried
+    :data:`START_STRIDE` apart, then the rows between the last tried row that gave no
+    heading and the first that gave one, in order: so the row found is the first that gives
+    a heading, unless a heading could be had for less than :data:`START_STRIDE` between two
+    tried rows that gave none.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Time of each log row [s], non-decreasing.
+    truth : Truth
+    valid : array_like of bool, shape (N,)
+        Rows with valid truth (:func:`odomkit.truth.truth_at`).
+    odometry : array_like, shape (N, 3), optional
+        The odometry's own path at ``t`` (dead-reckoned from the origin, any frame), which a
+        start heading fitted to position-only truth aligns to the fixes; None for truth with
+        heading (or a heading fitted to the fixes alone).
+    max_gap : float or None
+        As in :func:`odomkit.truth.truth_at`.
+    hint : str
+        Appended to the error when no row gives a heading (``"give --initial-pose"``).
+
+    Returns
+    -------
+    row : int
+    pose : ndarray, shape (3,)
+        [m, m, rad].
+    cov : ndarray, shape (3, 3)
+
+    Raises
+    ------
+    InputError
+        When no row has valid truth, or the position-only truth gives a heading at none.
+    """
+    from odomkit.truth import no_overlap, start_pose
+
+    t = np.asarray(t, dtype=float)
+    rows = np.flatnonzero(np.asarray(valid, dtype=bool))
+    if rows.size == 0:
+        raise InputError(no_overlap(truth, t), source=truth.source)
+    along = None if odometry is None else (t, np.asarray(odometry, dtype=float))
+
+    def at(row: int) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+        try:
+            return start_pose(truth, float(t[row]), max_gap, odometry=along)
+        except InputError:
+            if truth.has_heading:  # nothing to fit: a real error
+                raise
+            return None
+
+    tried, failed = -np.inf, -1  # time of the last row tried; its position in ``rows`` if it failed
+    for i, row in enumerate(rows.tolist()):
+        if t[row] < tried + START_STRIDE:
+            continue
+        tried = float(t[row])
+        found = at(row)
+        if found is None:
+            failed = i
+            continue
+        for back in rows[failed + 1:i].tolist():  # the rows skipped since the last failure
+            earlier = at(back)
+            if earlier is not None:
+                return back, *earlier
+        return row, *found
+    end = "" if not hint else f"; {hint}"
+    raise InputError(f"the truth has no heading, and its positions give none at any of the log's rows with "
+                     f"truth ({t[rows[0]]:.6g}..{t[rows[-1]]:.6g} s; the fixes are too few, stray from a "
+                     "smooth path by more than 3 --truth-sigma, or the robot hardly moves), so there is no "
+                     f"pose to start from{end}", source=truth.source)
+
+
+def late_start_note(source: str, what: str, t: ArrayLike, row: int, first_valid: int) -> str:
+    """One line on a run (``what``: "the track", "the whole-log window") that starts at log
+    row ``row`` (:func:`run_start`) rather than at row 0: why (``first_valid``, the first
+    row with truth, tells), and how many rows and seconds before it are left out."""
+    t = np.asarray(t, dtype=float)
+    why = ("the first log time inside the truth" if row == first_valid else
+           "the first time the position-only truth gives a heading (before it the fixes around the start "
+           "are too few or on one side only, stray from a smooth path, or the robot stands still)")
+    return (f"{source}: {what} starts at {t[row]:.6g} s, {why}; the {row} row(s) before it "
+            f"({t[row] - t[0]:.4g} s) are left out")
 
 
 @dataclass(frozen=True)
@@ -514,6 +616,9 @@ class WindowBasis:
         heading-related parameters).
     dropped : int
         Windows left out for lack of a fitted start heading.
+    notes : tuple of str
+        Warnings about these windows (:func:`log_window_basis`: where the whole-log window
+        starts later than the log's first row with truth, and why).
     """
 
     windows: list[Window]
@@ -526,13 +631,14 @@ class WindowBasis:
     bias_names: tuple[tuple[int, str], ...]
     turning: NDArray[np.float64]
     dropped: int
+    notes: tuple[str, ...] = ()
 
     def select(self, keep: ArrayLike) -> WindowBasis:
         """The windows where ``keep`` (bool, shape (W,)) is true, as a basis of their own."""
         idx = np.flatnonzero(np.asarray(keep, dtype=bool))
         return WindowBasis([self.windows[i] for i in idx], self.error[idx], self.fixed[idx],
                            self.white[idx], self.sens[idx], self.bias_weights, self.white_names,
-                           self.bias_names, self.turning[idx], self.dropped)
+                           self.bias_names, self.turning[idx], self.dropped, self.notes)
 
     @staticmethod
     def merge(bases: list[WindowBasis]) -> WindowBasis:
@@ -557,7 +663,8 @@ class WindowBasis:
                            np.concatenate([b.sens for b in bases]), first.bias_weights,
                            first.white_names, first.bias_names,
                            np.concatenate([b.turning for b in bases]),
-                           sum(b.dropped for b in bases))
+                           sum(b.dropped for b in bases),
+                           tuple(dict.fromkeys(n for b in bases for n in b.notes)))
 
     def covariance(self, variances: ArrayLike) -> NDArray[np.float64]:
         """Each window end's covariance (W, 3, 3) at variance parameters ``variances``
@@ -692,7 +799,11 @@ def log_window_basis(
     The truth is sampled at the log's rows (:func:`odomkit.truth.truth_at`), each length's
     windows are cut over the rows where it is valid (:func:`split_windows`) and turned
     into bases (:func:`window_covariance_basis`, with ``truth_columns``), and the lengths
-    are merged (:meth:`WindowBasis.merge`: they share the log's bias draw).
+    are merged (:meth:`WindowBasis.merge`: they share the log's bias draw). The whole-log
+    window (a ``spec`` None) starts where a run can start from the truth (:func:`run_start`,
+    as ``odomkit evaluate``'s whole run does): with position-only truth, at the first row
+    where its fixes give a heading, said in the basis's ``notes``; where they give none at
+    any row, the window is dropped and the note says so.
 
     Returns
     -------
@@ -704,12 +815,39 @@ def log_window_basis(
     from odomkit.truth import truth_at
 
     samples = truth_at(truth, log.t, max_gap)
-    travel = cumulative_travel(body_steps(robot, log))
-    parts, skipped = [], 0
+    steps = body_steps(robot, log)
+    travel = cumulative_travel(steps)
+    parts, skipped, notes = [], 0, []
     for spec in specs:
-        windows, left = split_windows(log.t, travel, spec, min_travel, valid=samples.valid)
+        valid = samples.valid
+        windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
+        if spec is None and windows and not truth.has_heading:
+            valid, note = _whole_log_rows(log, steps, truth, valid, max_gap, method)
+            windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
+            notes += [note] if note else []
         skipped += left
         if windows:
-            parts.append(window_covariance_basis(log, robot, models, samples.poses, samples.valid, windows,
+            parts.append(window_covariance_basis(log, robot, models, samples.poses, valid, windows,
                                                  truth=truth, method=method, truth_columns=truth_columns))
-    return (WindowBasis.merge(parts) if parts else None), skipped
+    if not parts:
+        return None, skipped
+    return replace(WindowBasis.merge(parts), notes=tuple(notes)), skipped
+
+
+def _whole_log_rows(log: OdometryLog, steps: BodySteps, truth: Truth, valid: NDArray[np.bool_],
+                    max_gap: float | None, method: str) -> tuple[NDArray[np.bool_], str | None]:
+    """The rows with truth from which the whole-log window may start (:func:`run_start`:
+    from the first where position-only truth gives a heading), and a note when that is not
+    the first row with truth. Where no row gives one, ``valid`` as it is (the window is then
+    dropped, as one whose start heading cannot be fitted) and the note says so."""
+    first_valid = int(np.argmax(valid))
+    odometry = dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)  # type: ignore[arg-type]
+    try:
+        row, _, _ = run_start(log.t, truth, valid, odometry, max_gap)
+    except InputError as exc:
+        return valid, f"{log.source}: no start for the whole-log window: {exc}"
+    if row == first_valid:
+        return valid, None
+    later = valid.copy()
+    later[:row] = False
+    return later, late_start_note(log.source, "the whole-log window", log.t, row, first_valid)

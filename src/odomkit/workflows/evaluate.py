@@ -128,12 +128,63 @@ def _score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64]
         notes.append(f"{label}: no RPE over {', '.join(k for k, v in rpe.items() if v is None)} m ({why})")
     if honesty_from_rows and P is not None:
         he, hc = est[:, :2] - ref[:, :2], P[:, :2, :2] + truth_sigma**2 * np.eye(2)
+        note = _singular_note(he, hc)
+        if note:
+            notes.append(f"{label}: {note}")
     else:
         he, hc = np.empty((0, 2)), np.empty((0, 2, 2))
         if honesty_from_rows:
             notes.append(f"{label}: the track has no covariance, so there is no NEES or coverage")
     kept = None if t is None else TrackRows(np.asarray(t, dtype=float)[rows], est, ref, P)
     return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept)
+
+
+#: A scored covariance whose smallest eigenvalue is below this fraction of its largest
+#: (standard deviations 1000× apart) is nearly singular (:func:`_singular_note`).
+NEAR_SINGULAR = 1e-6
+#: A position error [m] below this counts as none (a track started at the truth pose it is
+#: compared with), so a singular covariance there loses nothing.
+NO_ERROR = 1e-9
+
+
+def _singular_note(errors: NDArray[np.float64], cov: NDArray[np.float64]) -> str | None:
+    """One line on scored rows whose covariance (n, 2, 2) is singular or nearly so, where
+    they matter, else None.
+
+    A singular covariance has no NEES (:func:`odomkit.evaluate.nees` leaves the row out of
+    the NEES and coverage): none is lost where the error is zero too (below
+    :data:`NO_ERROR`: a track compared with the truth pose it started from), but a nonzero
+    error's NEES would be infinite, and those rows are counted. A nearly singular one
+    (:data:`NEAR_SINGULAR`) is kept: its NEES is well defined and true, but where the
+    covariance comes from a pose known exactly (a track started at a truth pose with zero
+    covariance) the error is mostly the truth's own noise, which the covariance lacks, and
+    a few such rows make the whole mean; they are counted where they make more than half
+    of the NEES summed over the rows.
+    """
+    from odomkit.evaluate import nees
+
+    if cov.shape[0] == 0:
+        return None
+    values = nees(errors, cov)
+    singular = ~np.isfinite(values)
+    lam = np.linalg.eigvalsh(cov)  # ascending, per row
+    near = ~singular & (lam[:, 0] < NEAR_SINGULAR * lam[:, 1])
+    off = singular & (np.hypot(errors[:, 0], errors[:, 1]) > NO_ERROR)
+    total = float(np.sum(values[~singular]))
+    share = float(np.sum(values[near])) / total if total > 0 else 0.0
+    parts = []
+    if off.any():
+        parts.append(f"{int(off.sum())} of {values.size} rows have a singular covariance but an error (an "
+                     "infinite NEES) and are left out of the NEES and coverage")
+    if share > 0.5:
+        parts.append(f"{100 * share:.4g} % of the summed NEES comes from {int(near.sum())} of {values.size} "
+                     "rows whose covariance is nearly singular (standard deviations over 1000x apart)")
+    if not parts:
+        return None
+    return ("; ".join(parts) + ", as at the start of a track started from a truth pose with zero "
+            "covariance: the truth's own noise alone falls far outside their ellipse, so their NEES "
+            "judges the truth, not the covariance; give the truth's noise with --truth-sigma, or start "
+            "the track with --initial-cov")
 
 
 def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
@@ -452,7 +503,14 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     from odomkit.log import OdometryLog
     from odomkit.track import dead_reckon_log
     from odomkit.truth import no_overlap, truth_at
-    from odomkit.windows import cumulative_travel, split_windows, why_no_windows, window_errors
+    from odomkit.windows import (
+        cumulative_travel,
+        late_start_note,
+        run_start,
+        split_windows,
+        why_no_windows,
+        window_errors,
+    )
 
     samples = truth_at(truth, log.t, opts.max_gap)
     rows = np.flatnonzero(samples.valid)
@@ -463,7 +521,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     # Without truth heading the start heading aligns the odometry's own path to the fixes.
     odometry = (None if truth.has_heading
                 else dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method))  # type: ignore[arg-type]
-    first, pose0, cov0 = _whole_run_start(log, truth, opts, rows, odometry)
+    first, pose0, cov0 = run_start(log.t, truth, samples.valid, odometry, opts.max_gap)
     # The whole run, dead-reckoned from the truth at its first usable row.
     sub = OdometryLog(log.t[first:], {k: v[first:] for k, v in log.channels.items()},
                       None, log.source, log.meta)
@@ -472,21 +530,24 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                          align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                          min_travel=0.0, honesty_from_rows=False, t=track.t)
     notes = list(whole.warnings)
+    # The honesty test: one window per span of the log, restarted from truth; the whole-log
+    # window (no spec) starts with the whole run (as fit-noise's: odomkit.windows.log_window_basis).
+    valid = samples.valid
+    if spec is None:
+        valid = valid.copy()
+        valid[:first] = False
     if first != rows[0]:
-        notes.append(f"{log.source}: the whole-run track starts at {log.t[first]:.6g} s, the first "
-                     "time the position-only truth gives a heading (before it the robot stands still, "
-                     "or the fixes around the start are too few or stray from a smooth path)")
-    # The honesty test: one window per span of the log, restarted from truth.
-    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=samples.valid)
+        what = "the whole-run track" + (" (and its window)" if spec is None else "")
+        notes.append(late_start_note(log.source, what, log.t, first, int(rows[0])))
+    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=valid)
     if not windows:
-        reason = why_no_windows(log.t, travel, samples.valid, spec, min_travel, skipped)
+        reason = why_no_windows(log.t, travel, valid, spec, min_travel, skipped)
         return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=np.empty((0, 2)),
                        honesty_cov=np.empty((0, 2, 2)), windows=0, warnings=notes, no_windows=reason)
     if skipped:
         notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m (standing "
                      "still or turning on the spot) and were left out")
-    found = window_errors(log, robot, noise, samples.poses, samples.valid, windows, truth=truth,
-                          method=method)
+    found = window_errors(log, robot, noise, samples.poses, valid, windows, truth=truth, method=method)
     if found.dropped:
         notes.append(f"{log.source}: {found.dropped} window(s) left out: no start heading could be "
                                "fitted to the position-only truth")
@@ -500,33 +561,3 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                    honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
                    honesty_t=log.t[found.end_rows])
 
-
-def _whole_run_start(log: OdometryLog, truth: Truth, opts: TruthOptions, rows: NDArray[np.intp],
-                     odometry: NDArray[np.float64] | None
-                     ) -> tuple[int, NDArray[np.float64], NDArray[np.float64]]:
-    """The first row with valid truth from which a track can start, its pose and covariance.
-
-    With position-only truth the heading comes from the fixes around the start and the
-    ``odometry`` (N, 3; its own path, any frame, at ``log.t``) aligned to them
-    (:func:`odomkit.truth.start_pose`), which a robot standing still cannot give: then the
-    next rows are tried, about every 0.5 s, until one gives a heading.
-    """
-    from odomkit.truth import start_pose
-
-    last_error: InputError | None = None
-    tried = -np.inf
-    for row in rows.tolist():
-        if log.t[row] < tried + 0.5:
-            continue
-        tried = float(log.t[row])
-        try:
-            pose, cov = start_pose(truth, tried, opts.max_gap,
-                                   odometry=None if odometry is None else (log.t, odometry))
-        except InputError as exc:
-            if truth.has_heading:
-                raise
-            last_error = exc
-            continue
-        return int(row), pose, cov
-    assert last_error is not None
-    raise last_error

@@ -276,11 +276,14 @@ def fit_noise_files(
         notes.append(f"{len(left_out)} of {len(prepared)} logs left out: {shown}{more}")
     bases = [p.basis for p in used if p.basis is not None]
     dropped = sum(b.dropped for b in bases)
+    notes += [n for b in bases for n in b.notes]  # where a whole-log window starts late, and why
     if not any(len(b.windows) for b in bases):
-        raise InputError(f"every window ({dropped}) was left out: no start heading could be fitted to the "
-                         "position-only truth around its start (too few fixes, fixes off a smooth path by "
-                         "more than 3 --truth-sigma, too noisy, or the robot hardly moves there)",
-                         source=used[0].name)
+        # Whole-log windows say why they have no start (no row gives a heading) in their notes.
+        why = "; ".join(n for b in bases for n in b.notes[:1])
+        raise InputError(f"every window ({dropped}) was left out: " + (why or (
+                         "no start heading could be fitted to the position-only truth around its start (too "
+                         "few fixes, fixes off a smooth path by more than 3 --truth-sigma, too noisy, or the "
+                         "robot hardly moves there)")), source=None if why else used[0].name)
     if dropped:
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,7 +23,7 @@ from odomkit.log import OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import Robot
 from odomkit.track import Track, dead_reckon_log
-from odomkit.truth import Truth, no_overlap, start_pose, truth_at
+from odomkit.truth import Truth, no_overlap, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, clock_from_robot, load_truth
@@ -113,6 +114,10 @@ def run_track(
     With truth the track starts at the truth pose at the first log time unless ``pose0``
     is given, and ``cov0`` defaults to that pose's uncertainty (``--truth-sigma``, and the
     variance of a heading fitted to position-only truth); the CSV gets ``gt_*`` columns.
+    Where the truth starts after the log's first row, or (position-only) gives no heading
+    there, the track starts at the first row where it gives a pose and heading, as
+    ``odomkit evaluate``'s whole run does (:func:`odomkit.windows.run_start`): the rows before
+    it are left out of the track and its outputs, with a warning that counts them.
     ``bag_out`` writes ``nav_msgs/Odometry`` (:mod:`odomkit.io.bag_writer`; ``bag_format``
     ros1, db3 or mcap, default from the path) with ``frame_id``/``child_frame_id``.
     ``engine`` (default ``"recursion"``) and ``cov0`` apply to the covariance only: given
@@ -146,8 +151,16 @@ def run_track(
             raise InputError(no_overlap(found, log.t), source=found.source)
         truth_rows = samples.poses
         if pose0 is None:
-            start, start_cov = start_pose(found, float(log.t[0]), options.max_gap,
-                                          odometry=_own_path(log, robot, method, found))
+            from odomkit.windows import late_start_note, run_start
+
+            own = _own_path(log, robot, method, found)
+            first, start, start_cov = run_start(log.t, found, samples.valid, own, options.max_gap,
+                                                hint="give --initial-pose")
+            if first > 0:
+                note = late_start_note(log.source, "the track", log.t, first, int(np.argmax(samples.valid)))
+                warnings.warn(f"{note} of the track and its outputs; give --initial-pose to start at the "
+                              "first row", stacklevel=2)
+                log, truth_rows = _from_row(log, first), truth_rows[first:]
             pose0 = (float(start[0]), float(start[1]), float(start[2]))
             if cov0 is None and start_cov.any():
                 cov0 = start_cov.tolist()
@@ -183,22 +196,23 @@ def run_track(
     return run
 
 
-def _own_path(log: OdometryLog, robot: Robot, method: Method, truth: Truth
-              ) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
-    """The odometry's own path (from the origin) over the log's first rows, as far as the
-    heading fit at its start looks (:func:`odomkit.truth.heading_span`), for
-    :func:`odomkit.truth.start_pose` to align to position-only truth; None with truth heading."""
+def _own_path(log: OdometryLog, robot: Robot, method: Method, truth: Truth) -> NDArray[np.float64] | None:
+    """The odometry's own path (N, 3), dead-reckoned from the origin over the whole log, which
+    :func:`odomkit.windows.run_start` aligns to position-only truth wherever it looks for a
+    start heading (as evaluate's whole run does); None with truth heading."""
     if truth.has_heading:
         return None
     from odomkit.integrate import dead_reckon
     from odomkit.kinematics import body_steps
-    from odomkit.truth import heading_span
 
-    rows = int(np.searchsorted(log.t, log.t[0] + heading_span(truth), side="right")) + 1
-    head = OdometryLog(log.t[:rows], {k: v[:rows] for k, v in log.channels.items()}, None, log.source,
-                       log.meta)
-    steps = body_steps(robot, head)
-    return head.t, dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)
+    steps = body_steps(robot, log)
+    return dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)
+
+
+def _from_row(log: OdometryLog, row: int) -> OdometryLog:
+    """The log from ``row`` on (its own ground truth too)."""
+    gt = None if log.ground_truth is None else log.ground_truth[row:]
+    return OdometryLog(log.t[row:], {k: v[row:] for k, v in log.channels.items()}, gt, log.source, log.meta)
 
 
 def _refuse_covariance_flags(engine: str | None, cov0: object, with_covariance: bool, has_noise: bool,
