@@ -353,3 +353,20 @@ def test_a_floor_fitted_from_one_window_length_is_warned_about_on_real_runs(run_
     given, _ = _fit(run_cli, tmp_path, *_logs(), "--window", "10s", "--truth-sigma", "0.001",
                     "--truth-heading-sigma", "0.005", "--truth-time-sigma", "0.01", name="given.toml")
     assert not any("hard to tell" in w for w in given["warnings"])
+
+
+def test_a_fitted_truth_floor_below_the_fixes_own_scatter_is_warned_about(run_cli, tmp_path):
+    """fit-noise reports how the truth's fixes scatter about a smooth path (truth.scatter_sigma,
+    pooled over the logs as an RMS) and warns where its fitted truth_sigma is under half of
+    it: every window end holds the fixes' own noise. On the OptiTrack runs the floor (about
+    1 mm) is above the scatter (0.25 mm), and nothing is said."""
+    from odomkit.truth import scatter_sigma, truth_from_log
+    from odomkit.workflows.fit_noise import _floor_below_scatter
+
+    result, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s")
+    each = [scatter_sigma(truth_from_log(read_run(run))) for run in RUNS[:3]]
+    assert result["truth_scatter_sigma"] == pytest.approx(np.sqrt(np.mean(np.square(each))), rel=1e-12)
+    assert not any("scatter of the truth" in w for w in result["warnings"])
+    said = _floor_below_scatter(0.0, 1.03)
+    assert said is not None and "--truth-sigma 1.03" in said
+    assert _floor_below_scatter(0.6, 1.0) is None and _floor_below_scatter(None, 1.0) is None

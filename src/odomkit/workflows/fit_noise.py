@@ -11,6 +11,7 @@ fitted ``[noise]``.
 
 from __future__ import annotations
 
+import math
 import multiprocessing
 import os
 import time
@@ -71,12 +72,13 @@ class PreparedLog:
     rows: int
     skipped: int
     reason: str | None
+    scatter: float | None = None  # the truth's fixes about a smooth path [m] (truth.scatter_sigma)
 
 
 def prepare_log(task: LogTask) -> PreparedLog:
     """Read one log and its truth, cut its windows and compute their covariance bases."""
     from odomkit.kinematics import body_steps
-    from odomkit.truth import no_overlap, truth_at
+    from odomkit.truth import no_overlap, scatter_sigma, truth_at
     from odomkit.windows import cumulative_travel, log_window_basis, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
@@ -92,7 +94,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
                                       min_travel=task.min_travel, max_gap=task.truth.max_gap,
                                       method=task.method, truth_columns=True)
     if basis is not None:
-        return PreparedLog(name, basis, len(log), skipped, None)
+        return PreparedLog(name, basis, len(log), skipped, None, scatter_sigma(truth))
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
@@ -308,7 +310,10 @@ def fit_noise_files(
     written = write_robot(out, robot, fit.models, overwrite=overwrite, truth=truth_table,
                           name=read_robot_name(robot_path))
     result = fit.to_dict()
-    result["warnings"] = notes + list(fit.warnings)
+    scatter = _pooled_scatter(used)
+    below = _floor_below_scatter(fit.parameters.get("truth_sigma"), scatter)
+    result["warnings"] = notes + list(fit.warnings) + ([below] if below else [])
+    result["truth_scatter_sigma"] = scatter
     result.update({
         "window": None if specs == (None,) else ",".join(str(x) for x in specs),
         "windows_skipped": sum(p.skipped for p in prepared),
@@ -322,6 +327,24 @@ def fit_noise_files(
                             overlapping=len(specs) > 1)
         result["outputs"] = {"robot": str(written), "plot": str(drawn)}
     return result
+
+
+def _pooled_scatter(prepared: Sequence[PreparedLog]) -> float | None:
+    """The logs' truth scatter (:func:`odomkit.truth.scatter_sigma`) pooled as an RMS [m]."""
+    found = [p.scatter for p in prepared if p.scatter is not None]
+    return math.sqrt(sum(x * x for x in found) / len(found)) if found else None
+
+
+def _floor_below_scatter(fitted: float | None, scatter: float | None) -> str | None:
+    """A warning where the fitted ``truth_sigma`` is under half the fixes' own scatter: every
+    window end holds that noise, so the fit has put it elsewhere (in ``truth_time_sigma``,
+    which a car at a steady speed cannot tell from it, or in the robot's noise)."""
+    if fitted is None or scatter is None or fitted >= 0.5 * scatter:
+        return None
+    return (f"the fitted truth_sigma ({fitted:.3g} m) is under half the scatter of the truth's own fixes "
+            f"about a smooth path ({scatter:.3g} m per axis, odomkit.truth.scatter_sigma), which every "
+            "window end holds: the fit has put the truth's noise elsewhere (truth_time_sigma, the robot's "
+            f"noise); if the fixes' noise is known, give it (--truth-sigma {scatter:.3g} if it is white)")
 
 
 #: The unit of each noise field (the variance parameter is its square for σ and k fields).
