@@ -256,3 +256,31 @@ def test_a_compass_robot_is_not_calibrated_so_not_checked():
     log = OdometryLog(t, {"speed": np.full(t.size, 0.5), "heading": 0.01 * t})
     (found,) = check_identifiable(log, CompassOdometry())
     assert found.status == "ok" and "does not calibrate" in found.message
+
+
+def test_a_noisy_truth_without_a_stated_sigma_is_judged_at_its_own_scatter():
+    """check_log's identifiability figures assume the truth's stated σ, else its fixes' own
+    scatter (truth.scatter_sigma) where that is above the 5 mm default: a 1 m GPS is not
+    taken for a motion capture."""
+    from odomkit.calibrate.check import check_identifiable, check_log
+    from odomkit.truth import Truth, scatter_sigma
+
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 300.0, 0.1)
+    speed = 8.0 + 2.0 * np.sin(t / 20.0)
+    steer = 0.05 * np.sin(t / 15.0)
+    robot = Car(2.7, 0.0, "rear")
+    log = OdometryLog(t, {"speed": speed, "steer": steer})
+    poses = dead_reckon_log(log, robot).poses
+    gps = Truth(t[::10], poses[::10, :2] + rng.normal(0.0, 1.0, (t[::10].size, 2)))
+    scatter = scatter_sigma(gps)
+    assert 0.8 < scatter < 1.2
+
+    def figures(found):
+        return {f.message.split(":")[0]: f.value for f in found if f.check == "identifiable"}
+
+    got = figures(check_log(log, robot, gps))
+    assert got == figures(check_identifiable(log, robot, scatter))
+    assert got != figures(check_identifiable(log, robot, None))  # the 5 mm default
+    stated = figures(check_log(log, robot, Truth(gps.t, gps.xy, sigma=0.5)))
+    assert stated == figures(check_identifiable(log, robot, 0.5))

@@ -751,6 +751,17 @@ def _design(log: OdometryLog, robot: CalibratedRobot
     return np.ascontiguousarray(J[..., keep]).reshape(-1, len(keep)), per, unused
 
 
+def _identifiability_sigma(truth: Truth | None) -> float | None:
+    """The position noise the identifiability figures assume: the truth's stated σ, else the
+    larger of the default and the fixes' own scatter (a 1 m GPS must not be taken for 5 mm),
+    else None (the default)."""
+    if truth is None:
+        return None
+    if truth.sigma > 0:
+        return truth.sigma
+    return max(_DEFAULT_SIGMA, scatter_sigma(truth) or 0.0)
+
+
 def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | None = None) -> list[Finding]:
     """How well this log's motion pins each calibration parameter (trajectory fit).
 
@@ -841,7 +852,7 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     if any(f.status == "fail" and f.check == "channels" for f in found):
         return found  # what the motion identifies means nothing until the channels are right
     found += check_motion(log, robot)
-    found += check_identifiable(log, robot, truth.sigma if truth is not None else None)
+    found += check_identifiable(log, robot, _identifiability_sigma(truth))
     return found
 
 
