@@ -228,3 +228,23 @@ def test_a_run_that_stands_or_spins_at_its_start_still_calibrates_and_one_that_n
     with pytest.raises(InputError, match="do not spread") as info:
         calibrate_positions([log, still], [truth, parked], Unicycle())
     assert info.value.source == "never-moves"
+
+
+def test_without_a_stated_sigma_the_drift_warning_judges_by_the_fixes_own_scatter():
+    """With no --truth-sigma the residuals are held against the fixes' own scatter about a
+    smooth path (truth.scatter_sigma): the same two drives as above, with the truth's σ
+    unstated, give no warning and the warning."""
+    import warnings
+    from dataclasses import replace
+
+    log, truth = drive(4, TRUE_CAR)
+    unstated = replace(truth, sigma=0.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        calibrate_positions([log], [unstated], NOMINAL_CAR)
+    rng = np.random.default_rng(4)
+    wander = np.cumsum(rng.normal(0.0, 0.3 / np.sqrt(len(log)), len(log)))
+    drifting = OdometryLog(log.t, {**log.channels, "steer": log.channels["steer"] + 0.02 * wander},
+                           source="drifting")
+    with pytest.warns(UserWarning, match="scatter about a smooth path .* standard errors are optimistic"):
+        calibrate_positions([drifting], [unstated], NOMINAL_CAR)
