@@ -233,7 +233,14 @@ def scatter_sigma(truth: Truth, block: int = 5) -> float | None:
         return None
     coef = np.linalg.solve(gram[ok], np.einsum("bni,bnk->bik", design[ok], xy[ok]))  # (B, 3, 2)
     resid = xy[ok] - np.einsum("bni,bik->bnk", design[ok], coef)
-    return math.sqrt(float(np.sum(resid**2)) / (2 * np.count_nonzero(ok) * (block - 3)))
+    # As an RMS of RMS's: squares of 1e200 m (a fuzzed file) would overflow to inf.
+    scale = float(np.max(np.abs(resid)))
+    if not math.isfinite(scale):
+        return None
+    if scale == 0.0:
+        return 0.0
+    rss = float(np.sum((resid / scale) ** 2))
+    return scale * math.sqrt(rss / (2 * np.count_nonzero(ok) * (block - 3)))
 
 
 def truth_from_log(log: OdometryLog) -> Truth | None:
