@@ -266,15 +266,9 @@ def run_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike 
 
     Returns
     -------
-    row : int
-    pose : ndarray, shape (3,)
-        [m, m, rad].
-    cov : ndarray, shape (3, 3)
-
-    Raises
-    ------
-    InputError
-        When no row has valid truth, or the position-only truth gives a heading at none.
+    (row, pose (3,), cov (3, 3)): the row, and :func:`odomkit.truth.start_pose`'s pose and
+    covariance there; InputError when no row has valid truth, or the position-only truth
+    gives a heading at none.
     """
     from odomkit.truth import no_overlap, start_pose
 
