@@ -88,3 +88,21 @@ def test_decimation_must_be_a_positive_integer(every):
     log = OdometryLog(np.arange(3.0), {"speed": np.ones(3)}, source="run.csv")
     with pytest.raises(InputError, match=r"^run\.csv: decimation must be a positive integer, got "):
         log.decimate(every)
+
+
+def test_from_row_keeps_every_channel_and_the_truth_from_that_row():
+    """OdometryLog.from_row: the rows from ``row`` on, channels and ground truth alike; a
+    track dead-reckoned from it equals the whole log's track from that row on, moved to start there."""
+    from odomkit.robot import DiffDrive
+    from odomkit.track import dead_reckon_log
+
+    t = np.arange(0.0, 5.0, 0.1)
+    log = OdometryLog(t, {"dist_left": 0.01 + 0.002 * np.sin(t), "dist_right": 0.01 + 0 * t},
+                      np.column_stack((t, 0 * t, 0 * t)), "x.csv")
+    part = log.from_row(20)
+    assert part.t.tolist() == t[20:].tolist() and part.source == "x.csv"
+    assert part.ground_truth.tolist() == log.ground_truth[20:].tolist()
+    robot = DiffDrive(0.3)
+    whole = dead_reckon_log(log, robot).poses
+    late = dead_reckon_log(part, robot, pose0=tuple(whole[20])).poses
+    np.testing.assert_allclose(late, whole[20:], atol=1e-12)

@@ -76,6 +76,13 @@ class OdometryLog:
                 f"log has no channel {name!r} (it has {sorted(self.channels)})", source=self.source
             ) from None
 
+    def from_row(self, row: int) -> OdometryLog:
+        """The log from row ``row`` on, its ground truth too (a run that starts late: the
+        first row's increments led up to it and are no step of the slice)."""
+        gt = None if self.ground_truth is None else self.ground_truth[row:]
+        return OdometryLog(self.t[row:], {k: v[row:] for k, v in self.channels.items()}, gt, self.source,
+                           self.meta)
+
     def decimate(self, every: int) -> OdometryLog:
         """Keep every ``every``-th row, as if the sensors had been read less often.
 

@@ -500,7 +500,6 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     """Whole-run figures from truth at the first row, and the window ends of one log."""
     from odomkit.integrate import dead_reckon
     from odomkit.kinematics import body_steps
-    from odomkit.log import OdometryLog
     from odomkit.track import dead_reckon_log
     from odomkit.truth import no_overlap, truth_at
     from odomkit.windows import (
@@ -523,9 +522,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                 else dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method))  # type: ignore[arg-type]
     first, pose0, cov0 = run_start(log.t, truth, samples.valid, odometry, opts.max_gap)
     # The whole run, dead-reckoned from the truth at its first usable row.
-    sub = OdometryLog(log.t[first:], {k: v[first:] for k, v in log.channels.items()},
-                      None, log.source, log.meta)
-    track = dead_reckon_log(sub, robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
+    track = dead_reckon_log(log.from_row(first), robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
     whole = _score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
                          align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                          min_travel=0.0, honesty_from_rows=False, t=track.t)

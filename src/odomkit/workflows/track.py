@@ -160,7 +160,7 @@ def run_track(
                 note = late_start_note(log.source, "the track", log.t, first, int(np.argmax(samples.valid)))
                 warnings.warn(f"{note} of the track and its outputs; give --initial-pose to start at the "
                               "first row", stacklevel=2)
-                log, truth_rows = _from_row(log, first), truth_rows[first:]
+                log, truth_rows = log.from_row(first), truth_rows[first:]
             pose0 = (float(start[0]), float(start[1]), float(start[2]))
             if cov0 is None and start_cov.any():
                 cov0 = start_cov.tolist()
@@ -208,11 +208,6 @@ def _own_path(log: OdometryLog, robot: Robot, method: Method, truth: Truth) -> N
     steps = body_steps(robot, log)
     return dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method)
 
-
-def _from_row(log: OdometryLog, row: int) -> OdometryLog:
-    """The log from ``row`` on (its own ground truth too)."""
-    gt = None if log.ground_truth is None else log.ground_truth[row:]
-    return OdometryLog(log.t[row:], {k: v[row:] for k, v in log.channels.items()}, gt, log.source, log.meta)
 
 
 def _refuse_covariance_flags(engine: str | None, cov0: object, with_covariance: bool, has_noise: bool,
