@@ -184,14 +184,19 @@ def test_a_robot_file_far_off_is_refused_at_the_edge_of_the_plausible_range():
         calibrate_positions([log], [truth], wrong)
 
 
-def test_residuals_beyond_the_truths_noise_warn_that_the_standard_errors_are_optimistic(recwarn):
+@pytest.mark.parametrize("stated", [True, False])
+def test_residuals_beyond_the_truths_noise_warn_that_the_standard_errors_are_optimistic(stated):
     """The standard errors treat the residuals as the fixes' independent noise. Perfect
     odometry against 3 m fixes gives residuals of 3 m and no warning; a steering reading that
     wanders (a random walk of a few mrad the robot file cannot know) puts its drift into the
-    residuals, correlated along the run, and the calibration says so."""
+    residuals, correlated along the run, and the calibration says so. With no stated σ the
+    residuals are held against the fixes' own scatter about a smooth path
+    (truth.scatter_sigma), with the same outcome."""
     import warnings
+    from dataclasses import replace
 
     log, truth = drive(4, TRUE_CAR)
+    truth = truth if stated else replace(truth, sigma=0.0)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         calibrate_positions([log], [truth], NOMINAL_CAR)
@@ -199,7 +204,8 @@ def test_residuals_beyond_the_truths_noise_warn_that_the_standard_errors_are_opt
     wander = np.cumsum(rng.normal(0.0, 0.3 / np.sqrt(len(log)), len(log)))
     drifting = OdometryLog(log.t, {**log.channels, "steer": log.channels["steer"] + 0.02 * wander},
                            source="drifting")
-    with pytest.warns(UserWarning, match="standard errors are optimistic"):
+    said = "stated σ" if stated else "scatter about a smooth path"
+    with pytest.warns(UserWarning, match=f"{said} .* standard errors are optimistic"):
         calibrate_positions([drifting], [truth], NOMINAL_CAR)
 
 
@@ -228,23 +234,3 @@ def test_a_run_that_stands_or_spins_at_its_start_still_calibrates_and_one_that_n
     with pytest.raises(InputError, match="do not spread") as info:
         calibrate_positions([log, still], [truth, parked], Unicycle())
     assert info.value.source == "never-moves"
-
-
-def test_without_a_stated_sigma_the_drift_warning_judges_by_the_fixes_own_scatter():
-    """With no --truth-sigma the residuals are held against the fixes' own scatter about a
-    smooth path (truth.scatter_sigma): the same two drives as above, with the truth's σ
-    unstated, give no warning and the warning."""
-    import warnings
-    from dataclasses import replace
-
-    log, truth = drive(4, TRUE_CAR)
-    unstated = replace(truth, sigma=0.0)
-    with warnings.catch_warnings():
-        warnings.simplefilter("error")
-        calibrate_positions([log], [unstated], NOMINAL_CAR)
-    rng = np.random.default_rng(4)
-    wander = np.cumsum(rng.normal(0.0, 0.3 / np.sqrt(len(log)), len(log)))
-    drifting = OdometryLog(log.t, {**log.channels, "steer": log.channels["steer"] + 0.02 * wander},
-                           source="drifting")
-    with pytest.warns(UserWarning, match="scatter about a smooth path .* standard errors are optimistic"):
-        calibrate_positions([drifting], [unstated], NOMINAL_CAR)
