@@ -367,6 +367,23 @@ def test_a_fitted_truth_floor_below_the_fixes_own_scatter_is_warned_about(run_cl
     each = [scatter_sigma(truth_from_log(read_run(run))) for run in RUNS[:3]]
     assert result["truth_scatter_sigma"] == pytest.approx(np.sqrt(np.mean(np.square(each))), rel=1e-12)
     assert not any("scatter of the truth" in w for w in result["warnings"])
-    said = _floor_below_scatter(0.0, 1.03)
+    metres = np.random.default_rng(3).normal(0.0, 2.0, (40, 2))  # a GPS car's window ends
+    said = _floor_below_scatter(0.0, 1.03, metres)
     assert said is not None and "--truth-sigma 1.03" in said
-    assert _floor_below_scatter(0.6, 1.0) is None and _floor_below_scatter(None, 1.0) is None
+    assert _floor_below_scatter(0.6, 1.0, metres) is None and _floor_below_scatter(None, 1.0, metres) is None
+
+
+def test_a_truth_scatter_too_small_to_matter_is_not_warned_about():
+    """A 1 mm motion capture under window-end errors of decimetres (commanded-velocity robots)
+    changes no fit wherever the fit put it: the warning waits until the fixes' variance at a
+    window's two ends is 5 % of the errors' mean square per axis, and says it from there on."""
+    from odomkit.workflows.fit_noise import SCATTER_SHARE_THAT_MATTERS, _floor_below_scatter
+
+    errors = np.random.default_rng(4).normal(0.0, 0.1, (95, 2))
+    mean_square = float(np.mean(np.square(errors)))
+    assert _floor_below_scatter(0.0, 0.001, errors) is None
+    edge = np.sqrt(SCATTER_SHARE_THAT_MATTERS * mean_square / 2.0)
+    assert _floor_below_scatter(0.0, 0.99 * edge, errors) is None
+    assert _floor_below_scatter(0.0, 1.01 * edge, errors) is not None
+    with_gaps = np.vstack([errors, [[np.nan, np.nan]]])  # a window without truth at its end
+    assert _floor_below_scatter(0.0, 1.01 * edge, with_gaps) is not None

@@ -21,11 +21,15 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
+import numpy as np
+
 from odomkit.calibrate.fit_noise import DEFAULT_TRIM
 from odomkit.errors import InputError
 from odomkit.progress import NO_PROGRESS, Progress, stage
 
 if TYPE_CHECKING:
+    from numpy.typing import NDArray
+
     from odomkit.calibrate.fit_noise import NoiseFit
     from odomkit.noise import NoiseModel
     from odomkit.robot import Robot
@@ -311,7 +315,8 @@ def fit_noise_files(
                           name=read_robot_name(robot_path))
     result = fit.to_dict()
     scatter = _pooled_scatter(used)
-    below = _floor_below_scatter(fit.parameters.get("truth_sigma"), scatter)
+    below = _floor_below_scatter(fit.parameters.get("truth_sigma"), scatter,
+                                 np.concatenate([b.error[:, :2] for b in bases]))
     result["warnings"] = notes + list(fit.warnings) + ([below] if below else [])
     result["truth_scatter_sigma"] = scatter
     result.update({
@@ -335,11 +340,24 @@ def _pooled_scatter(prepared: Sequence[PreparedLog]) -> float | None:
     return math.sqrt(sum(x * x for x in found) / len(found)) if found else None
 
 
-def _floor_below_scatter(fitted: float | None, scatter: float | None) -> str | None:
+#: The fixes' scatter is worth a word only where its variance at a window's two ends is at
+#: least this share of the window-end errors' own mean square per axis: a 1 mm motion capture
+#: under errors of centimetres changes no fit, wherever the fit put it.
+SCATTER_SHARE_THAT_MATTERS = 0.05
+
+
+def _floor_below_scatter(fitted: float | None, scatter: float | None,
+                         errors: NDArray[np.float64]) -> str | None:
     """A warning where the fitted ``truth_sigma`` is under half the fixes' own scatter: every
     window end holds that noise, so the fit has put it elsewhere (in ``truth_time_sigma``,
-    which a car at a steady speed cannot tell from it, or in the robot's noise)."""
+    which a car at a steady speed cannot tell from it, or in the robot's noise).
+
+    ``errors``, shape (W, 2), are the window-end position errors [m]; nothing is said where
+    the scatter is immaterial to them (:data:`SCATTER_SHARE_THAT_MATTERS`)."""
     if fitted is None or scatter is None or fitted >= 0.5 * scatter:
+        return None
+    mean_square = float(np.nanmean(np.square(errors))) if errors.size else 0.0
+    if 2.0 * scatter**2 < SCATTER_SHARE_THAT_MATTERS * mean_square:
         return None
     return (f"the fitted truth_sigma ({fitted:.3g} m) is under half the scatter of the truth's own fixes "
             f"about a smooth path ({scatter:.3g} m per axis, odomkit.truth.scatter_sigma), which every "
