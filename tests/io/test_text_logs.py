@@ -290,3 +290,49 @@ def test_a_ros_twist_header_is_read_and_the_columns_hint_is_the_robots_own(tmp_p
                                          r"order \(t,speed,yaw_rate\)"):
         load_log(short, robot, LogOptions())
     assert set(COLUMN_EXAMPLES) == set(ROBOT_TYPES)
+
+
+def test_angles_in_degrees_read_as_radians_and_radians_that_look_like_degrees_are_warned_about(tmp_path):
+    """A CAN steering angle or a gyro is often logged in degrees: ``steer_deg``,
+    ``yaw_rate_deg`` and ``heading_deg`` (in --columns or in the header) read them as the
+    radians of the same channel, exactly as ``np.radians`` of the numbers. Read as radians,
+    a steering angle beyond ±(π/2 + 0.01) or a yaw rate beyond a revolution a second in 1 %
+    of the rows is said to look like degrees; a tricycle at its ±π/2 lock is not."""
+    import warnings as warnings_module
+
+    from odomkit.robot import Car
+
+    t = np.arange(0.0, 20.0, 0.05)
+    steer_deg = 25.0 * np.sin(0.3 * t)
+    rate_deg = 40.0 * np.cos(0.2 * t)
+    rows = np.column_stack((t, 0.3 + 0 * t, steer_deg, rate_deg))
+    path = tmp_path / "deg.csv"
+    np.savetxt(path, rows, delimiter=",", header="t,speed,steer_deg,yaw_rate_deg", comments="")
+    with warnings_module.catch_warnings():
+        warnings_module.simplefilter("error")  # degree columns read so are no cause for a warning
+        by_header = read_csv_log(path, None)
+        in_order = read_csv_log(path, ["t", "speed", "steer_deg", "yaw_rate_deg"])
+    for log in (by_header, in_order):
+        np.testing.assert_array_equal(log.channels["steer"], np.radians(steer_deg))
+        np.testing.assert_array_equal(log.channels["yaw_rate"], np.radians(rate_deg))
+        assert "steer_deg" not in log.channels and "yaw_rate_deg" not in log.channels
+    radians = tmp_path / "rad.csv"
+    np.savetxt(radians, np.column_stack((t, 0.3 + 0 * t, np.radians(steer_deg))), delimiter=",",
+               header="t,speed,steer", comments="")
+    car = Car(wheel_base=2.7)
+    track_deg = dead_reckon_log(load_log(path, car, LogOptions(columns="t,speed,steer_deg")), car)
+    track_rad = dead_reckon_log(load_log(radians, car, LogOptions()), car)
+    np.testing.assert_allclose(track_deg.poses, track_rad.poses, rtol=0, atol=1e-12)
+
+    with pytest.warns(UserWarning, match=r"column 3 \(steer\) reaches 25 rad.*steer_deg"):
+        read_csv_log(path, ["t", "speed", "steer", "yaw_rate_deg"])
+    with pytest.warns(UserWarning, match=r"column 4 \(yaw_rate\) has a 99th percentile of 40 rad/s.*_deg"):
+        read_csv_log(path, ["t", "speed", "steer_deg", "yaw_rate"])
+    lock = tmp_path / "lock.csv"
+    np.savetxt(lock, np.column_stack((t, 0.3 + 0 * t, np.full_like(t, np.pi / 2), np.full_like(t, 6.0))),
+               delimiter=",")
+    with warnings_module.catch_warnings():
+        warnings_module.simplefilter("error")
+        read_csv_log(lock, ["t", "speed", "steer", "yaw_rate"])
+    with pytest.raises(InputError, match="give steer or steer_deg, not both"):
+        read_csv_log(path, ["t", "speed", "steer", "steer_deg"])

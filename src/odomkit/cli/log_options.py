@@ -37,7 +37,8 @@ FormatOption = Annotated[str, typer.Option(
 ColumnsOption = Annotated[str | None, typer.Option(
     "--columns", help="Text log columns: header names t=time,ticks_left=L,ticks_right=R, or in order "
                       "for a headerless file t,ticks_left,_,ticks_right (_ skips a column). Comma, "
-                      "semicolon, tab or whitespace separated; # comments.")]
+                      "semicolon, tab or whitespace separated; # comments. Angles are radians; "
+                      "steer_deg, yaw_rate_deg, heading_deg read degrees.")]
 CumulativeOption = Annotated[bool, typer.Option(
     "--cumulative/--no-cumulative",
     help="CSV ticks_*/dist_* columns are cumulative counters (differenced, integers exactly).")]

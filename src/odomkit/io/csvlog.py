@@ -10,6 +10,7 @@ never decrease; the time column may be in s, ms, µs or ns (``--time-unit``).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -35,11 +36,21 @@ from odomkit.io.text import (
 )
 from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
 
-__all__ = ["GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN"]
+__all__ = ["DEGREE_COLUMNS", "GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN"]
 
 GROUND_TRUTH_FIELDS = ("gt_x", "gt_y", "gt_theta")
 SKIP_COLUMN = "_"
 """The name that skips a column in ``--columns`` given in order."""
+DEGREE_COLUMNS = {"steer_deg": "steer", "yaw_rate_deg": "yaw_rate", "heading_deg": "heading"}
+"""Column names that read an angle channel in degrees (deg/s for the yaw rate), as the truth's
+``theta_deg``: odomkit's channels are radians (DESIGN.md), and a CAN steering angle or a
+gyro is often logged in degrees."""
+#: A bicycle or tricycle steering angle beyond ±90° (and a little more: OptiOdom's tricycle
+#: logs exactly ±π/2 when it turns in place) is no radians a vehicle steers by.
+STEER_LIMIT = np.pi / 2 + 0.01
+#: A base turning faster than a revolution a second for 1 % of a log is rarer than a gyro
+#: logged in °/s read as rad/s (a 30 °/s turn would read as 4.8 revolutions a second).
+YAW_RATE_LIMIT = 2 * np.pi
 
 
 def parse_columns(text: str) -> dict[str, str] | list[str]:
@@ -96,7 +107,8 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
         raise InputError(hint + "; this log has no header", source=source)
     times = [name for name in header if name.lower() in TIME_NAMES]
     known = [name for name in header
-             if name in KNOWN_CHANNELS or name in GROUND_TRUTH_FIELDS or name.lower() in HEADER_ALIASES]
+             if name in KNOWN_CHANNELS or name in DEGREE_COLUMNS or name in GROUND_TRUTH_FIELDS
+             or name.lower() in HEADER_ALIASES]
     unknown = [name for name in header if name not in times and name not in known]
     if len(times) != 1 or not known or unknown:
         why = (f"its header names {', '.join(repr(u) for u in unknown)}, not odomkit's own names" if unknown
@@ -110,14 +122,19 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
 def _check_targets(targets: Sequence[str], source: str) -> None:
     named = [k for k in targets if k != SKIP_COLUMN]
     for key in named:
-        if key != "t" and key not in KNOWN_CHANNELS and key not in GROUND_TRUTH_FIELDS:
+        if key != "t" and key not in KNOWN_CHANNELS | DEGREE_COLUMNS.keys() | set(GROUND_TRUTH_FIELDS):
             raise InputError(
                 f"unknown target {key!r} in --columns; expected t, "
-                f"{', '.join(sorted(KNOWN_CHANNELS))}, {', '.join(GROUND_TRUTH_FIELDS)} or _ (skip)",
+                f"{', '.join(sorted(KNOWN_CHANNELS))} (steer_deg, yaw_rate_deg, heading_deg in degrees), "
+                f"{', '.join(GROUND_TRUTH_FIELDS)} or _ (skip)",
                 source=source)
     twice = sorted({k for k in named if named.count(k) > 1})
     if twice:
         raise InputError(f"--columns names {', '.join(twice)} more than once", source=source)
+    both = sorted(f"{channel} or {degrees}" for degrees, channel in DEGREE_COLUMNS.items()
+                  if degrees in named and channel in named)
+    if both:
+        raise InputError(f"--columns names one angle twice: give {', '.join(both)}, not both", source=source)
     if "t" not in named:
         raise InputError("--columns needs the time column t (t=<header name>, or t in its place)",
                          source=source)
@@ -158,6 +175,25 @@ def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
     return layout, index
 
 
+def _warn_if_degrees(values: np.ndarray, key: str, source: str, label: str) -> None:
+    """Warn where a steering angle or yaw rate read as radians looks like degrees
+    (:data:`STEER_LIMIT`, :data:`YAW_RATE_LIMIT`): read so, it gives a wrong track silently."""
+    finite = np.abs(values[np.isfinite(values)])
+    if not finite.size:
+        return
+    if key == "steer":
+        seen, limit, what = float(finite.max()), STEER_LIMIT, "reaches"
+    else:
+        seen, limit, what = float(np.percentile(finite, 99)), YAW_RATE_LIMIT, "has a 99th percentile of"
+    if seen > limit:
+        unit = "rad" if key == "steer" else "rad/s"
+        warnings.warn(
+            f"{source}: {label} ({key}) {what} {seen:.3g} {unit}, beyond {limit:.3g} {unit}: "
+            f"is it in degrees? odomkit reads radians; {key}_deg in --columns reads degrees "
+            f"({key}_deg=<header name>, or {key}_deg in its place)",
+            UserWarning, stacklevel=3)
+
+
 def read_csv_log(
     path: str | Path,
     columns: Mapping[str, str] | Sequence[str] | None,
@@ -181,7 +217,9 @@ def read_csv_log(
         last name are ignored; a header line, if any, is skipped); a mapping goes from
         odomkit name to header name (``{"t": "time", "ticks_left": "L"}``). Names: ``t``
         (required), any channel of :mod:`odomkit.log` (``ticks_left``, ``speed``,
-        ``steer``, ...), and ``gt_x``, ``gt_y``, ``gt_theta`` for ground truth [m, m, rad].
+        ``steer``, ...), the angle channels in degrees (:data:`DEGREE_COLUMNS`:
+        ``steer_deg``, ``yaw_rate_deg``, ``heading_deg``), and ``gt_x``, ``gt_y``,
+        ``gt_theta`` for ground truth [m, m, rad].
     time_unit : unit of the time column: ``"s"``, ``"ms"``, ``"us"``, ``"ns"``, or seconds
         per unit as a number (:func:`odomkit.io.text.seconds_per_unit`)
     cumulative : increment channels hold cumulative counts, differenced here (integer
@@ -200,7 +238,9 @@ def read_csv_log(
     -----
     UserWarning
         When an increment column read as increments never decreases and takes many
-        values: a cumulative counter without ``cumulative`` (:func:`odomkit.io.table.warn_if_cumulative`).
+        values: a cumulative counter without ``cumulative`` (:func:`odomkit.io.table.warn_if_cumulative`);
+        when a steering angle beyond ±(π/2 + 0.01) rad or a yaw rate whose 99th percentile
+        is beyond 2π rad/s looks like degrees read as radians.
     """
     path = Path(path)
     source = str(path)
@@ -237,6 +277,11 @@ def read_csv_log(
         channels[key] = data[:, col].copy()
         if key in INCREMENT_CHANNELS:
             warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
+    for key, col in index.items():
+        if key in DEGREE_COLUMNS:
+            channels[DEGREE_COLUMNS[key]] = np.radians(data[:, col])
+        elif key in ("steer", "yaw_rate"):
+            _warn_if_degrees(channels[key], key, source, labels[key])
     truth = None
     gt_keys = [k for k in GROUND_TRUTH_FIELDS if k in index]
     if gt_keys:
