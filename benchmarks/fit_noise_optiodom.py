@@ -26,7 +26,8 @@ from odomkit.io.optiodom import read_experiment
 from odomkit.kinematics import body_steps
 from odomkit.noise import NoiseModel, ParameterUncertainty, SpeedNoise, WheelNoise
 from odomkit.truth import truth_at, truth_from_log
-from odomkit.windows import cumulative_travel, parse_window, split_windows, window_covariance_basis
+from odomkit.window_errors import window_covariance_basis
+from odomkit.windows import cumulative_travel, parse_window, split_windows
 
 LEVELS = ("0.5", "0.9", "0.95", "0.99")
 

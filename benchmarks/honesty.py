@@ -46,7 +46,8 @@ from odomkit.io.robotfile import read_robot
 from odomkit.log import OdometryLog
 from odomkit.noise import LateralSlipNoise, ParameterUncertainty, SpeedNoise, TricycleNoise, WheelNoise
 from odomkit.truth import truth_from_log
-from odomkit.windows import log_window_basis, parse_window
+from odomkit.window_errors import log_window_basis
+from odomkit.windows import parse_window
 
 REPO = Path(__file__).resolve().parents[1]
 LEVELS = ("0.5", "0.9", "0.95", "0.99")

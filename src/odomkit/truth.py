@@ -72,7 +72,7 @@ class Truth:
         (``--truth-time-sigma``; jitter and latency between two clocks): a fix δ off is off
         by the velocity times δ, so it adds (v·σ)² along the track where the robot moves and
         nothing where it stands; the heading's share ω·δ counts only where a start heading
-        is fitted to position-only truth (:func:`odomkit.windows._pose_rates` says why).
+        is fitted to position-only truth (:func:`odomkit.window_errors._pose_rates` says why).
     """
 
     t: NDArray[np.float64]

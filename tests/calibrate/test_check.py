@@ -13,9 +13,7 @@ import numpy as np
 import pytest
 
 from odomkit.calibrate.check import (
-    check_channels,
     check_counters,
-    check_identifiable,
     check_log,
     check_motion,
     check_stuck,
@@ -23,6 +21,8 @@ from odomkit.calibrate.check import (
     check_values,
     next_steps,
 )
+from odomkit.calibrate.check_channels import check_channels
+from odomkit.calibrate.check_identifiable import check_identifiable
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Tricycle
 from odomkit.track import dead_reckon_log

@@ -26,7 +26,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from odomkit.calibrate.check import check_identifiable
+from odomkit.calibrate.check_identifiable import check_identifiable
 from odomkit.calibrate.exact import calibrate_exact
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Tricycle, Unicycle
@@ -262,7 +262,8 @@ def test_a_noisy_truth_without_a_stated_sigma_is_judged_at_its_own_scatter():
     """check_log's identifiability figures assume the truth's stated σ, else its fixes' own
     scatter (truth.scatter_sigma) where that is above the 5 mm default: a 1 m GPS is not
     taken for a motion capture."""
-    from odomkit.calibrate.check import check_identifiable, check_log
+    from odomkit.calibrate.check import check_log
+    from odomkit.calibrate.check_identifiable import check_identifiable
     from odomkit.truth import Truth, scatter_sigma
 
     rng = np.random.default_rng(2)

@@ -36,7 +36,8 @@ from odomkit.noise import (
 )
 from odomkit.robot import CompassOdometry, DiffDrive, GyroOdometry, Tricycle
 from odomkit.truth import Truth
-from odomkit.windows import WindowBasis, WindowSpec, split_windows, window_covariance_basis
+from odomkit.window_errors import WindowBasis, window_covariance_basis
+from odomkit.windows import WindowSpec, split_windows
 
 TRUE = {"k_left": 0.002, "k_right": 0.003, "sigma_wheel_base": 0.003, "sigma_scale_left": 0.004,
         "sigma_scale_right": 0.002}
@@ -367,7 +368,7 @@ def truth_noise_bases(seed, *, n_logs=6, n=1200, true=TRUTH_TRUE, bias=False, tr
     with the truth's own noise in every fix: its position taken at t + δ, δ ~ N(0, σt²)
     off the log's clock (x, y interpolated between the true track's rows, simulated 1 s
     beyond both ends of the log so that a shifted fix stays on it), its heading at t (the
-    model leaves a clock offset's heading share out: windows._pose_rates), then moved by
+    model leaves a clock offset's heading share out: window_errors._pose_rates), then moved by
     N(0, σ²) per axis and N(0, σθ²) in heading. ``stops``: the robot stands still within 0.5 s of every
     multiple of 8 s (every window's ends).
 
@@ -532,7 +533,8 @@ def test_truth_held_names_only_truth_parameters_of_bases_that_carry_them():
 def _floor_basis(durations, floor_share):
     """Windows of the given durations whose end covariance at unit variances is a robot
     column (1 - floor_share) plus a truth column (floor_share) per position axis."""
-    from odomkit.windows import TRUTH_NOISE, Window
+    from odomkit.window_errors import TRUTH_NOISE
+    from odomkit.windows import Window
 
     w = len(durations)
     white = np.zeros((w, 4, 3, 3))

@@ -19,7 +19,8 @@ from odomkit.log import OdometryLog
 from odomkit.noise import WheelNoise
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
-from odomkit.windows import WindowSpec, cumulative_travel, split_windows, window_covariance_basis
+from odomkit.window_errors import window_covariance_basis
+from odomkit.windows import WindowSpec, cumulative_travel, split_windows
 
 ROBOT = DiffDrive(0.3)
 

@@ -19,7 +19,8 @@ from odomkit.log import OdometryLog
 from odomkit.noise import ParameterUncertainty, WheelNoise
 from odomkit.robot import DiffDrive
 from odomkit.truth import Truth
-from odomkit.windows import WindowSpec, split_windows, window_covariance_basis
+from odomkit.window_errors import window_covariance_basis
+from odomkit.windows import WindowSpec, split_windows
 
 ROBOT = DiffDrive(0.3)
 SIGMA = {"k_left": 0.002, "k_right": 0.003, "sigma_wheel_base": 0.003, "sigma_scale_left": 0.004,

@@ -87,7 +87,7 @@ def _json(run_cli, *args):
 def test_the_whole_log_window_starts_where_the_position_only_truth_first_gives_a_heading(run_cli, tmp_path):
     from odomkit.calibrate.fit_noise import models_to_fit
     from odomkit.truth import truth_at
-    from odomkit.windows import log_window_basis
+    from odomkit.window_errors import log_window_basis
 
     robot_path, log_path, gps = _drive(tmp_path)
     robot, log, truth = _loaded(robot_path, log_path, gps)

@@ -1,11 +1,12 @@
 """Maximum-likelihood noise variances from window-end errors (``odomkit fit-noise``).
 
 Each log with ground truth is cut into windows that restart from the truth
-(:mod:`odomkit.windows`). To first order a window end's covariance is linear in the
-noise models' variance parameters v (:meth:`odomkit.noise.NoiseModel.variance_parameters`:
-σ and k fields squared, var/psd/alpha fields as they are), so the bases are computed once
-per window and the likelihood of every window end (:class:`WindowLikelihood`: white
-noise independent between windows, one bias draw per log) is cheap to evaluate at any v.
+(:mod:`odomkit.windows`; their ends' errors and covariances: :mod:`odomkit.window_errors`).
+To first order a window end's covariance is linear in the noise models' variance
+parameters v (:meth:`odomkit.noise.NoiseModel.variance_parameters`: σ and k fields
+squared, var/psd/alpha fields as they are), so the bases are computed once per window and
+the likelihood of every window end (:class:`WindowLikelihood`: white noise independent
+between windows, one bias draw per log) is cheap to evaluate at any v.
 It is maximised over v ≥ 0 by L-BFGS-B on log v with its analytic gradient.
 
 Intervals are **profile-likelihood** intervals {v_j : 2(ℓ̂ − ℓ_p(v_j)) ≤ χ²₁(level)}: they
@@ -37,11 +38,11 @@ from odomkit.errors import ModelError
 from odomkit.evaluate import coverage
 from odomkit.noise import NOISE_MODELS, NoiseModel, NoiseSet
 from odomkit.noise.base import variance_power
-from odomkit.windows import TRUTH_NOISE
+from odomkit.window_errors import TRUTH_NOISE
 
 if TYPE_CHECKING:
     from odomkit.robot import Robot
-    from odomkit.windows import WindowBasis
+    from odomkit.window_errors import WindowBasis
 
 __all__ = [
     "DEFAULT_FIXED",
@@ -193,7 +194,7 @@ def models_to_fit(robot: Robot, models: Sequence[NoiseModel], kinds: Collection[
 def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collection[str],
                      fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
     """Every variance parameter of ``models`` that applies to ``robot``: white ones first,
-    then bias (the order of :func:`odomkit.windows.window_covariance_basis`); free when
+    then bias (the order of :func:`odomkit.window_errors.window_covariance_basis`); free when
     the model's kind is in ``kinds`` and the key or field is not in ``fixed``."""
     entries = []
     for kind in ("white", "bias"):
@@ -219,7 +220,7 @@ def _has_truth_columns(basis: WindowBasis) -> bool:
 def fit_parameters(bases: Sequence[WindowBasis], models: Sequence[NoiseModel], robot: Robot,
                    kinds: Collection[str], fixed: Collection[str] = ()) -> tuple[NoiseParameter, ...]:
     """The parameters of a fit on ``bases``: :func:`noise_parameters`, and, where the bases
-    carry the truth's own noise (:data:`odomkit.windows.TRUTH_NOISE`, ``truth_columns``),
+    carry the truth's own noise (:data:`odomkit.window_errors.TRUTH_NOISE`, ``truth_columns``),
     ``truth_sigma`` [m], ``truth_heading_sigma`` [rad] and ``truth_time_sigma`` [s]
     between the white and the bias ones (the bases' column order), kind ``"truth"``: free
     unless named in ``fixed`` or their columns are zero in every window (no truth heading
@@ -453,7 +454,7 @@ def fit_noise(
     Parameters
     ----------
     bases : sequence of WindowBasis
-        One per log, from :func:`odomkit.windows.window_covariance_basis` with ``models``.
+        One per log, from :func:`odomkit.window_errors.window_covariance_basis` with ``models``.
     models : sequence of NoiseModel
         The models (:func:`models_to_fit`); parameters not fitted keep their value.
     robot : Robot

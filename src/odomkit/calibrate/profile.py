@@ -28,7 +28,7 @@ if TYPE_CHECKING:
     from odomkit.calibrate.fit_noise import NoiseFit
     from odomkit.noise import NoiseModel
     from odomkit.robot import Robot
-    from odomkit.windows import WindowBasis
+    from odomkit.window_errors import WindowBasis
 
 __all__ = ["LogLikelihood", "Profile", "amcl_profiles", "noise_profiles", "profile_grid",
            "profile_log_likelihood"]

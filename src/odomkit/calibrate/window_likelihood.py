@@ -1,6 +1,6 @@
 """The Gaussian likelihood of window-end errors as a function of the noise variances.
 
-The window ends of one log (:mod:`odomkit.windows`) have errors e_w with, to first order,
+The window ends of one log (:mod:`odomkit.window_errors`) have errors e_w with, to first order,
 
     e_w = (white and start noise of window w) + S_w β,
 
@@ -35,7 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.windows import WindowBasis
+from odomkit.window_errors import WindowBasis
 
 __all__ = ["FLOOR", "LikelihoodValue", "WindowLikelihood"]
 

@@ -47,7 +47,8 @@ def check_file(
         ``log``, ``ok`` (no finding failed), ``findings`` [{check, status, message,
         advice}], ``next`` [what to record or fix next], ``truth`` (where it came from or None).
     """
-    from odomkit.calibrate.check import Finding, check_log, next_steps
+    from odomkit.calibrate.check import check_log, next_steps
+    from odomkit.calibrate.check_finding import Finding
     from odomkit.io.robotfile import read_robot
     from odomkit.workflows.logs import LogOptions, load_log
     from odomkit.workflows.results import numeric_guard

@@ -37,13 +37,14 @@ from odomkit.propagate.predict import predict
 from odomkit.robot import DiffDrive
 from odomkit.track import dead_reckon_log
 from odomkit.truth import truth_from_log
-from odomkit.windows import log_window_basis, parse_window
+from odomkit.window_errors import log_window_basis
+from odomkit.windows import parse_window
 from odomkit.workflows.predict import add_ros_pose_covariance
 
 if TYPE_CHECKING:
     from odomkit.noise import NoiseModel
     from odomkit.track import Track
-    from odomkit.windows import WindowBasis
+    from odomkit.window_errors import WindowBasis
     from odomkit.workflows.demo_report import DemoData
 
 __all__ = ["FIT", "FIT_WINDOW", "HELD_OUT", "SCORE_WINDOWS", "noise_honesty", "run_demo"]

@@ -502,14 +502,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     from odomkit.kinematics import body_steps
     from odomkit.track import dead_reckon_log
     from odomkit.truth import no_overlap, truth_at
-    from odomkit.windows import (
-        cumulative_travel,
-        late_start_note,
-        run_start,
-        split_windows,
-        why_no_windows,
-        window_errors,
-    )
+    from odomkit.window_errors import window_errors
+    from odomkit.windows import cumulative_travel, late_start_note, run_start, split_windows, why_no_windows
 
     samples = truth_at(truth, log.t, opts.max_gap)
     rows = np.flatnonzero(samples.valid)
@@ -528,7 +522,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                          min_travel=0.0, honesty_from_rows=False, t=track.t)
     notes = list(whole.warnings)
     # The honesty test: one window per span of the log, restarted from truth; the whole-log
-    # window (no spec) starts with the whole run (as fit-noise's: odomkit.windows.log_window_basis).
+    # window (no spec) starts with the whole run (as fit-noise's: odomkit.window_errors.log_window_basis).
     valid = samples.valid
     if spec is None:
         valid = valid.copy()
@@ -553,7 +547,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     note = first_order_note(found.cov[:, 2, 2])
     if note:
         notes.append(f"{log.source}: {note}")
-    # found.cov holds the truth's noise at both window ends already (odomkit.windows).
+    # found.cov holds the truth's noise at both window ends already (odomkit.window_errors).
     return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
                    honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
                    honesty_t=log.t[found.end_rows])

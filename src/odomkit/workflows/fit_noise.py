@@ -33,7 +33,8 @@ if TYPE_CHECKING:
     from odomkit.calibrate.fit_noise import NoiseFit
     from odomkit.noise import NoiseModel
     from odomkit.robot import Robot
-    from odomkit.windows import WindowBasis, WindowSpec
+    from odomkit.window_errors import WindowBasis
+    from odomkit.windows import WindowSpec
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
@@ -83,7 +84,8 @@ def prepare_log(task: LogTask) -> PreparedLog:
     """Read one log and its truth, cut its windows and compute their covariance bases."""
     from odomkit.kinematics import body_steps
     from odomkit.truth import no_overlap, scatter_sigma, truth_at
-    from odomkit.windows import cumulative_travel, log_window_basis, why_no_windows
+    from odomkit.window_errors import log_window_basis
+    from odomkit.windows import cumulative_travel, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -110,9 +112,9 @@ def prepare_log(task: LogTask) -> PreparedLog:
 
 def _grouped(bases: list[WindowBasis], groups: list[str]) -> tuple[list[WindowBasis], list[str]]:
     """One basis per group, in order of first appearance: the logs of one robot share its
-    bias draw (:meth:`odomkit.windows.WindowBasis.merge`; their white errors are independent,
+    bias draw (:meth:`odomkit.window_errors.WindowBasis.merge`; their white errors are independent,
     being different runs, so the merged likelihood is exact here, not composite)."""
-    from odomkit.windows import WindowBasis
+    from odomkit.window_errors import WindowBasis
 
     order = list(dict.fromkeys(groups))
     return [WindowBasis.merge([b for b, g in zip(bases, groups, strict=True) if g == name])
@@ -202,7 +204,7 @@ def fit_noise_files(
     window : ``"30s"``, ``"5m"`` (:func:`odomkit.windows.parse_window`), or several
         (``["10s", "30s"]``: one model fitted to windows of every length together, so that
         it holds at each; a composite likelihood, see
-        :meth:`odomkit.windows.WindowBasis.merge`); None: each log is one window.
+        :meth:`odomkit.window_errors.WindowBasis.merge`); None: each log is one window.
     kinds : which models' variances are fitted ("white", "bias"); both by default, since
         a real robot's errors over a run grow like a bias (a constant scale or offset
         error per run), which white noise alone covers on some lengths only.

@@ -17,7 +17,8 @@ import math
 import numpy as np
 import pytest
 
-from odomkit.calibrate.check import check_channels, check_log
+from odomkit.calibrate.check import check_log
+from odomkit.calibrate.check_channels import check_channels
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, DiffDrive, Unicycle
 from odomkit.track import dead_reckon_log
