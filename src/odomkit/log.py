@@ -79,8 +79,14 @@ class OdometryLog:
     def from_row(self, row: int) -> OdometryLog:
         """The log from row ``row`` on, its ground truth too (a run that starts late: the
         first row's increments led up to it and are no step of the slice)."""
-        gt = None if self.ground_truth is None else self.ground_truth[row:]
-        return OdometryLog(self.t[row:], {k: v[row:] for k, v in self.channels.items()}, gt, self.source,
+        return self.rows(row, len(self))
+
+    def rows(self, start: int, stop: int) -> OdometryLog:
+        """Rows ``start`` … ``stop − 1`` of the log, its ground truth too; the first row's
+        increments led up to it and are no step of the slice (as :meth:`from_row`)."""
+        part = slice(start, stop)
+        gt = None if self.ground_truth is None else self.ground_truth[part]
+        return OdometryLog(self.t[part], {k: v[part] for k, v in self.channels.items()}, gt, self.source,
                            self.meta)
 
     def decimate(self, every: int) -> OdometryLog:

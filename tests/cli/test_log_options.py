@@ -21,7 +21,7 @@ from odomkit.io.optiodom import read_run
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
 LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-unit",
-             "--time-scale", "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic"}
+             "--time-scale", "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic", "--span"}
 CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
 LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
 #: Every command that reads a log (issue 12 item 1: "Every command that reads a log shares these options").
@@ -283,5 +283,55 @@ def test_bad_text_logs_exit_2_with_one_line(run_cli, tmp_path, text, columns, me
     path = tmp_path / "log.csv"
     path.write_text(text)
     code, _, err = run_cli("track", path, "--robot", ROBOT, "--columns", columns)
+    assert code == 2, err
+    assert message in err and err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1
+
+
+def test_a_span_of_a_log_is_that_part_of_it_and_halves_share_no_row(run_cli, tmp_path):
+    """``--span :50%`` and ``--span 50%:`` cut a log into halves at half its duration
+    (half-open: no row in both), and ``--span 2:6`` to the rows from 2 s to before 6 s after
+    its first; each gives the track of a file holding only those rows, written out here
+    (the independent truth), in every log-reading command alike."""
+    from odomkit.io.robotfile import read_robot
+    from odomkit.workflows.logs import LogOptions, load_log
+
+    robot, _ = read_robot(ROBOT)
+    whole = read_run(RUNS[0])
+    first = load_log(RUNS[0], robot, LogOptions(span=":50%"))
+    rest = load_log(RUNS[0], robot, LogOptions(span="50%:"))
+    middle = whole.t[0] + 0.5 * (whole.t[-1] - whole.t[0])
+    assert first.t[-1] < middle <= rest.t[0]
+    np.testing.assert_array_equal(np.concatenate([first.t, rest.t]), whole.t)
+    for name, values in whole.channels.items():
+        np.testing.assert_array_equal(np.concatenate([first.channels[name], rest.channels[name]]), values)
+    seconds = load_log(RUNS[0], robot, LogOptions(span="2:6"))
+    inside = (whole.t >= whole.t[0] + 2) & (whole.t < whole.t[0] + 6)
+    np.testing.assert_array_equal(seconds.t, whole.t[inside])
+
+    part = tmp_path / "part.csv"
+    rows = np.flatnonzero(inside)
+    gt = whole.ground_truth
+    table = np.column_stack([whole.t, whole.channels["ticks_left"], whole.channels["ticks_right"], gt])
+    np.savetxt(part, table[rows], delimiter=",", header="t,ticks_left,ticks_right,gt_x,gt_y,gt_theta",
+               comments="")
+    for command in ("track", "evaluate"):
+        cut, _ = run_json(run_cli, command, RUNS[0], "--robot", ROBOT, "--span", "2:6")
+        alone, _ = run_json(run_cli, command, part, "--robot", ROBOT)
+        same_numbers(cut, alone, skip=("outputs", "warnings", "log", "per_log"))
+        for a, b in zip(cut.get("per_log", []), alone.get("per_log", []), strict=True):
+            same_numbers(a, b, skip=("log",))
+
+
+@pytest.mark.parametrize(("span", "message"), [
+    ("1:2:3", "--span takes START:END"),
+    ("50", "--span takes START:END"),
+    ("x:", "'x' is neither"),
+    ("-5:", "'-5' is neither"),
+    (":150%", "'150%' is neither"),
+    ("9:3", "--span 9:3: its end must come after its start"),
+    ("500:", "--span 500: leaves 0 row(s) of the log, whose rows run over"),
+])
+def test_a_bad_span_is_one_line(run_cli, span, message):
+    code, _, err = run_cli("track", RUNS[0], "--robot", ROBOT, "--span", span)
     assert code == 2, err
     assert message in err and err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1

@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.robot import Robot
 
-__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log"]
+__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log", "parse_span"]
 
 LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom", "bag")
 
@@ -97,6 +97,8 @@ class LogOptions:
     joints : JointState wheel joints, ``(left, right)`` or one (bag only)
     bag_time : time each message by when the bag received it, not its header stamp (bag only)
     truth_topic : a ROS bag pose topic that is the log's ground truth (bag only)
+    span : the part of the log to use, ``START:END`` from its first row, in seconds or in
+        percent of its duration (``:50%`` the first half, ``50%:`` the rest; :func:`parse_span`)
     """
 
     format: str = "auto"
@@ -110,8 +112,11 @@ class LogOptions:
     joints: tuple[str, ...] = ()
     bag_time: bool = False
     truth_topic: str | None = None
+    span: str | None = None
 
     def __post_init__(self) -> None:
+        if self.span is not None:
+            parse_span(self.span)
         if self.format not in LOG_FORMATS:
             raise InputError(f"--format must be one of {', '.join(LOG_FORMATS)}, got {self.format!r}")
         if self.wrap_bits is not None and self.wrap_bits not in _COUNTER_BITS:
@@ -148,6 +153,63 @@ class LogOptions:
             raise InputError("--wrap-bits unwraps cumulative counters: add --cumulative", source=source)
 
 
+#: One end of a ``--span``: (value, True for percent of the log's duration, False for seconds).
+_SpanEnd = tuple[float, bool]
+
+
+def parse_span(text: str) -> tuple[_SpanEnd | None, _SpanEnd | None]:
+    """``--span START:END``: each end seconds from the log's first row or a percentage of
+    its duration, either end may be left out (the log's own end).
+
+    Examples
+    --------
+    >>> parse_span(":50%"), parse_span("120:600")
+    ((None, (50.0, True)), ((120.0, False), (600.0, False)))
+    """
+    def end(part: str) -> _SpanEnd | None:
+        part = part.strip()
+        if not part:
+            return None
+        percent = part.endswith("%")
+        try:
+            value = float(part.removesuffix("%"))
+        except ValueError:
+            value = math.nan
+        if not math.isfinite(value) or value < 0 or (percent and value > 100):
+            raise InputError(f"--span takes START:END, seconds from the log's first row or percent of its "
+                             f"duration (:50%, 50%:, 120:600); {part!r} is neither")
+        return value, percent
+
+    if not isinstance(text, str) or text.count(":") != 1:
+        raise InputError(f"--span takes START:END, e.g. :50% (the first half), 50%: (the rest) or "
+                         f"120:600 (seconds from the log's first row); got {text!r}")
+    start, stop = (end(part) for part in text.split(":"))
+    if start is not None and stop is not None and start[1] == stop[1] and stop[0] <= start[0]:
+        raise InputError(f"--span {text}: its end must come after its start")
+    return start, stop
+
+
+def _span_rows(log: OdometryLog, text: str) -> OdometryLog:
+    """The rows of ``log`` inside ``--span text``, half-open [start, end) so that ``:50%``
+    and ``50%:`` share no row."""
+    import numpy as np
+
+    start, stop = parse_span(text)
+    first, duration = float(log.t[0]), float(log.t[-1] - log.t[0])
+
+    def at(end: _SpanEnd | None, default: int) -> int:
+        if end is None:
+            return default
+        seconds = end[0] / 100.0 * duration if end[1] else end[0]
+        return int(np.searchsorted(log.t, first + seconds, side="left"))
+
+    a, b = at(start, 0), at(stop, len(log))
+    if b - a < 2:
+        raise InputError(f"--span {text} leaves {max(b - a, 0)} row(s) of the log, whose rows run over "
+                         f"{duration:.6g} s from its first", source=log.source)
+    return log.rows(a, b)
+
+
 def _positive(value: float) -> bool:
     return (not isinstance(value, bool) and isinstance(value, int | float)
             and math.isfinite(value) and value > 0)
@@ -155,8 +217,8 @@ def _positive(value: float) -> bool:
 
 def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, *,
              progress: Progress = NO_PROGRESS) -> OdometryLog:
-    """Read a log in any supported format (plain or gzip) and decimate it as ``options`` say
-    (default: :class:`LogOptions`, the format from the file name).
+    """Read a log in any supported format (plain or gzip), cut it to ``--span`` and decimate
+    it as ``options`` say (default: :class:`LogOptions`, the format from the file name).
 
     ``progress`` (:mod:`odomkit.progress`) gets one stage, ``"reading NAME"``: of the bag's
     messages for a ROS bag, of unknown length for a text log (read at once).
@@ -185,7 +247,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         options.check_format(fmt, str(path))
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
                        progress=progress)
-        return log.decimate(options.decimate)
+        return _in_span(log, options)
     if not path.is_file():
         raise InputError("no such file", source=str(path))
     options.check_format(fmt, str(path))
@@ -202,4 +264,12 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
                                cumulative=options.cumulative, wrap_bits=options.wrap_bits,
                                time_unit=options.time_unit,
                                example=COLUMN_EXAMPLES[robot_type_name(robot)])
-        return log.decimate(options.decimate)
+        return _in_span(log, options)
+
+
+def _in_span(log: OdometryLog, options: LogOptions) -> OdometryLog:
+    """The log cut to ``--span`` (before decimating: every n-th row counts from the span's
+    first), then decimated."""
+    if options.span is not None and len(log):
+        log = _span_rows(log, options.span)
+    return log.decimate(options.decimate)
