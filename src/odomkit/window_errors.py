@@ -338,6 +338,9 @@ class WindowBasis:
     notes : tuple of str
         Warnings about these windows (:func:`log_window_basis`: where the whole-log window
         starts later than the log's first row with truth, and why).
+    per_spec : tuple of int
+        How many of the windows each window length given to :func:`log_window_basis` cut,
+        in its order (empty for a basis made otherwise).
     """
 
     windows: list[Window]
@@ -351,6 +354,7 @@ class WindowBasis:
     turning: NDArray[np.float64]
     dropped: int
     notes: tuple[str, ...] = ()
+    per_spec: tuple[int, ...] = ()
 
     def select(self, keep: ArrayLike) -> WindowBasis:
         """The windows where ``keep`` (bool, shape (W,)) is true, as a basis of their own."""
@@ -538,7 +542,7 @@ def log_window_basis(
     samples = truth_at(truth, log.t, max_gap)
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)
-    parts, skipped, notes = [], 0, []
+    parts, skipped, notes, counts = [], 0, [], []
     for spec in specs:
         valid = samples.valid
         windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
@@ -550,9 +554,10 @@ def log_window_basis(
         if windows:
             parts.append(window_covariance_basis(log, robot, models, samples.poses, valid, windows,
                                                  truth=truth, method=method, truth_columns=truth_columns))
+        counts.append(len(parts[-1].windows) if windows else 0)  # less the windows dropped
     if not parts:
         return None, skipped
-    return replace(WindowBasis.merge(parts), notes=tuple(notes)), skipped
+    return replace(WindowBasis.merge(parts), notes=tuple(notes), per_spec=tuple(counts)), skipped
 
 
 def _whole_log_rows(log: OdometryLog, steps: BodySteps, truth: Truth, valid: NDArray[np.bool_],

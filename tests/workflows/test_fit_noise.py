@@ -387,3 +387,18 @@ def test_a_truth_scatter_too_small_to_matter_is_not_warned_about():
     assert _floor_below_scatter(0.0, 1.01 * edge, errors) is not None
     with_gaps = np.vstack([errors, [[np.nan, np.nan]]])  # a window without truth at its end
     assert _floor_below_scatter(0.0, 1.01 * edge, with_gaps) is not None
+
+
+def test_a_window_length_no_log_has_a_window_of_is_named(run_cli, tmp_path):
+    """``--window 10s --window 500s`` on runs of about 90 s: the fit rests on the 10 s windows
+    alone, which is not what was asked, and fit-noise says so (it used to fit them
+    silently); every log is one 500 s window short, so the window count is the 10 s fit's."""
+    both, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--window", "10s", "--window", "500s", name="a.toml")
+    alone, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--window", "10s", name="b.toml")
+    said = [w for w in both["warnings"] if w.startswith("--window 500 s: no log has a window")]
+    assert len(said) == 1, both["warnings"]
+    assert both["windows"] == alone["windows"]
+    for key, value in alone["parameters"].items():
+        assert both["parameters"][key] == pytest.approx(value, rel=1e-9, abs=1e-12)
+    fine, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--window", "10s", "--window", "30s", name="c.toml")
+    assert not any("no log has a window" in w for w in fine["warnings"])

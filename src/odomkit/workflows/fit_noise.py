@@ -282,6 +282,9 @@ def fit_noise_files(
         shown = "; ".join(f"{p.name}: {p.reason}" for p in left_out[:3])
         more = f"; and {len(left_out) - 3} more" if len(left_out) > 3 else ""
         notes.append(f"{len(left_out)} of {len(prepared)} logs left out: {shown}{more}")
+    unused = _lengths_without_windows(specs, [p.basis.per_spec for p in prepared if p.basis is not None])
+    if unused:
+        notes.append(unused)
     bases = [p.basis for p in used if p.basis is not None]
     dropped = sum(b.dropped for b in bases)
     notes += [n for b in bases for n in b.notes]  # where a whole-log window starts late, and why
@@ -334,6 +337,21 @@ def fit_noise_files(
                             overlapping=len(specs) > 1)
         result["outputs"] = {"robot": str(written), "plot": str(drawn)}
     return result
+
+
+def _lengths_without_windows(specs: Sequence[WindowSpec | None],
+                             counts: Sequence[Sequence[int]]) -> str | None:
+    """A warning naming each ``--window`` length that no log had a window of (longer than
+    every log inside its truth, or travelling less than ``--min-travel``), where others did:
+    the fit then rests on the other lengths alone, which the user did not ask for."""
+    if len(specs) < 2 or not counts:
+        return None
+    empty = [str(spec) for j, spec in enumerate(specs) if not any(c[j] for c in counts if len(c) > j)]
+    if not empty:
+        return None
+    return (f"--window {', '.join(empty)}: no log has a window of that length (each is shorter inside "
+            "its truth, or its windows travel less than --min-travel); the fit rests on the other "
+            "length(s) alone")
 
 
 def _pooled_scatter(prepared: Sequence[PreparedLog]) -> float | None:
