@@ -87,6 +87,30 @@ def test_values_and_time():
     assert statuses(found, "values") == ["fail"] and "row(s) 8" in found[0].message
 
 
+def test_time_jumps_in_a_log_of_rates_are_said_but_not_warned_about():
+    """A log of commanded speed and yaw rate written when a command changes (cmd_vel, the
+    MRCLAM robots: 10 ms to 1 s between rows) loses nothing in its gaps, since each row's
+    rates hold until the next; the same gaps in a tick log lose motion and are warned about.
+    The track of the irregular rate log equals that of the same commands on a regular grid."""
+    from odomkit.robot import Unicycle
+
+    changes = np.array([0.0, 0.01, 0.02, 1.02, 1.03, 1.04, 2.5, 2.51, 2.52, 3.0])
+    speed = np.array([0.1, 0.1, 0.2, 0.2, 0.2, 0.0, 0.3, 0.3, 0.3, 0.3])
+    rate = np.array([0.0, 0.0, 0.5, 0.5, 0.5, 0.0, -0.2, -0.2, -0.2, -0.2])
+    rates = OdometryLog(changes, {"speed": speed, "yaw_rate": rate})
+    found = check_time(rates)
+    assert statuses(found, "time") == ["ok"] and "held until the next" in found[0].message
+    assert next_steps(found) == []
+    ticks = OdometryLog(changes, {"ticks_left": np.ones(10), "ticks_right": np.ones(10)})
+    assert statuses(check_time(ticks), "time") == ["warn"]
+    grid = np.round(np.arange(0.0, 3.0 + 1e-9, 0.01), 2)
+    held = np.searchsorted(changes, grid, side="right") - 1
+    regular = OdometryLog(grid, {"speed": speed[held], "yaw_rate": rate[held]})
+    robot = Unicycle()
+    end, end_on_grid = dead_reckon_log(rates, robot).poses[-1], dead_reckon_log(regular, robot).poses[-1]
+    np.testing.assert_allclose(end, end_on_grid, rtol=0, atol=1e-12)
+
+
 def test_counter_wrap_names_the_counter_width():
     left, right = square_both_ways()
     wrapped = left.copy()
