@@ -33,7 +33,7 @@ from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, 
 __all__ = [
     "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_speed_factor",
     "diff_body_jacobian", "diff_body_steps", "Method", "steering_body_jacobian", "steering_body_steps",
-    "step_displacement", "step_jacobians", "tricycle_body_jacobian", "tricycle_body_steps"
+    "step_displacement", "step_jacobians", "tricycle_body_jacobian", "tricycle_body_steps", "unicycle_moving"
 ]
 
 Method = Literal["euler", "midpoint", "exact"]
@@ -397,8 +397,22 @@ def _unicycle_steps(robot: Unicycle, log: OdometryLog, dt: NDArray[np.float64]) 
         raise InputError("a unicycle reads speed [m/s] (or dist [m]) and yaw_rate, not ticks; "
                          "describe an encoder robot as type = \"gyro\"", source=log.source)
     dd = _travel(log, 1.0, robot.c_scale)
-    rate = robot.yaw_rate_scale * (log.channel("yaw_rate")[:-1] - robot.yaw_rate_bias)
+    measured = log.channel("yaw_rate")[:-1]
+    rate = np.where(unicycle_moving(dd, measured),
+                    robot.yaw_rate_scale * (measured - robot.yaw_rate_bias), 0.0)
     return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+
+
+def unicycle_moving(dd: ArrayLike, yaw_rate: ArrayLike) -> NDArray[np.bool_]:
+    """Which steps of a unicycle move: those with travel ``dd`` [m] or a yaw rate [rad/s]
+    other than zero, shape (n,).
+
+    A unicycle's channels are body velocities, commanded (``cmd_vel``) or reported by the
+    base (``odom``): zero speed and zero yaw rate is a base standing still, which no
+    yaw-rate bias turns and no noise moves (:class:`odomkit.noise.kelly.GyroNoise`). The
+    calibration, the bias sensitivities and the Monte Carlo apply the same rule.
+    """
+    return (np.asarray(dd) != 0) | (np.asarray(yaw_rate) != 0)
 
 
 def _car_steps(robot: Car, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:

@@ -226,3 +226,64 @@ def test_positions_fit_standard_errors_cover_the_truth_under_noise(nominal, true
     assert np.all(within >= 17), (within, z_arr)
     spread = np.sqrt(np.mean(z_arr**2, axis=0))
     assert np.all((spread > 0.6) & (spread < 1.5)), spread
+
+
+def _arcs(t: np.ndarray, speed: np.ndarray, yaw_rate: np.ndarray, robot: Unicycle,
+          pose0=(4.0, -3.0, 0.6)) -> np.ndarray:
+    """Poses (N, 3) of a base doing what its rows say, held from each row to the next, on
+    exact arcs, written here apart from the library: speed·c_scale, and the yaw rate
+    yaw_rate_scale·(ω − yaw_rate_bias) only where it moves (zero speed and yaw rate: it
+    stands, and no bias turns it)."""
+    poses = np.empty((len(t), 3))
+    poses[0] = pose0
+    for k in range(len(t) - 1):
+        dt = t[k + 1] - t[k]
+        moving = speed[k] != 0 or yaw_rate[k] != 0
+        v = robot.c_scale * speed[k]
+        w = robot.yaw_rate_scale * (yaw_rate[k] - robot.yaw_rate_bias) if moving else 0.0
+        x, y, th = poses[k]
+        if abs(w * dt) > 1e-9:
+            x += v / w * (np.sin(th + w * dt) - np.sin(th))
+            y -= v / w * (np.cos(th + w * dt) - np.cos(th))
+        else:
+            x += v * dt * np.cos(th + w * dt / 2)
+            y += v * dt * np.sin(th + w * dt / 2)
+        poses[k + 1] = (x, y, th + w * dt)
+    return poses
+
+
+def with_stops(seed: int, n: int = 2000) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """:func:`channels` ("speed") with the base told to stand (speed and yaw rate 0) for
+    a third of its rows, in stretches of 5 s: cmd_vel robots such as MRCLAM's stand often."""
+    t, ch = channels(seed, "speed", n=n)
+    standing = (np.arange(n) // 50) % 3 == 1
+    return t, {name: np.where(standing, 0.0, ch[name]) for name in ("speed", "yaw_rate")}
+
+
+def test_a_standing_unicycle_is_not_turned_by_its_yaw_rate_bias():
+    """A base told to stand stands: its yaw-rate bias acts only while it moves. The track
+    of a log with stops equals exact arcs integrated here; a log standing for 200 s stays
+    where it is; calibration from nominal values gets the true bias and scales back; and
+    the calibration's Jacobian on such a log matches central differences."""
+    t, ch = with_stops(6)
+    log = OdometryLog(t, ch)
+    track = dead_reckon_log(log, TRUE_UNICYCLE, pose0=(4.0, -3.0, 0.6))
+    np.testing.assert_allclose(track.poses, _arcs(t, ch["speed"], ch["yaw_rate"], TRUE_UNICYCLE),
+                               rtol=0, atol=1e-9)
+    still = OdometryLog(np.arange(0.0, 200.0, 0.1), {"speed": np.zeros(2000), "yaw_rate": np.zeros(2000)})
+    assert np.array_equal(dead_reckon_log(still, TRUE_UNICYCLE).poses[-1], np.zeros(3))
+
+    truth = _arcs(t, ch["speed"], ch["yaw_rate"], TRUE_UNICYCLE)
+    cal = calibrate_exact([OdometryLog(t, ch, truth, "stops")], Unicycle(), "trajectory")
+    np.testing.assert_allclose(cal.values, [1.03, 0.01, 0.97], rtol=0, atol=1e-6)
+
+    model = calibration_model(Unicycle(), [log])
+    p = np.array([1.01, 0.004, 0.99])
+    _, _, _, ddt = model.steps(p, 0)
+    h = 1e-6
+    plus, minus = p.copy(), p.copy()
+    plus[1] += h
+    minus[1] -= h
+    fd = (model.steps(plus, 0)[1] - model.steps(minus, 0)[1]) / (2 * h)
+    np.testing.assert_allclose(ddt[:, 1], fd, rtol=1e-6, atol=1e-12)
+    assert np.all(ddt[(np.arange(len(t) - 1) // 50) % 3 == 1, 1] == 0)

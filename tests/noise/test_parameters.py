@@ -241,6 +241,9 @@ def _vehicle_cases():
         "steered": OdometryLog(t, {"speed": rng.uniform(0.5, 1.0, n), "steer": steer}),
         "rate": OdometryLog(t, {"ticks": ticks, "yaw_rate": rate}),
         "unicycle": OdometryLog(t, {"speed": rng.uniform(0.5, 1.0, n), "yaw_rate": rate}),
+        # told to stand (speed and yaw rate zero) for rows 40-79: no bias turns it there
+        "stops": OdometryLog(t, {"speed": np.where((t > t[40]) & (t < t[80]), 0.0, 0.7),
+                                 "yaw_rate": np.where((t > t[40]) & (t < t[80]), 0.0, rate)}),
         "compass": OdometryLog(t, {"ticks": ticks, "heading": np.cumsum(rate * 0.1)}),
     }
     # (robot, log, noise, β -> robot with the parameters perturbed)
@@ -263,6 +266,9 @@ def _vehicle_cases():
          ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.003, sigma_yaw_rate_scale=0.02),
          lambda r, p: replace(r, m_per_tick=1e-4 * (1 + p[0]), gyro_bias=-p[1], gyro_scale=1 + p[2])),
         ("unicycle", Unicycle(), logs["unicycle"],
+         ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.003, sigma_yaw_rate_scale=0.02),
+         lambda r, p: replace(r, c_scale=1 + p[0], yaw_rate_bias=-p[1], yaw_rate_scale=1 + p[2])),
+        ("unicycle-stops", Unicycle(), logs["stops"],
          ParameterUncertainty(0, 0.02, sigma_yaw_rate_offset=0.003, sigma_yaw_rate_scale=0.02),
          lambda r, p: replace(r, c_scale=1 + p[0], yaw_rate_bias=-p[1], yaw_rate_scale=1 + p[2])),
         ("compass", CompassOdometry(1e-4), logs["compass"],

@@ -31,7 +31,14 @@ from numpy.typing import NDArray
 
 from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
-from odomkit.kinematics import Method, body_steps, car_body_jacobian, car_body_steps, step_jacobians
+from odomkit.kinematics import (
+    Method,
+    body_steps,
+    car_body_jacobian,
+    car_body_steps,
+    step_jacobians,
+    unicycle_moving,
+)
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, DiffDrive, GyroOdometry, Tricycle, Unicycle
 from odomkit.track import initial_pose
@@ -215,12 +222,15 @@ class CarCalibrationModel(_ScaleFirst):
 
 
 
-def _yaw_rate_steps(w: NDArray[np.float64], dt: NDArray[np.float64], bias: float, scale: float
+def _yaw_rate_steps(w: NDArray[np.float64], dt: NDArray[np.float64], bias: float, scale: float,
+                    moving: NDArray[np.bool_] | None = None
                     ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
     """Δθ = scale·(ω − bias)·Δt of a measured yaw rate ω held from row k over step k, and its
-    derivatives with respect to bias and scale."""
+    derivatives with respect to bias and scale; zero on steps not ``moving`` (a unicycle
+    standing still: :func:`odomkit.kinematics.unicycle_moving`)."""
+    time = dt if moving is None else np.where(moving, dt, 0.0)
     rate = w - bias
-    return scale * rate * dt, -scale * dt, rate * dt
+    return scale * rate * time, -scale * time, rate * time
 
 
 class UnicycleCalibrationModel(_ScaleFirst):
@@ -229,7 +239,8 @@ class UnicycleCalibrationModel(_ScaleFirst):
     Body velocities (:func:`odomkit.kinematics.body_steps` for a unicycle, Kelly's
     integrated heading with velocities measured at the body):
     Δd_k = c_scale·s_k (s_k the step's ``dist`` increment [m], or ``speed``_k·Δt_k with the
-    speed held from row k) and Δθ_k = yaw_rate_scale·(ω_k − yaw_rate_bias)·Δt_k.
+    speed held from row k) and Δθ_k = yaw_rate_scale·(ω_k − yaw_rate_bias)·Δt_k, zero where
+    the base stands (s_k = ω_k = 0: :func:`odomkit.kinematics.unicycle_moving`).
     """
 
     names = ("c_scale", "yaw_rate_bias", "yaw_rate_scale")
@@ -246,7 +257,7 @@ class UnicycleCalibrationModel(_ScaleFirst):
 
     def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
         s0, w, dt = self.raw[i]
-        dtheta, dth_bias, dth_scale = _yaw_rate_steps(w, dt, p[1], p[2])
+        dtheta, dth_bias, dth_scale = _yaw_rate_steps(w, dt, p[1], p[2], unicycle_moving(s0, w))
         zero = np.zeros_like(s0)
         ddd = np.stack([s0, zero, zero], axis=1)
         ddt = np.stack([zero, dth_bias, dth_scale], axis=1)

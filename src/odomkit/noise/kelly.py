@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from odomkit import validate
 from odomkit.errors import ModelError
+from odomkit.kinematics import unicycle_moving
 from odomkit.noise.base import NoiseModel, register, require_non_negative, sym2
 
 if TYPE_CHECKING:
@@ -120,8 +121,7 @@ class GyroNoise(NoiseModel):
         """
         dt = np.abs(np.asarray(steps.dt[a:b], dtype=float))
         if steps.robot.type_name == "unicycle":
-            moving = (np.asarray(steps.dd[a:b]) != 0) | (np.asarray(steps.dtheta[a:b]) != 0)
-            dt = np.where(moving, dt, 0.0)
+            dt = np.where(unicycle_moving(steps.dd[a:b], steps.inputs["yaw_rate"][a:b]), dt, 0.0)
         return dt
 
 

@@ -39,7 +39,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit.errors import ModelError
-from odomkit.kinematics import car_body_jacobian
+from odomkit.kinematics import car_body_jacobian, unicycle_moving
 from odomkit.noise.base import NoiseKind, NoiseModel, register, require_non_negative, steps_input
 
 if TYPE_CHECKING:
@@ -218,6 +218,12 @@ def _rate_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int
     return rate_parameter_jacobian(steps.dd[a:b], steps.dtheta[a:b], steps.dt[a:b])
 
 
+def _unicycle_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
+    # A standing base (no travel, no yaw rate) is not turned by a yaw-rate offset.
+    moving = unicycle_moving(steps.dd[a:b], steps.inputs["yaw_rate"][a:b])
+    return rate_parameter_jacobian(steps.dd[a:b], steps.dtheta[a:b], np.where(moving, steps.dt[a:b], 0.0))
+
+
 def _compass_sensitivity(pu: ParameterUncertainty, steps: BodySteps, a: int, b: int):
     # The heading offset moves no step (Δθ = h_{k+1} − h_k): its column is zero, and it
     # enters through bias_heading.
@@ -231,7 +237,7 @@ _SENSITIVITY: dict[str, Callable[[ParameterUncertainty, BodySteps, int, int], ND
     "tricycle": _tricycle_sensitivity,
     "car": _car_sensitivity,
     "gyro": _rate_sensitivity,
-    "unicycle": _rate_sensitivity,
+    "unicycle": _unicycle_sensitivity,
     "compass": _compass_sensitivity,
 }
 
