@@ -234,3 +234,43 @@ def test_a_run_that_stands_or_spins_at_its_start_still_calibrates_and_one_that_n
     with pytest.raises(InputError, match="do not spread") as info:
         calibrate_positions([log, still], [truth, parked], Unicycle())
     assert info.value.source == "never-moves"
+
+
+def _wandering(seed, robot, n=15000, dt=0.1):
+    """25 min of a slow base wandering (0.05–0.11 m/s, turning up to ±0.4 rad/s), as
+    MRCLAM's robots do, with 20 Hz fixes of 1 mm noise on their own clock."""
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(n)
+    knots = rng.uniform(-0.4, 0.4, n // 60 + 2)
+    yaw_rate = np.interp(t, np.arange(knots.size) * 60 * dt, knots)
+    log = OdometryLog(t, {"speed": 0.08 + 0.03 * np.sin(t / 20), "yaw_rate": yaw_rate}, source=f"r{seed}")
+    gt = dead_reckon_log(log, robot, pose0=(1.0, 2.0, 0.3)).poses
+    tg = np.arange(0.013, t[-1], 0.05)
+    xy = np.column_stack([np.interp(tg, t, gt[:, 0]), np.interp(tg, t, gt[:, 1])])
+    return log, Truth(tg, xy + rng.normal(0, 0.001, xy.shape), None, 0.0, f"gt{seed}")
+
+
+def test_runs_no_one_robot_fits_are_said_to_disagree():
+    """Two robots of one type with their own scales and biases, calibrated together: the
+    joint fit is no compromise (a wandering base whose heading the compromise gets wrong
+    fits best with its path shrunk: c_scale 0.59 for robots of 1.00 and 0.97), and
+    runs_disagree names the parameters outside every run's own fit. Runs of one robot
+    (the car's two drives) are a compromise of their own fits, and nothing is said."""
+    from odomkit.calibrate.positions import runs_disagree
+    from odomkit.robot import Unicycle
+
+    runs = [_wandering(1, Unicycle(c_scale=1.0, yaw_rate_scale=1.06, yaw_rate_bias=0.002)),
+            _wandering(2, Unicycle(c_scale=0.97, yaw_rate_scale=0.98, yaw_rate_bias=-0.003))]
+    joint = calibrate_positions([r[0] for r in runs], [r[1] for r in runs], Unicycle())
+    alone = [calibrate_positions([log], [truth], Unicycle()) for log, truth in runs]
+    np.testing.assert_allclose(alone[0].values, [1.0, 0.002, 1.06], atol=1e-4)
+    np.testing.assert_allclose(alone[1].values, [0.97, -0.003, 0.98], atol=1e-4)
+    assert joint.values[0] < 0.9  # far below both runs' own
+    said = runs_disagree(joint, alone, ["r1", "r2"])
+    assert said is not None and "c_scale" in said and "(r1)" in said and "(r2)" in said
+    assert runs_disagree(joint, [alone[0], None], ["r1", "r2"]) is None  # one run alone: nothing to compare
+
+    logs, truths = zip(*[drive(s, TRUE_CAR) for s in (1, 2)], strict=True)
+    together = calibrate_positions(logs, truths, NOMINAL_CAR)
+    each = [calibrate_positions([log], [truth], NOMINAL_CAR) for log, truth in zip(logs, truths, strict=True)]
+    assert runs_disagree(together, each, ["run1", "run2"]) is None

@@ -208,3 +208,14 @@ def test_calibrate_a_car_log_with_gps_truth_on_its_own_clock(tmp_path, run_cli):
     code, _, err = run_cli("calibrate", log, "--robot", robot, "--truth", gps, "--columns",
                            "t=t,speed=speed,steer=steer", "--from", "trajectory")
     assert code == 2 and "--from does not apply with --truth" in err
+    # Two runs: each is also calibrated alone (JSON per_run, the single-run fit's numbers),
+    # and runs of one robot are no cause for the "runs disagree" warning.
+    code, out, err = run_cli("calibrate", log, log, "--robot", robot, "--truth", gps, "--truth", gps,
+                             "--columns", "t=t,speed=speed,steer=steer", "--json")
+    assert code == 0, err
+    both = json.loads(out)
+    assert [row["log"] for row in both["per_run"]] == [str(log), str(log)]
+    for row in both["per_run"]:
+        for name, value in result["parameters"].items():
+            assert row["parameters"][name] == pytest.approx(value, rel=1e-6, abs=1e-9), name
+    assert not any("runs disagree" in w for w in both.get("warnings", [])) and "runs disagree" not in err

@@ -14,10 +14,10 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from odomkit.calibrate.exact import calibrate_exact
+from odomkit.calibrate.exact import ExactCalibration, calibrate_exact
 from odomkit.calibrate.export import twist_covariance
 from odomkit.calibrate.noise_fit import fit_wheel_noise_from_runs
-from odomkit.calibrate.positions import calibrate_positions
+from odomkit.calibrate.positions import calibrate_positions, runs_disagree
 from odomkit.calibrate.realdata import (
     SquareRow,
     e_max_syst_of_runs,
@@ -169,6 +169,8 @@ def calibrate_files(
             given = truth[0].time_offset
             cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None)
             summary = cal.to_dict()
+            if len(runs) > 1:
+                summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
                 {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
@@ -210,6 +212,30 @@ def calibrate_files(
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: list[Truth], robot: Any,
+                    fit_time_offset: bool) -> list[dict[str, Any]]:
+    """Each run calibrated from its truth positions alone (JSON ``per_run``: ``log``,
+    ``parameters``, ``std_errors``, or ``error`` where it cannot be fitted alone), and a
+    warning where the joint fit is no compromise of them (:func:`runs_disagree`)."""
+    alone: list[ExactCalibration | None] = []
+    rows: list[dict[str, Any]] = []
+    for log, found in zip(runs, truths, strict=True):
+        try:
+            with warnings.catch_warnings():  # the joint fit has said what they would say
+                warnings.simplefilter("ignore")
+                one = calibrate_positions([log], [found], robot, fit_time_offset=fit_time_offset)
+        except (InputError, ModelError) as exc:
+            alone.append(None)
+            rows.append({"log": log.source, "error": str(exc)})
+            continue
+        alone.append(one)
+        rows.append({"log": log.source, **{k: one.to_dict()[k] for k in ("parameters", "std_errors")}})
+    said = runs_disagree(joint, alone, [log.source for log in runs])
+    if said:
+        warnings.warn(said, UserWarning, stacklevel=2)
+    return rows
 
 
 def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any]) -> None:
