@@ -402,3 +402,17 @@ def test_a_window_length_no_log_has_a_window_of_is_named(run_cli, tmp_path):
         assert both["parameters"][key] == pytest.approx(value, rel=1e-9, abs=1e-12)
     fine, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--window", "10s", "--window", "30s", name="c.toml")
     assert not any("no log has a window" in w for w in fine["warnings"])
+
+
+def test_the_text_reports_warnings_on_stderr_once_each_as_every_command_does(run_cli, tmp_path):
+    """fit-noise's own warnings (too few windows, ...) and those raised while reading go to
+    stderr as ``odomkit: warning: ...``, each once, and none to stdout (they went to stdout
+    as a bare ``warning: ...``); the JSON lists the same texts."""
+    args = ("fit-noise", "--robot", ROBOT, *_logs(RUNS[:1]), "--window", "10s")
+    code, stdout, stderr = run_cli(*args, "--out", tmp_path / "a.toml")
+    assert code == 0, stderr
+    result, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:1]), "--window", "10s", name="b.toml")
+    said = [line.removeprefix("odomkit: warning: ") for line in stderr.splitlines()
+            if line.startswith("odomkit: warning: ")]
+    assert said and sorted(said) == sorted(result["warnings"])
+    assert "warning: " not in stdout

@@ -11,6 +11,8 @@
 
 from __future__ import annotations
 
+import sys
+from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any
 
@@ -107,11 +109,13 @@ def fit_noise_command(
     if json_out:
         print_json(result)
         return
-    print_fit(result)
+    print_fit(result, already_said=warned)
 
 
-def print_fit(out: dict[str, Any]) -> None:
-    """The short text report of ``odomkit fit-noise``."""
+def print_fit(out: dict[str, Any], already_said: Sequence[str] = ()) -> None:
+    """The short text report of ``odomkit fit-noise``; its warnings go to stderr as
+    ``odomkit: warning: ...``, as every command's do (those in ``already_said`` were
+    printed there when raised)."""
     key = next(k for k in out if k.startswith("interval"))
     trimmed = (f" ({out['windows_trimmed']} more left out: outside the {100 * out['trim']:g} % "
                "ellipse)" if out.get("windows_trimmed") else "")
@@ -134,6 +138,7 @@ def print_fit(out: dict[str, Any]) -> None:
         print("leave-one-log-out coverage: "
               + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
     for w in out["warnings"]:
-        print(f"warning: {w}")
+        if w not in already_said:
+            print(f"odomkit: warning: {w}", file=sys.stderr)
     for kind, path in out["outputs"].items():
         print(f"wrote {kind}: {path}")
