@@ -37,7 +37,13 @@ def test_text_reports_say_what_a_single_run_means(run_cli, tmp_path):
     note = [line for line in out.splitlines() if line.startswith("note:")]
     assert len(note) == 1 and "one sample, not a statistic" in note[0] and "correlated" in note[0]
     code, out, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "20s")
-    assert code == 0 and "this is the test to trust" in out
+    assert code == 0 and "this is the test to trust" in out and "share its bias draw" in out
+    # A log dead-reckoned from the truth without --window is one window: one sample, and the
+    # report says so instead of calling it the test to trust.
+    code, out, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--truth-sigma", "0.001")
+    note = [line for line in out.splitlines() if line.startswith("note:")]
+    assert code == 0 and len(note) == 1 and "one sample per log" in note[0] and "test to trust" in note[0]
+    assert "this is the test to trust" not in out
 
 
 def test_evaluate_json_keys(run_cli, tmp_path):

@@ -100,7 +100,7 @@ def evaluate_command(
     if json_out:
         print_json(out)
         return
-    print_report(out, windowed=robot is not None)
+    print_report(out, windowed=robot is not None, whole_runs=window is None)
     for kind, path in out.get("outputs", {}).items():
         print(f"wrote {kind}: {path}")
 
@@ -109,9 +109,10 @@ def _fmt(value: float | None, spec: str = ".4f") -> str:
     return "n/a" if value is None else format(value, spec)
 
 
-def print_report(out: dict[str, Any], windowed: bool) -> None:
-    """The short text report of ``odomkit evaluate``."""
-    from odomkit.workflows.evaluate import CONTAINMENT_NOTE, WINDOWED_NOTE
+def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) -> None:
+    """The short text report of ``odomkit evaluate``: ``windowed`` for logs dead-reckoned
+    from the truth, in ``--window`` windows or (``whole_runs``) one window per log."""
+    from odomkit.workflows.evaluate import CONTAINMENT_NOTE, WHOLE_RUN_NOTE, WINDOWED_NOTE
 
     print(f"{out['rows_evaluated']} rows evaluated, {out['rows_skipped']} skipped (no truth there, or "
           f"before the start), {len(out['per_log'])} file(s)")
@@ -128,4 +129,5 @@ def print_report(out: dict[str, Any], windowed: bool) -> None:
               f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}")
         print("inside the predicted 50/90/95/99 % ellipses: "
               + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")))
-    print(f"note: {WINDOWED_NOTE if windowed else CONTAINMENT_NOTE}")
+    note = (CONTAINMENT_NOTE if not windowed else WHOLE_RUN_NOTE if whole_runs else WINDOWED_NOTE)
+    print(f"note: {note}")

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
     from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["CONTAINMENT_NOTE", "evaluate_logs", "evaluate_tracks", "score_logs", "Scored", "summarise",
-           "TrackRows", "WINDOWED_NOTE"]
+           "TrackRows", "WHOLE_RUN_NOTE", "WINDOWED_NOTE"]
 
 #: The one line every text report carries about what a single run's containment means.
 CONTAINMENT_NOTE = (
@@ -45,8 +45,13 @@ CONTAINMENT_NOTE = (
     "correlated (each pose inherits the error of the one before), so trust the windowed test "
     "(--robot --window), whose windows restart from truth and give independent samples")
 WINDOWED_NOTE = (
-    "each window restarts from truth, so window ends are independent samples: this is the test to trust "
-    "(coverage near 0.5/0.9/0.95/0.99 and NEES mean inside its bounds means an honest covariance)")
+    "each window restarts from truth, so window ends are independent samples of the random error (the "
+    "windows of one log share its bias draw: with few logs coverage comes in lumps): this is the test to "
+    "trust (coverage near 0.5/0.9/0.95/0.99 and NEES mean inside its bounds means an honest covariance)")
+#: The note of ``evaluate --robot`` without ``--window``: one window per log, from its start.
+WHOLE_RUN_NOTE = (
+    "without --window each log is one window, scored at its end: one sample per log, too few to judge "
+    "a covariance; --window 30s restarts windows from the truth and gives the test to trust")
 
 
 @dataclass(frozen=True)
