@@ -106,6 +106,11 @@ def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
                      ParameterUncertainty(sigma_scale_left=0.01, sigma_steering_offset=0.003))
     again = write_robot(tmp_path / "again.toml", robot, noise)
     assert read_robot(again) == (robot, noise)
+    # The file lists the car's own bias parameters only, not a gyro's or a diff's at zero.
+    import tomllib
+
+    written = tomllib.loads(again.read_text())["noise"]["parameters"]
+    assert set(written) == {"sigma_wheel_base", "sigma_scale_left", "sigma_steering_offset", "mode"}
     uni, _ = read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nyaw_rate_bias = 0.002\n'))
     assert uni == Unicycle(yaw_rate_bias=0.002)
     for bad, message in (('encoder_at = "middle"\n',

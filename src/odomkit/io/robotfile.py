@@ -55,7 +55,8 @@ import tomli_w
 from odomkit.errors import InputError, ModelError
 from odomkit.io.files import refuse_overwrite
 from odomkit.io.text import read_text
-from odomkit.noise import NOISE_MODELS, NoiseModel, noise_fields
+from odomkit.noise import NOISE_MODELS, NoiseModel, ParameterUncertainty, noise_fields
+from odomkit.noise.parameters import PARAMETERS
 from odomkit.robot import (
     ENCODER_POSITIONS,
     ROBOT_TYPES,
@@ -360,10 +361,16 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
     if noise:
         noise_table: dict[str, Any] = {}
         for model in noise:
+            entry = model.to_dict()
+            if isinstance(model, ParameterUncertainty):
+                # Only the robot's own bias parameters (and any other that is set, which the
+                # reader then refuses by name): a car's file need not list a gyro's, at zero.
+                own = set(PARAMETERS[robot_type_name(robot)]) | {"mode"}
+                entry = {key: value for key, value in entry.items() if key in own or value}
             if model.toml_table.startswith("noise."):
-                noise_table[model.toml_table.split(".", 1)[1]] = model.to_dict()
+                noise_table[model.toml_table.split(".", 1)[1]] = entry
             else:
-                noise_table.update(model.to_dict())
+                noise_table.update(entry)
         doc["noise"] = noise_table
     if truth:
         doc["truth"] = {key: float(truth[key]) for key in TRUTH_KEYS if key in truth}
