@@ -116,7 +116,8 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
 
     print(f"{out['rows_evaluated']} rows evaluated, {out['rows_skipped']} skipped (no truth there, or "
           f"before the start), {len(out['per_log'])} file(s)")
-    print(f"position error: final {_fmt(out['final_position_error'])} m, max "
+    final = "final" if len(out["per_log"]) < 2 else f"final (mean of {len(out['per_log'])} logs)"
+    print(f"position error: {final} {_fmt(out['final_position_error'])} m, max "
           f"{_fmt(out['max_position_error'])} m, ATE RMSE {_fmt(out['ate_rmse'])} m, drift "
           f"{_fmt(out['drift_percent'], '.2f')} %")
     print("RPE RMSE: " + ", ".join(("n/a" if v is None else f"{v:.4f} m") + f" over {k} m"
