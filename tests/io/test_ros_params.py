@@ -175,7 +175,7 @@ def test_twist_flags_are_checked(tmp_path, run_cli):
     run, robot = _write_tricycle(tmp_path)
     cols = "t=t,ticks=ticks,steer=steer,gt_x=gx,gt_y=gy,gt_theta=gth"
     code, _, err = run_cli("calibrate", run, "--robot", robot, "--columns", cols, "--twist-speed", "0.2")
-    assert code == 2 and "--ros-yaml" in err
+    assert code == 2 and "go together" in err
     code, _, err = run_cli("calibrate", run, "--robot", robot, "--columns", cols,
                            "--ros-yaml", tmp_path / "a.yaml", "--twist-speed", "0.2")
     assert code == 2 and "--controller-period" in err
@@ -187,6 +187,36 @@ def test_twist_flags_are_checked(tmp_path, run_cli):
                            "--controller-period", "0.02")
     assert code == 2 and "[noise]" in err
     assert not (tmp_path / "a.yaml").exists() and not (tmp_path / "b.yaml").exists()
+
+
+def test_the_twist_covariance_comes_without_a_controller_file_for_any_robot(tmp_path, run_cli):
+    """robot_localization needs the twist covariance whatever the robot (a car, a unicycle
+    has no controller snippet here): --twist-speed --controller-period without --ros-yaml
+    puts it in the JSON and the text, equal to export.twist_covariance of the calibrated
+    robot and the file's noise; white noise of zero there is warned about (an EKF would
+    trust that velocity completely)."""
+    import json
+
+    from odomkit.io.robotfile import read_robot
+
+    run, robot = _write_tricycle(tmp_path)
+    cols = "t=t,ticks=ticks,steer=steer,gt_x=gx,gt_y=gy,gt_theta=gth"
+    flags = ("--from", "trajectory", "--twist-speed", "0.2", "--controller-period", "0.02",
+             "--velocity-window", "5")
+    code, out, err = run_cli("calibrate", run, "--robot", robot, "--columns", cols, *flags,
+                             "--out-robot", tmp_path / "cal.toml", "--json")
+    assert code == 0, err
+    got = json.loads(out)["twist_covariance"]
+    calibrated, noise = read_robot(tmp_path / "cal.toml")
+    want = twist_covariance(calibrated, noise, 0.2, 0.02, window=5)
+    assert got["var_speed"] == pytest.approx(want.var_speed, rel=1e-12) and want.var_speed > 0
+    assert got["var_yaw_rate"] == pytest.approx(want.var_yaw_rate, rel=1e-12) and want.var_yaw_rate > 0
+    code, out, err = run_cli("calibrate", run, "--robot", robot, "--columns", cols, *flags)
+    assert code == 0 and "twist covariance at 0.2 m/s" in out and not err
+    silent = tmp_path / "silent.toml"
+    silent.write_text(robot.read_text().replace("sigma_speed = 0.01", "sigma_speed = 0.0"))
+    code, out, err = run_cli("calibrate", run, "--robot", silent, "--columns", cols, *flags)
+    assert code == 0 and "gives v no variance at 0.2 m/s" in err
 
 
 def test_inputs_named(tmp_path):

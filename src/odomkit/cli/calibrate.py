@@ -5,7 +5,7 @@
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
         [--truth GT ... [TRUTH OPTIONS]]
-        [--ros-yaml params.yaml --wheel-radius R [--twist-speed V --controller-period T]]
+        [--ros-yaml params.yaml --wheel-radius R] [--twist-speed V --controller-period T]
         [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
         [--known-mean] [--level 0.95] [LOG OPTIONS] [--json]
@@ -67,8 +67,9 @@ def calibrate_command(
     wheel_radius: Annotated[float | None, typer.Option(
         "--wheel-radius", help="Nominal wheel radius [m] for --ros-yaml.")] = None,
     twist_speed: Annotated[float | None, typer.Option(
-        "--twist-speed", help="--ros-yaml: add twist_covariance_diagonal from the robot file's [noise] "
-                              "at this speed [m/s].")] = None,
+        "--twist-speed", help="The (v, ω) covariance a controller publishes at this speed [m/s], from the "
+                              "robot file's white [noise], for robot_localization (any robot); with "
+                              "--ros-yaml also its twist_covariance_diagonal.")] = None,
     controller_period: Annotated[float | None, typer.Option(
         "--controller-period", help="--twist-speed: the controller's update period [s] "
                                     "(1/update_rate).")] = None,
@@ -128,6 +129,12 @@ def _print_text(out: dict[str, Any]) -> None:
     else:
         print(f"UMBmark: E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  "
               f"c_left = {out['c_left']:.6f}  c_right = {out['c_right']:.6f}")
+    twist = out.get("twist_covariance")
+    if twist is not None:
+        print(f"twist covariance at {twist['speed']:g} m/s (controller period "
+              f"{twist['controller_period']:g} s, {twist['velocity_window']} update(s) averaged): "
+              f"var v {twist['var_speed']:.3g} m²/s², "
+              f"var ω {twist['var_yaw_rate']:.3g} rad²/s², cov {twist['cov_speed_yaw_rate']:.3g} m·rad/s²")
     if "e_max_syst_before" in out:
         print(f"E_max,syst on these runs: {1e3 * out['e_max_syst_before']:.2f} mm before, "
               f"{1e3 * out['e_max_syst_after']:.2f} mm after")

@@ -81,8 +81,9 @@ def calibrate_files(
         robot file gives (``wheel_radius``/``wheel_diameter``), and an error if it differs.
         The snippet is a ``diff_drive_controller``'s or, for a tricycle, a
         ``tricycle_controller``'s.
-    twist_speed, controller_period, velocity_window : with ``twist_speed`` [m/s] the
-        snippet also gets ``twist_covariance_diagonal``, the twist covariance the robot
+    twist_speed, controller_period, velocity_window : with ``twist_speed`` [m/s] the summary
+        (``twist_covariance``, any robot) and the snippet, where there is one, get
+        ``twist_covariance_diagonal``, the twist covariance the robot
         file's white ``[noise]`` implies at that speed for a controller updating every
         ``controller_period`` [s] and averaging ``velocity_window`` updates
         (:func:`odomkit.calibrate.export.twist_covariance`).
@@ -127,16 +128,15 @@ def calibrate_files(
     exact_kwargs = {k: v for k, v in exact_kwargs.items() if v is not None}
     if wheel_radius is not None and ros_yaml is None:
         raise InputError("--wheel-radius applies to --ros-yaml only (the controller's nominal radius)")
-    if ros_yaml is None and (twist_speed is not None or controller_period is not None):
-        raise InputError("--twist-speed and --controller-period apply to --ros-yaml only")
     robot, noise = read_robot(robot_path)
     if ros_yaml is not None:
         if not isinstance(robot, DiffDrive | Tricycle):
             raise InputError(f"--ros-yaml writes diff_drive_controller or tricycle_controller parameters; "
-                             f"the robot file describes a {robot.type_name!r} robot", source=str(robot_path))
+                             f"the robot file describes a {robot.type_name!r} robot (--twist-speed "
+                             "without --ros-yaml gives any robot's twist covariance)", source=str(robot_path))
         wheel_radius = _controller_radius(robot_path, wheel_radius)
-        if twist_speed is not None or controller_period is not None:
-            _check_twist(twist_speed, controller_period, noise, robot_path)
+    if twist_speed is not None or controller_period is not None:
+        _check_twist(twist_speed, controller_period, noise, robot_path)
     if method == "umbmark" and not isinstance(robot, DiffDrive):
         raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
                          source=str(robot_path))
@@ -194,16 +194,24 @@ def calibrate_files(
     if out_robot is not None:
         outputs["robot"] = str(write_robot(out_robot, new_robot, noise, overwrite=overwrite,
                                            truth=truth_table, name=read_robot_name(robot_path)))
+    twist = None
+    if twist_speed is not None:
+        # robot_localization's twist covariance, for any robot: in the controller's YAML
+        # where there is one (--ros-yaml), in the summary always.
+        assert controller_period is not None
+        twist = twist_covariance(new_robot, noise, twist_speed, controller_period, window=velocity_window)
+        zero = [name for name, var in (("v", twist.var_speed), ("ω", twist.var_yaw_rate)) if var <= 0]
+        if zero and twist.speed > 0:
+            warnings.warn(f"the robot file's white noise gives {' and '.join(zero)} no variance at "
+                          f"{twist.speed:g} m/s: an EKF (robot_localization) would trust it completely; "
+                          "give that noise a value (fit-noise fitted it at zero? --fix keeps the file's)",
+                          UserWarning, stacklevel=2)
+        summary["twist_covariance"] = {"speed": twist.speed, "var_speed": twist.var_speed,
+                                       "var_yaw_rate": twist.var_yaw_rate,
+                                       "cov_speed_yaw_rate": twist.cov_speed_yaw_rate,
+                                       "controller_period": twist.period, "velocity_window": twist.window}
     if ros_yaml is not None:
         assert wheel_radius is not None
-        twist = None
-        if twist_speed is not None:
-            assert controller_period is not None
-            twist = twist_covariance(new_robot, noise, twist_speed, controller_period, window=velocity_window)
-            summary["twist_covariance"] = {"speed": twist.speed, "var_speed": twist.var_speed,
-                                           "var_yaw_rate": twist.var_yaw_rate,
-                                           "cov_speed_yaw_rate": twist.cov_speed_yaw_rate,
-                                           "controller_period": twist.period, "velocity_window": twist.window}
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
                                                   overwrite=overwrite, twist=twist))
     if plot is not None:
