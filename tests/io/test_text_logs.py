@@ -336,3 +336,25 @@ def test_angles_in_degrees_read_as_radians_and_radians_that_look_like_degrees_ar
         read_csv_log(lock, ["t", "speed", "steer", "yaw_rate"])
     with pytest.raises(InputError, match="give steer or steer_deg, not both"):
         read_csv_log(path, ["t", "speed", "steer", "steer_deg"])
+
+
+def test_a_header_written_as_a_comment_is_shown_in_the_columns_hint(tmp_path):
+    """Public datasets often write their header as the last comment line (the UTIAS MRCLAM
+    robots: ``# Time [s]    forward velocity [m/s]    angular velocity[rad/s]`` over
+    tab-separated rows). It is not read as a header (a comment may say anything), but the
+    --columns hint quotes it, and the columns in order then read the log."""
+    rows = "\n".join(f"{1248272272.841 + 0.02 * k:.3f} \t  0.074 \t  {0.229 - 0.001 * k:.3f}"
+                     for k in range(20))
+    path = tmp_path / "Robot1_Odometry.dat"
+    path.write_text("# A dataset\n# Odometry Data Format:\n"
+                    "# Time [s]    forward velocity [m/s]    angular velocity[rad/s]\n" + rows + "\n")
+    robot = Unicycle()
+    with pytest.raises(InputError, match=r"its last comment line names its 3 columns 'Time \[s\]', "
+                                         r"'forward velocity \[m/s\]', 'angular velocity\[rad/s\]'"):
+        load_log(path, robot, LogOptions())
+    log = load_log(path, robot, LogOptions(columns="t,speed,yaw_rate"))
+    assert len(log) == 20 and log.channels["speed"][0] == 0.074
+    other = tmp_path / "other.dat"
+    other.write_text("# recorded on Tuesday\n" + rows + "\n")
+    with pytest.raises(InputError, match=r"this log has no header$"):
+        load_log(other, robot, LogOptions())

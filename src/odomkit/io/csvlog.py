@@ -94,8 +94,30 @@ HEADER_ALIASES = {"linear_x": "speed", "linear.x": "speed", "twist.linear.x": "s
                   "twist.angular.z": "yaw_rate", "field.angular.z": "yaw_rate"}
 
 
+def _commented_names(text: str, ncols: int) -> list[str] | None:
+    """The column names of a header written as the last ``#`` comment line before the data
+    (``# Time [s]    forward velocity [m/s]    angular velocity[rad/s]``, the MRCLAM logs),
+    split at tabs or runs of two or more spaces, where they are as many as the columns;
+    else None. Only shown in the ``--columns`` hint: a comment is not read as a header."""
+    import re
+
+    last = None
+    for line in text.splitlines():
+        stripped = line.strip()
+        if not stripped:
+            continue
+        if not stripped.startswith("#"):
+            break
+        last = stripped.lstrip("#").strip()
+    if not last:
+        return None
+    names = [n for n in re.split(r"\t+|\s{2,}", last) if n]
+    return names if len(names) == ncols else None
+
+
 def _columns_from_header(header: Sequence[str] | None, source: str,
-                         example: str = "t=time,ticks_left=L,ticks_right=R") -> dict[str, str]:
+                         example: str = "t=time,ticks_left=L,ticks_right=R",
+                         commented: Sequence[str] | None = None) -> dict[str, str]:
     """The ``columns`` mapping of a header that names every column by odomkit's own names
     (a time column of :data:`TIME_NAMES`, channels such as ``speed``, ``yaw_rate``,
     ``ticks_left``, and ``gt_x``, ``gt_y``, ``gt_theta``); otherwise the error asking for
@@ -104,7 +126,10 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
     in_order = ",".join(part.split("=")[0] for part in example.split(","))
     hint = f"a text log needs --columns: header names ({example}) or the columns in order ({in_order})"
     if header is None:
-        raise InputError(hint + "; this log has no header", source=source)
+        said = (f"; this log has no header (its last comment line names its {len(commented)} columns "
+                f"{', '.join(repr(n) for n in commented)}: map them in order)" if commented
+                else "; this log has no header")
+        raise InputError(hint + said, source=source)
     times = [name for name in header if name.lower() in TIME_NAMES]
     known = [name for name in header
              if name in KNOWN_CHANNELS or name in DEGREE_COLUMNS or name in GROUND_TRUTH_FIELDS
@@ -253,7 +278,8 @@ def read_csv_log(
     text = read_text(path)
     layout = sniff_layout(text, source)
     if columns is None:
-        columns = _columns_from_header(layout.header, source, example)
+        commented = _commented_names(text, layout.ncols) if layout.header is None else None
+        columns = _columns_from_header(layout.header, source, example, commented)
     _check_targets(list(columns), source)
     if isinstance(columns, Mapping):
         layout, index = _by_header(columns, layout, text, source)
