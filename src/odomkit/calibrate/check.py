@@ -103,8 +103,8 @@ def check_time(log: OdometryLog) -> list[Finding]:
         if jumps.size:
             worst = int(jumps[np.argmax(dt[jumps])])
             said = (f"{jumps.size} time jump(s) longer than {GAP_FACTOR:g}x the median period "
-                    f"{median:.4g} s; the longest {dt[worst]:.4g} s, {log.t[worst] - log.t[0]:.6g} s into the "
-                    f"log (row {worst + 2})")
+                    f"{median:.4g} s; the longest {dt[worst]:.4g} s, "
+                    f"{log.t[worst] - log.t[0]:.6g} s into the log (row {worst + 2})")
             if INCREMENT_CHANNELS.isdisjoint(log.channels):
                 # Rates (speed, yaw rate, steering) are held from each row to the next: a log
                 # written when a command changes (cmd_vel, the MRCLAM robots) has such gaps by
