@@ -46,6 +46,24 @@ def test_text_reports_say_what_a_single_run_means(run_cli, tmp_path):
     assert "this is the test to trust" not in out
 
 
+def test_windowed_text_lists_each_logs_ends_when_there_are_several(run_cli):
+    """Windows of one log share its bias draw, so coverage comes in lumps: with several logs
+    the text lists each log's ends, coverage and NEES, the per_log figures of the JSON."""
+    import json
+
+    second = builtin_data_path("230620202042_run-02.csv")
+    args = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s")
+    code, out, _ = run_cli(*args)
+    _, js, _ = run_cli(*args, "--json")
+    assert code == 0
+    for one in json.loads(js)["per_log"]:
+        line = next(x for x in out.splitlines() if x.startswith(f"  {one['log']}: "))
+        assert f"{one['windows']} ends" in line and f"NEES mean {one['nees_position_mean']:.3g}" in line
+        assert f"{one['coverage']['0.95']:.2f} / {one['coverage']['0.5']:.2f}" in line
+    code, out, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "10s")
+    assert code == 0 and not any(x.startswith(f"  {RUN}: ") for x in out.splitlines())
+
+
 def test_evaluate_json_keys(run_cli, tmp_path):
     code, out, _ = run_cli("evaluate", RUN, builtin_data_path("230620202042_run-02.csv"), "--robot", ROBOT,
                            "--window", "10s", "--rpe", "0.5,1", "--json")

@@ -130,5 +130,13 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
               f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}")
         print("inside the predicted 50/90/95/99 % ellipses: "
               + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")))
+    if windowed and not whole_runs and len(out["per_log"]) > 1:
+        # Windows of one log share its bias draw: coverage comes in lumps, seen log by log.
+        for one in out["per_log"]:
+            if one.get("nees_position_mean") is None:
+                continue
+            c = one["coverage"]
+            print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
+                  f"{_fmt(c['0.5'], '.2f')}, NEES mean {one['nees_position_mean']:.3g}")
     note = (CONTAINMENT_NOTE if not windowed else WHOLE_RUN_NOTE if whole_runs else WINDOWED_NOTE)
     print(f"note: {note}")
