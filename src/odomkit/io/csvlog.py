@@ -99,10 +99,11 @@ def _commented_names(text: str, ncols: int) -> list[str] | None:
     (``# Time [s]    forward velocity [m/s]    angular velocity[rad/s]``, the MRCLAM logs),
     split at tabs or runs of two or more spaces, where they are as many as the columns;
     else None. Only shown in the ``--columns`` hint: a comment is not read as a header."""
+    import io
     import re
 
     last = None
-    for line in text.splitlines():
+    for line in io.StringIO(text):  # lazily: the data's first line ends the search
         stripped = line.strip()
         if not stripped:
             continue
