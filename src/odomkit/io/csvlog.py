@@ -296,6 +296,9 @@ def read_csv_log(
     t = to_seconds(data[:, index["t"]], seconds)
     channels = {}
     for key, col in index.items():
+        if key in DEGREE_COLUMNS:
+            channels[DEGREE_COLUMNS[key]] = np.radians(data[:, col])
+            continue
         if key not in KNOWN_CHANNELS:
             continue
         if key in INCREMENT_CHANNELS and cumulative:
@@ -304,9 +307,6 @@ def read_csv_log(
         channels[key] = data[:, col].copy()
         if key in INCREMENT_CHANNELS:
             warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
-    for key, col in index.items():
-        if key in DEGREE_COLUMNS:
-            channels[DEGREE_COLUMNS[key]] = np.radians(data[:, col])
         elif key in ("steer", "yaw_rate"):
             _warn_if_degrees(channels[key], key, source, labels[key])
     truth = None

@@ -239,7 +239,9 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: li
             rows.append({"log": log.source, "error": str(exc)})
             continue
         alone.append(one)
-        rows.append({"log": log.source, **{k: one.to_dict()[k] for k in ("parameters", "std_errors")}})
+        summary = one.to_dict()
+        rows.append({"log": log.source, "parameters": summary["parameters"],
+                     "std_errors": summary["std_errors"]})
     said = runs_disagree(joint, alone, [log.source for log in runs])
     if said:
         warnings.warn(said, UserWarning, stacklevel=2)
