@@ -143,6 +143,7 @@ def test_car_reduces_to_the_tricycle_and_to_a_plain_rear_wheel():
         steering_body_steps(Unicycle(), s, a)  # type: ignore[arg-type]
 
 
+@pytest.mark.filterwarnings("ignore:.*past any car's lock")
 def test_car_rear_wheel_beyond_the_turn_centre_is_refused():
     """tan α·H/L >= 1: the wheel is at or beyond the centre of the turn, its speed is zero
     or runs backwards while the car goes forwards."""
@@ -165,6 +166,40 @@ def test_car_log_channels_scale_and_offset(channel, value, per_step):
     expected = car_body_steps(1.01 * per_step, 0.12, 2.7, 0.8)
     assert np.allclose(steps.dd, expected[0], rtol=1e-14)
     assert np.allclose(steps.dtheta, expected[1], rtol=1e-14)
+
+
+@pytest.mark.parametrize("ratio", [1.0, 15.0])
+def test_car_steering_wheel_angle_over_its_ratio_drives_the_circle_of_the_road_wheel_angle(ratio):
+    """A car's CAN logs the steering wheel's angle, ``steering_ratio`` times the road
+    wheel's. Independent truth: a constant road-wheel angle α = 0.3 rad and rear-axle speed
+    v turn the car at v·tan α / L, and one full turn of 2π brings it back to its start. The
+    offset is road-wheel radians, added after the ratio."""
+    alpha, offset, length, v, dt = 0.3, 0.01, 2.7, 5.0, 0.05
+    n = round(2 * np.pi * length / np.tan(alpha) / (v * dt))
+    log = OdometryLog(dt * np.arange(n + 1), {"speed": np.full(n + 1, v),
+                                             "steer": np.full(n + 1, ratio * (alpha - offset))})
+    steps = body_steps(Car(length, steering_offset=offset, steering_ratio=ratio), log)
+    np.testing.assert_allclose(steps.inputs["steer"], alpha, rtol=1e-14)
+    np.testing.assert_allclose(steps.dtheta, v * dt * np.tan(alpha) / length, rtol=1e-13)
+    turned = float(np.sum(steps.dtheta))
+    assert abs(turned - 2 * np.pi) < v * dt * np.tan(alpha) / length  # within one step of a turn
+    end = dead_reckon(steps.dd, steps.dtheta)[-1]
+    assert np.hypot(*end[:2]) < 2 * v * dt  # back at the start, within a step's travel
+
+
+def test_a_steering_wheel_angle_read_as_the_road_wheel_angle_is_warned_about():
+    """80° at the steering wheel read with ratio 1 would steer the bicycle past any car's
+    lock (tan 1.4 rad = 5.7): a silently wrong track. Warned, naming steering_ratio; with the
+    ratio set, quiet; a road-wheel angle at a real lock (35°) is quiet too."""
+    import warnings
+
+    wheel = np.radians(80.0)
+    with pytest.warns(UserWarning, match=r"road-wheel angle reaches 1.4 rad \(80°\).*steering_ratio"):
+        body_steps(Car(2.7), _log({"speed": 5.0, "steer": wheel}))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        body_steps(Car(2.7, steering_ratio=15.0), _log({"speed": 5.0, "steer": wheel}))
+        body_steps(Car(2.7), _log({"speed": 5.0, "steer": np.radians(35.0)}))
 
 
 def test_unicycle_reads_body_velocities_with_gyro_like_corrections():

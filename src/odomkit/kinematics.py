@@ -18,6 +18,8 @@ straight lines (r -> ∞). The factor sinc(Δθ/2) and its derivative come from
 
 from __future__ import annotations
 
+import math
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal
@@ -417,13 +419,32 @@ def unicycle_moving(dd: ArrayLike, yaw_rate: ArrayLike) -> NDArray[np.bool_]:
 
 def _car_steps(robot: Car, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
     travel = _travel(log, robot.m_per_tick, robot.c_scale)
-    steer = _steer_per_step(log) + robot.steering_offset
+    steer = _steer_per_step(log) / robot.steering_ratio + robot.steering_offset
+    _warn_past_lock(steer, robot, log.source)
     try:
         dd, dtheta = car_body_steps(travel, steer, robot.wheel_base, robot.encoder_offset,
                                     robot.encoder_at)
     except ModelError as exc:
         raise InputError(str(exc), source=log.source) from None
     return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
+
+
+#: A car's road wheels turn about ±35–45° at full lock; a bicycle angle beyond 60° is a
+#: steering-wheel angle read without its ratio (Car.steering_ratio), or degrees as radians.
+CAR_LOCK = np.pi / 3
+
+
+def _warn_past_lock(steer: NDArray[np.float64], robot: Car, source: str) -> None:
+    """Warn where a car's road-wheel angle goes past any car's lock (:data:`CAR_LOCK`): the
+    track would be silently wrong (tan α of a steering-wheel angle)."""
+    finite = np.abs(steer[np.isfinite(steer)])
+    if finite.size and float(finite.max()) > CAR_LOCK:
+        warnings.warn(
+            f"{source}: the car's road-wheel angle reaches {float(finite.max()):.3g} rad "
+            f"({math.degrees(float(finite.max())):.0f}°) with steering_ratio {robot.steering_ratio:g}, past "
+            f"any car's lock ({math.degrees(CAR_LOCK):.0f}°): is the steer channel a steering-wheel angle? "
+            f"set steering_ratio in the robot file (about 12-18 for a car), or is it in degrees (steer_deg)?",
+            UserWarning, stacklevel=2)
 
 
 # One entry per vehicle, keyed by its robot-file type: a new vehicle adds one function here.

@@ -294,10 +294,17 @@ class Car:
         Distance per tick of the measuring wheel [m]; converts a ``ticks`` channel only
         (``dist`` [m] and ``speed`` [m/s] are metres already).
     steering_offset : float
-        Added to the measured steering angle [rad]: α = α_measured + steering_offset.
+        Added to the road-wheel angle [rad]: α = α_measured / steering_ratio +
+        steering_offset.
     c_scale : float
         Dimensionless scale correction of the measuring wheel (ticks, ``dist`` and
         ``speed`` alike).
+    steering_ratio : float
+        Measured steering angle per road-wheel angle [1]: 1 for a ``steer`` channel that is
+        the (virtual) front wheel's angle, about 12–18 for a car's CAN steering-wheel angle.
+        Read as a road-wheel angle, a steering-wheel angle of 100° would steer the bicycle
+        past its lock (tan α of 1.7 rad); the offset and the steering noise are road-wheel
+        radians either way.
     """
 
     type_name: ClassVar[str] = "car"
@@ -311,9 +318,10 @@ class Car:
     m_per_tick: float = 1.0
     steering_offset: float = 0.0
     c_scale: float = 1.0
+    steering_ratio: float = 1.0
 
     def __post_init__(self) -> None:
-        _positive_fields(self, "wheel_base", "m_per_tick", "c_scale")
+        _positive_fields(self, "wheel_base", "m_per_tick", "c_scale", "steering_ratio")
         validate.finite(self.encoder_offset, "Car.encoder_offset")
         validate.finite(self.steering_offset, "Car.steering_offset")
         if self.encoder_at not in ENCODER_POSITIONS:

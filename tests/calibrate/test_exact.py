@@ -164,6 +164,19 @@ def test_car_trajectory_recovers_scale_offset_and_wheel_base():
     np.testing.assert_allclose(cal.values, [1.03, 0.005, 2.8], rtol=1e-7)
 
 
+def test_car_with_a_steering_ratio_is_calibrated_in_road_wheel_radians():
+    """A steering-wheel angle (ratio 15): the fitted offset is the road wheel's, as the
+    robot file's ``steering_offset`` is, and the rest is recovered as with ratio 1."""
+    nominal = Car(2.7, 0.8, "rear", m_per_tick=0.01, steering_ratio=15.0)
+    truth = Car(2.8, 0.8, "rear", m_per_tick=0.01, steering_offset=0.005, c_scale=1.03, steering_ratio=15.0)
+    t = np.arange(1201) * 0.05
+    ch = {"ticks": np.r_[0.0, np.full(1200, 10.0)], "steer": 15.0 * 0.3 * np.sin(t / 6.0)}
+    gt = dead_reckon_log(OdometryLog(t, ch, None), truth).poses
+    cal = calibrate_exact([OdometryLog(t, ch, gt)], nominal, "trajectory")
+    np.testing.assert_allclose(cal.values, [1.03, 0.005, 2.8], rtol=1e-7)
+    assert cal.robot.steering_ratio == 15.0
+
+
 @pytest.mark.parametrize("kind", ["diff", "tricycle", "car-rear", "car-front"])
 def test_sensitivities_match_finite_differences(kind):
     rng = np.random.default_rng(3)

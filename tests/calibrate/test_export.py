@@ -196,6 +196,12 @@ def test_twist_covariance_of_a_car_and_a_unicycle_matches_their_sensors_simulate
     want = np.array([[got.var_speed, got.cov_speed_yaw_rate], [got.cov_speed_yaw_rate, got.var_yaw_rate]])
     se = np.sqrt((np.outer(np.diag(want), np.diag(want)) + want**2) / n)
     assert np.all(np.abs(emp - want) <= 5 * se), (emp, want)
+    # A steering-wheel angle over its ratio: the same road-wheel angle, the same noise on it.
+    from dataclasses import replace
+
+    geared = twist_covariance(replace(car, steering_ratio=15.0), noise, v, T, window=W, yaw_rate=w)
+    assert (geared.var_speed, geared.var_yaw_rate, geared.cov_speed_yaw_rate) == pytest.approx(
+        (got.var_speed, got.var_yaw_rate, got.cov_speed_yaw_rate), rel=1e-9)
     uni = twist_covariance(Unicycle(c_scale=1.1), (SpeedNoise(1e-3), GyroNoise(1e-4)), v, T, window=W,
                            yaw_rate=w)
     assert uni.var_speed == pytest.approx(1e-3 * v / (W * T), rel=1e-12)

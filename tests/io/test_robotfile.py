@@ -111,6 +111,12 @@ def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
 
     written = tomllib.loads(again.read_text())["noise"]["parameters"]
     assert set(written) == {"sigma_wheel_base", "sigma_scale_left", "sigma_steering_offset", "mode"}
+    geared = '[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 15.5\n'
+    ratio, _ = read_robot(robot_file(tmp_path, geared))
+    assert ratio == Car(2.69, steering_ratio=15.5)
+    assert read_robot(write_robot(tmp_path / "ratio.toml", ratio)) == (ratio, ())
+    with pytest.raises(InputError, match="steering_ratio"):
+        read_robot(robot_file(tmp_path, '[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 0\n'))
     uni, _ = read_robot(robot_file(tmp_path, '[robot]\ntype = "unicycle"\nyaw_rate_bias = 0.002\n'))
     assert uni == Unicycle(yaw_rate_bias=0.002)
     for bad, message in (('encoder_at = "middle"\n',

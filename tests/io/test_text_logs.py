@@ -334,8 +334,47 @@ def test_angles_in_degrees_read_as_radians_and_radians_that_look_like_degrees_ar
     with warnings_module.catch_warnings():
         warnings_module.simplefilter("error")
         read_csv_log(lock, ["t", "speed", "steer", "yaw_rate"])
-    with pytest.raises(InputError, match="give steer or steer_deg, not both"):
+    with pytest.raises(InputError, match="give steer or steer_deg, not more than one"):
         read_csv_log(path, ["t", "speed", "steer", "steer_deg"])
+
+
+def test_speeds_in_kmh_and_mph_are_read_as_metres_per_second_and_kmh_read_as_ms_is_warned_about(tmp_path):
+    """A car's CAN speed is km/h or mph: ``speed_kmh`` and ``speed_mph`` read it as the m/s
+    of ``speed`` (1 km/h = 1/3.6 m/s; 1 mph = 1609.344 m / 3600 s, exact by definition), so
+    the track is the one of the same speeds written in m/s. Read as m/s, a speed beyond
+    60 m/s (216 km/h) in 1 % of the rows is said to look like km/h or mph; a 30 m/s car is not."""
+    import warnings as warnings_module
+
+    from odomkit.robot import Car
+
+    t = np.arange(0.0, 60.0, 0.1)
+    kmh = 50.0 + 40.0 * np.sin(0.05 * t)  # 10-90 km/h
+    steer = 0.05 * np.sin(0.2 * t)
+    mph = kmh / 1.609344
+    path = tmp_path / "can.csv"
+    np.savetxt(path, np.column_stack((t, kmh, mph, steer)), delimiter=",", header="t,speed_kmh,v_mph,steer",
+               comments="")
+    with warnings_module.catch_warnings():
+        warnings_module.simplefilter("error")
+        from_kmh = read_csv_log(path, {"t": "t", "speed_kmh": "speed_kmh", "steer": "steer"})
+        from_mph = read_csv_log(path, ["t", "_", "speed_mph", "steer"])
+    np.testing.assert_allclose(from_kmh.channels["speed"], kmh * 1000.0 / 3600.0, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(from_mph.channels["speed"], mph * 1609.344 / 3600.0, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(from_mph.channels["speed"], from_kmh.channels["speed"], rtol=1e-12)
+    ms = tmp_path / "ms.csv"
+    np.savetxt(ms, np.column_stack((t, kmh / 3.6, steer)), delimiter=",", header="t,speed,steer", comments="")
+    car = Car(wheel_base=2.7)
+    with warnings_module.catch_warnings():
+        warnings_module.simplefilter("error")  # 25 m/s is a car's speed, no cause for a warning
+        track_ms = dead_reckon_log(load_log(ms, car, LogOptions()), car)
+    track_kmh = dead_reckon_log(load_log(path, car, LogOptions(columns="t,speed_kmh,_,steer")), car)
+    np.testing.assert_allclose(track_kmh.poses, track_ms.poses, rtol=0, atol=1e-9)
+    with pytest.warns(UserWarning, match=r"column 2 \(speed\) has a 99th percentile of 90 m/s.*km/h or mph"):
+        read_csv_log(path, ["t", "speed", "_", "steer"])
+    with pytest.raises(InputError, match="give speed or speed_kmh, not more than one"):
+        read_csv_log(path, ["t", "speed", "speed_kmh", "steer"])
+    with pytest.raises(InputError, match="speed_kmh, speed_mph"):
+        read_csv_log(path, ["t", "speed_kph", "_", "steer"])
 
 
 def test_a_header_written_as_a_comment_is_shown_in_the_columns_hint(tmp_path):

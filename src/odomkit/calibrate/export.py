@@ -170,7 +170,8 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
         # ω = v·tan α / L (the bicycle); the measuring wheel travels d / car_speed_factor(α)
         alpha = math.atan2(turn * robot.wheel_base, d)
         s = d / float(car_speed_factor(alpha, robot.wheel_base, robot.encoder_offset, robot.encoder_at))
-        channels = {"dist": ones * s / robot.c_scale, "steer": ones * (alpha - robot.steering_offset)}
+        channels = {"dist": ones * s / robot.c_scale,
+                    "steer": ones * (alpha - robot.steering_offset) * robot.steering_ratio}
     elif isinstance(robot, CompassOdometry):
         channels = {"speed": ones * speed, "heading": yaw_rate * t - robot.heading_offset}
     else:

@@ -10,6 +10,7 @@ never decrease; the time column may be in s, ms, µs or ns (``--time-unit``).
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -36,21 +37,29 @@ from odomkit.io.text import (
 )
 from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
 
-__all__ = ["DEGREE_COLUMNS", "GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN"]
+__all__ = ["GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN", "UNIT_COLUMNS"]
 
 GROUND_TRUTH_FIELDS = ("gt_x", "gt_y", "gt_theta")
 SKIP_COLUMN = "_"
 """The name that skips a column in ``--columns`` given in order."""
-DEGREE_COLUMNS = {"steer_deg": "steer", "yaw_rate_deg": "yaw_rate", "heading_deg": "heading"}
-"""Column names that read an angle channel in degrees (deg/s for the yaw rate), as the truth's
-``theta_deg``: odomkit's channels are radians (DESIGN.md), and a CAN steering angle or a
-gyro is often logged in degrees."""
+UNIT_COLUMNS: dict[str, tuple[str, float]] = {
+    "steer_deg": ("steer", math.pi / 180), "yaw_rate_deg": ("yaw_rate", math.pi / 180),
+    "heading_deg": ("heading", math.pi / 180),
+    "speed_kmh": ("speed", 1 / 3.6), "speed_mph": ("speed", 0.44704),
+}
+"""Column names that read a channel in another unit: name -> (channel, SI units per unit).
+odomkit's channels are radians and metres per second (DESIGN.md), but a CAN steering angle
+or a gyro is often logged in degrees (°/s for the yaw rate, as the truth's ``theta_deg``)
+and a car's speed in km/h or mph (an international mile is 1609.344 m exactly)."""
 #: A bicycle or tricycle steering angle beyond ±90° (and a little more: OptiOdom's tricycle
 #: logs exactly ±π/2 when it turns in place) is no radians a vehicle steers by.
 STEER_LIMIT = np.pi / 2 + 0.01
 #: A base turning faster than a revolution a second for 1 % of a log is rarer than a gyro
 #: logged in °/s read as rad/s (a 30 °/s turn would read as 4.8 revolutions a second).
 YAW_RATE_LIMIT = 2 * np.pi
+#: 60 m/s is 216 km/h: a wheeled robot or a road car logging faster for 1 % of its log is rarer
+#: than a speed in km/h (a car at 100 km/h reads as 100 m/s) or mph read as m/s.
+SPEED_LIMIT = 60.0
 
 
 def parse_columns(text: str) -> dict[str, str] | list[str]:
@@ -133,7 +142,7 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
         raise InputError(hint + said, source=source)
     times = [name for name in header if name.lower() in TIME_NAMES]
     known = [name for name in header
-             if name in KNOWN_CHANNELS or name in DEGREE_COLUMNS or name in GROUND_TRUTH_FIELDS
+             if name in KNOWN_CHANNELS or name in UNIT_COLUMNS or name in GROUND_TRUTH_FIELDS
              or name.lower() in HEADER_ALIASES]
     unknown = [name for name in header if name not in times and name not in known]
     if len(times) != 1 or not known or unknown:
@@ -148,19 +157,25 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
 def _check_targets(targets: Sequence[str], source: str) -> None:
     named = [k for k in targets if k != SKIP_COLUMN]
     for key in named:
-        if key != "t" and key not in KNOWN_CHANNELS | DEGREE_COLUMNS.keys() | set(GROUND_TRUTH_FIELDS):
+        if key != "t" and key not in KNOWN_CHANNELS | UNIT_COLUMNS.keys() | set(GROUND_TRUTH_FIELDS):
             raise InputError(
                 f"unknown target {key!r} in --columns; expected t, "
-                f"{', '.join(sorted(KNOWN_CHANNELS))} (steer_deg, yaw_rate_deg, heading_deg in degrees), "
+                f"{', '.join(sorted(KNOWN_CHANNELS))} (steer_deg, yaw_rate_deg, heading_deg in degrees; "
+                f"speed_kmh, speed_mph), "
                 f"{', '.join(GROUND_TRUTH_FIELDS)} or _ (skip)",
                 source=source)
     twice = sorted({k for k in named if named.count(k) > 1})
     if twice:
         raise InputError(f"--columns names {', '.join(twice)} more than once", source=source)
-    both = sorted(f"{channel} or {degrees}" for degrees, channel in DEGREE_COLUMNS.items()
-                  if degrees in named and channel in named)
+    def channel_of(name: str) -> str:
+        return UNIT_COLUMNS[name][0] if name in UNIT_COLUMNS else name
+
+    by_channel = {channel_of(name): [other for other in named if channel_of(other) == channel_of(name)]
+                  for name in named}
+    both = sorted(" or ".join(names) for names in by_channel.values() if len(names) > 1)
     if both:
-        raise InputError(f"--columns names one angle twice: give {', '.join(both)}, not both", source=source)
+        raise InputError(f"--columns names one channel twice, in two units: give {'; '.join(both)}, "
+                         "not more than one", source=source)
     if "t" not in named:
         raise InputError("--columns needs the time column t (t=<header name>, or t in its place)",
                          source=source)
@@ -201,22 +216,26 @@ def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
     return layout, index
 
 
-def _warn_if_degrees(values: np.ndarray, key: str, source: str, label: str) -> None:
+def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -> None:
     """Warn where a steering angle or yaw rate read as radians looks like degrees
-    (:data:`STEER_LIMIT`, :data:`YAW_RATE_LIMIT`): read so, it gives a wrong track silently."""
+    (:data:`STEER_LIMIT`, :data:`YAW_RATE_LIMIT`), or a speed read as m/s like km/h or mph
+    (:data:`SPEED_LIMIT`): read so, they give a wrong track silently."""
     finite = np.abs(values[np.isfinite(values)])
     if not finite.size:
         return
     if key == "steer":
         seen, limit, what = float(finite.max()), STEER_LIMIT, "reaches"
     else:
-        seen, limit, what = float(np.percentile(finite, 99)), YAW_RATE_LIMIT, "has a 99th percentile of"
+        seen, what = float(np.percentile(finite, 99)), "has a 99th percentile of"
+        limit = YAW_RATE_LIMIT if key == "yaw_rate" else SPEED_LIMIT
     if seen > limit:
-        unit = "rad" if key == "steer" else "rad/s"
+        unit, other = {"steer": ("rad", "degrees"), "yaw_rate": ("rad/s", "degrees"),
+                       "speed": ("m/s", "km/h or mph")}[key]
+        columns = f"{key}_deg" if key != "speed" else "speed_kmh or speed_mph"
         warnings.warn(
             f"{source}: {label} ({key}) {what} {seen:.3g} {unit}, beyond {limit:.3g} {unit}: "
-            f"is it in degrees? odomkit reads radians; {key}_deg in --columns reads degrees "
-            f"({key}_deg=<header name>, or {key}_deg in its place)",
+            f"is it in {other}? odomkit reads {unit}; {columns} in --columns reads {other} "
+            f"({columns.split(' or ')[0]}=<header name>, or in its place)",
             UserWarning, stacklevel=3)
 
 
@@ -243,8 +262,9 @@ def read_csv_log(
         last name are ignored; a header line, if any, is skipped); a mapping goes from
         odomkit name to header name (``{"t": "time", "ticks_left": "L"}``). Names: ``t``
         (required), any channel of :mod:`odomkit.log` (``ticks_left``, ``speed``,
-        ``steer``, ...), the angle channels in degrees (:data:`DEGREE_COLUMNS`:
-        ``steer_deg``, ``yaw_rate_deg``, ``heading_deg``), and ``gt_x``, ``gt_y``,
+        ``steer``, ...), the channels in other units (:data:`UNIT_COLUMNS`:
+        ``steer_deg``, ``yaw_rate_deg``, ``heading_deg`` in degrees, ``speed_kmh``,
+        ``speed_mph``), and ``gt_x``, ``gt_y``,
         ``gt_theta`` for ground truth [m, m, rad].
     time_unit : unit of the time column: ``"s"``, ``"ms"``, ``"us"``, ``"ns"``, or seconds
         per unit as a number (:func:`odomkit.io.text.seconds_per_unit`)
@@ -296,8 +316,9 @@ def read_csv_log(
     t = to_seconds(data[:, index["t"]], seconds)
     channels = {}
     for key, col in index.items():
-        if key in DEGREE_COLUMNS:
-            channels[DEGREE_COLUMNS[key]] = np.radians(data[:, col])
+        if key in UNIT_COLUMNS:
+            channel, si_per_unit = UNIT_COLUMNS[key]
+            channels[channel] = data[:, col] * si_per_unit
             continue
         if key not in KNOWN_CHANNELS:
             continue
@@ -307,8 +328,8 @@ def read_csv_log(
         channels[key] = data[:, col].copy()
         if key in INCREMENT_CHANNELS:
             warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
-        elif key in ("steer", "yaw_rate"):
-            _warn_if_degrees(channels[key], key, source, labels[key])
+        elif key in ("steer", "yaw_rate", "speed"):
+            _warn_if_other_unit(channels[key], key, source, labels[key])
     truth = None
     gt_keys = [k for k in GROUND_TRUTH_FIELDS if k in index]
     if gt_keys:

@@ -32,7 +32,9 @@ A car (rear-axle reference, speed measured at one wheel, front steering angle)::
     wheel_base = 2.7            # L [m]
     encoder_offset = 0.8        # H [m], + left: lateral offset of the measuring wheel
     encoder_at = "rear"         # "rear" | "front": axle of the measuring wheel
-    steering_offset = 0.0       # [rad], added to the measured steering angle
+    steering_ratio = 15.0       # measured steering angle per road-wheel angle: 1 (default)
+                                #    for a road-wheel steer, ~12-18 for a steering wheel's
+    steering_offset = 0.0       # [rad], added to the road-wheel angle (after the ratio)
     c_scale = 1.0               # measuring-wheel scale correction
     wheel_diameter = 0.65       # optional size of the measuring wheel (ticks only):
                                 # m_per_tick, wheel_diameter or wheel_radius
@@ -218,7 +220,8 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
                     encoder_at=f.word("encoder_at", ENCODER_POSITIONS, "rear"),
                     m_per_tick=sizes.optional_scale(None, "measuring"),
                     steering_offset=f.number("steering_offset", 0.0),
-                    c_scale=f.number("c_scale", 1.0))
+                    c_scale=f.number("c_scale", 1.0),
+                    steering_ratio=f.number("steering_ratio", 1.0))
     else:
         raise InputError(f"[robot] type must be one of {', '.join(ROBOT_TYPES)}; got {kind!r}",
                          source=source)
