@@ -31,9 +31,14 @@ def test_a_good_run_passes(run_cli, diff_data):
     run = diff_data / "free" / "020120212354" / "020120212354_run-01.csv"
     code, report, err = _run(run_cli, run)
     assert code == 0, err
-    assert report["ok"] and all(f["status"] == "ok" for f in report["findings"]), report["findings"]
+    # Every check passes but one about the truth itself: this OptiTrack body sits 9 mrad off
+    # the robot's axis (tests/calibrate/test_check_truth.py), which is said, not failed.
+    assert report["ok"] and all(f["status"] == "ok" for f in report["findings"]
+                                if f["check"] != "truth_heading"), report["findings"]
+    (heading,) = _by_check(report, "truth_heading")
+    assert heading["status"] == "warn" and -0.012 < heading["value"] < -0.007
     assert report["truth"] == str(run)  # the run's own OptiTrack columns
-    assert report["next"] == ["nothing: the log is fit to calibrate from"]
+    assert len(report["next"]) == 1 and "rigid body" in report["next"][0]
     # a UMBmark square run passes too, with the advice to turn the other way as well
     code, report, _ = _run(run_cli, diff_data / "square" / "230620202042" / "230620202042_run-01.csv")
     assert code == 0 and report["ok"]

@@ -44,6 +44,7 @@ from numpy.typing import NDArray
 from odomkit.calibrate.check_channels import check_channels
 from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_identifiable import check_identifiable, identifiability_sigma
+from odomkit.calibrate.check_truth import check_truth_heading
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at
@@ -267,7 +268,8 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
 def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spin: str | None = None,
               max_gap: float | None = 0.5) -> list[Finding]:
     """Every check, in the order a user fixes things: values and time, counters, stuck
-    channels, the channel mapping, then what the motion can identify."""
+    channels, the channel mapping, the truth's own heading, then what the motion can
+    identify."""
     found = check_values(log)
     if any(f.status == "fail" for f in found):
         return found
@@ -279,6 +281,7 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     found += check_channels(log, robot, truth, spin=spin, max_gap=max_gap)
     if any(f.status == "fail" and f.check == "channels" for f in found):
         return found  # what the motion identifies means nothing until the channels are right
+    found += check_truth_heading(log, robot, truth, max_gap)
     found += check_motion(log, robot)
     found += check_identifiable(log, robot, identifiability_sigma(truth))
     return found

@@ -26,8 +26,8 @@ class Finding:
     Parameters
     ----------
     check : str
-        Which check (``time``, ``values``, ``counters``, ``stuck``, ``channels``, ``distance``,
-        ``turning``, ``identifiable``, ``reading``).
+        Which check (``time``, ``values``, ``counters``, ``stuck``, ``channels``,
+        ``truth_heading``, ``distance``, ``turning``, ``identifiable``, ``reading``).
     status : {"ok", "warn", "fail"}
     message : str
         What was found, in the log's numbers.
@@ -36,7 +36,8 @@ class Finding:
     value : float, optional
         The figure the status was judged on, where there is one (``identifiable``: the
         standard error, relative for a scale or length, rad for a steering offset, rad/s
-        for a yaw-rate bias; ``channels``: the misfit of the mapping as given).
+        for a yaw-rate bias; ``channels``: the misfit of the mapping as given;
+        ``truth_heading``: the truth's heading minus its direction of motion, rad).
     """
 
     check: str

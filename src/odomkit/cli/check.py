@@ -78,7 +78,7 @@ def print_findings(out: dict[str, Any]) -> None:
     """The text report of ``odomkit check``."""
     print(f"{out['log']}" + (f" (truth: {out['truth']})" if out["truth"] else " (no truth)"))
     for f in out["findings"]:
-        print(f"  {_MARK[f['status']]} {f['check']:12s} {f['message']}")
+        print(f"  {_MARK[f['status']]} {f['check']:13s} {f['message']}")
     print("next:")
     for line in out["next"]:
         print(f"  - {line}")
