@@ -334,3 +334,30 @@ def test_the_scatter_of_the_fixes_estimates_their_own_noise(rate, sigma, speed):
     dof = 2 * (t.size // 5) * 2
     assert got == pytest.approx(sigma, rel=4 / np.sqrt(2 * dof) + 0.01)
     assert scatter_sigma(Truth(t[:9], fixes.xy[:9])) is None  # one block only
+
+
+def test_a_vehicle_standing_under_wandering_fixes_gets_no_start_heading():
+    """A car waits 30 s at a light under a 1 Hz GPS whose fixes wander smoothly by metres
+    (as a phone's do), then drives off at 10 m/s. The fixes alone fit a confident heading
+    to the wander (σ well under MAX_HEADING_SIGMA: on a real drive such a start came out
+    185° wrong); the odometry, at rest, says the motion is the fixes' own, so the start is
+    refused. Once the car drives, the start heading is its true one up to what the wander
+    bends over the fit's 60 m (0.03 rad here; its σ, from the white part, does not know the
+    wander: a correlated truth error is beyond any per-fix σ)."""
+    from odomkit.truth import MAX_HEADING_SIGMA, start_heading
+
+    rng = np.random.default_rng(3)
+    t_odo = np.arange(0.0, 60.0, 0.1)
+    heading = 0.5
+    travel = np.where(t_odo < 30.0, 0.0, 10.0 * (t_odo - 30.0))
+    odometry = np.column_stack((travel * np.cos(heading), travel * np.sin(heading),
+                                np.full_like(t_odo, heading)))
+    t = np.arange(0.0, 60.0, 1.0) + 0.37
+    true_xy = np.column_stack([np.interp(t, t_odo, odometry[:, k]) for k in (0, 1)])
+    wander = 3.0 * np.column_stack((np.sin(2 * np.pi * t / 40.0 + 1.0), np.cos(2 * np.pi * t / 55.0)))
+    fixes = Truth(t, true_xy + wander + rng.normal(0.0, 0.3, (t.size, 2)))
+    alone = heading_from_positions(fixes, 20.0)
+    assert alone is not None and alone[1] < MAX_HEADING_SIGMA**2  # the wander's confident heading
+    assert start_heading(fixes, 20.0, t_odo, odometry) is None
+    moving = start_heading(fixes, 45.0, t_odo, odometry)
+    assert moving is not None and abs(moving[0] - heading) < 0.06

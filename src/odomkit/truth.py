@@ -44,6 +44,9 @@ HEADING_SIGMA_SOUGHT = 0.05
 #: The widest span [s] a heading fit widens to (a sparse truth's own span may be wider:
 #: it is kept, not widened).
 WIDEST_HEADING_SPAN = 10.0
+#: A start whose odometry travels less than this share of the truth's own displacement over
+#: the heading fit's span stood still while the fixes wandered (:func:`start_heading`).
+STANDING_SHARE = 0.5
 
 
 @dataclass(frozen=True)
@@ -498,12 +501,18 @@ def start_heading(truth: Truth, time: float, track_t: ArrayLike, track_poses: Ar
     there (:func:`heading_from_positions`: too few fixes, a residual above
     :data:`MAX_RESIDUAL_SIGMAS` σ, a robot hardly moving).
 
-    Which starts are refused is the truth's decision alone: a window must not be left out
-    for its odometry's error, which the alignment's residual also holds (the windows kept
-    would then be the odometry's good ones). Where the alignment gives no heading (its
-    residual, odometry included, spread over too short a path: an uncalibrated robot
-    turning on the spot), the truth-only fit's heading is used, turned by π where the
-    odometry moves backwards over the next 0.5 s.
+    Which starts are refused is the truth's decision, not the odometry's error: a window
+    must not be left out for that error, which the alignment's residual also holds (the
+    windows kept would then be the odometry's good ones). Where the alignment gives no
+    heading (its residual, odometry included, spread over too short a path: an
+    uncalibrated robot turning on the spot), the truth-only fit's heading is used, turned
+    by π where the odometry moves backwards over the next 0.5 s, unless the odometry says
+    the vehicle stood while the truth moved: over the truth-only fit's span it travelled
+    less than half the truth's own displacement (:data:`STANDING_SHARE`). Then the truth's
+    motion is its noise (a car waiting at a light under a GPS whose fixes wander metres:
+    on a real drive such a start came out 185° wrong, with a σ of 0.2 rad) and the start is
+    refused. Whether a vehicle moves is no odometry error: a stuck wheel aside (``odomkit
+    check``), an odometry at rest is a vehicle at rest.
 
     Parameters
     ----------
@@ -522,10 +531,28 @@ def start_heading(truth: Truth, time: float, track_t: ArrayLike, track_poses: Ar
     aligned = heading_by_alignment(truth, time, t_odo, poses, max_residual=math.inf)
     if aligned is not None:
         return aligned
+    if _stood_while_truth_moved(truth, time, t_odo, poses):
+        return None
     a, b = np.searchsorted(t_odo, [time, time + 0.5]).clip(0, len(t_odo) - 1)
     moved = poses[b, :2] - poses[a, :2]
     backwards = moved[0] * math.cos(poses[a, 2]) + moved[1] * math.sin(poses[a, 2]) < 0
     return (alone[0] + math.pi if backwards else alone[0]), alone[1]
+
+
+def _stood_while_truth_moved(truth: Truth, time: float, t_odo: NDArray[np.float64],
+                             poses: NDArray[np.float64]) -> bool:
+    """Over the truth-only heading fit's first span about ``time``, did the odometry travel
+    less than :data:`STANDING_SHARE` of the truth's displacement between its first and last
+    fix there?"""
+    half = heading_span(truth) / 2
+    near = np.flatnonzero(np.abs(truth.t - time) <= half)
+    if near.size < 2:
+        return False
+    moved = float(np.linalg.norm(truth.xy[near[-1]] - truth.xy[near[0]]))
+    inside = (t_odo >= truth.t[near[0]]) & (t_odo <= truth.t[near[-1]])
+    path = poses[inside, :2]
+    travel = float(np.sum(np.linalg.norm(np.diff(path, axis=0), axis=1))) if len(path) > 1 else 0.0
+    return travel < STANDING_SHARE * moved
 
 
 def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, reverse: bool = False,
