@@ -318,3 +318,23 @@ def test_evaluate_warns_where_the_scored_covariance_leaves_the_first_order_regim
     short = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="5s")
     assert any("first-order model may not hold" in w for w in long["warnings"])
     assert not any("first-order model may not hold" in w for w in short["warnings"])
+
+
+def test_few_window_ends_are_warned_about_with_an_honest_models_spread(tmp_path):
+    """6 window ends: a 95 % figure moves in steps of 1/6, and an honest model's count of
+    ends inside is Binomial(6, 0.95): its 2.5 and 97.5 % points (summed here from the
+    pmf) are 4 and 6 ends, so the warning says 0.67..1.00. 200 ends (the slow test
+    above) get no such warning."""
+    from math import comb
+
+    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
+    with pytest.warns(UserWarning, match=r"only 6 window end\(s\)") as caught:
+        out = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
+                            window="10s")
+    assert out["windows"] == 6
+    cdf = np.cumsum([comb(6, k) * 0.95**k * 0.05 ** (6 - k) for k in range(7)])
+    low, high = int(np.searchsorted(cdf, 0.025)), int(np.searchsorted(cdf, 0.975))
+    assert (low, high) == (4, 6)
+    said = [str(w.message) for w in caught if "window end" in str(w.message)]
+    assert f"{low / 6:.2f}..{high / 6:.2f}" in said[0]
+    assert any("only 6 window end" in w for w in out["warnings"])

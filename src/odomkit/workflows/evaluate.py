@@ -237,9 +237,29 @@ def _report(scored: list[Scored], rpe_distances: Sequence[float]) -> dict[str, A
     out = summarise(scored, rpe_distances)
     out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances)} for s in scored]
     out["warnings"] = list(dict.fromkeys(w for s in scored for w in s.warnings))
+    few = _few_ends_note(out["windows"])
+    if few:
+        out["warnings"].append(few)
     for text in out["warnings"]:
         warnings.warn(text, stacklevel=3)
     return out
+
+
+#: Fewer window ends than this make a coverage figure too coarse to judge a model by.
+FEW_WINDOW_ENDS = 20
+
+
+def _few_ends_note(ends: int) -> str | None:
+    """The warning for a windowed test of fewer than :data:`FEW_WINDOW_ENDS` ends: how far
+    an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points)."""
+    if not 0 < ends < FEW_WINDOW_ENDS:
+        return None
+    from scipy.stats import binom
+
+    low, high = (float(binom.ppf(q, ends, 0.95)) / ends for q in (0.025, 0.975))
+    return (f"only {ends} window end(s): coverage moves in steps of 1/{ends}, and an honest model's "
+            f"95 % figure falls anywhere in {low:.2f}..{high:.2f} in 95 % of such tests; score more "
+            "windows (more or longer logs, shorter windows) before judging the model")
 
 
 def evaluate_tracks(
