@@ -88,6 +88,7 @@ def draw_track(
     color: str | None = None,
     truth_label: str = "ground truth",
     ellipse_scale: float = 1.0,
+    truth_points: bool = False,
 ) -> list[Artist]:
     """A dead-reckoned track with position confidence ellipses, against ground truth.
 
@@ -113,6 +114,9 @@ def draw_track(
     ellipse_scale : float
         Draw the ellipses this many times larger (said in the legend); 1 draws them true
         to scale.
+    truth_points : bool
+        Draw the truth as separate points (sparse fixes such as GPS, each its own
+        measurement) rather than a line.
 
     Returns
     -------
@@ -143,7 +147,12 @@ def draw_track(
         if g.ndim != 2 or g.shape[1] not in (2, 3):
             raise InputError(f"truth must have shape (M, 2) or (M, 3), got {g.shape}")
         keep = thin(g.shape[0])
-        (tl,) = ax.plot(g[keep, 0], g[keep, 1], "--", color="black", lw=1.0, alpha=0.7, label=truth_label)
+        if truth_points:
+            (tl,) = ax.plot(g[keep, 0], g[keep, 1], ".", ls="none", color="black", ms=3.0, alpha=0.6,
+                            label=truth_label)
+        else:
+            (tl,) = ax.plot(g[keep, 0], g[keep, 1], "--", color="black", lw=1.0, alpha=0.7,
+                            label=truth_label)
         artists.append(tl)
     if cov is not None:
         P = np.asarray(cov, dtype=float)

@@ -215,7 +215,10 @@ def calibrate_files(
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
                                                   overwrite=overwrite, twist=twist))
     if plot is not None:
-        outputs["plot"] = str(_calibration_plot(plot, runs, truth, robot, new_robot, side))
+        clock_fitted = bool(summary.get("truth_time_offset", {}).get("fitted"))
+        drawn = _calibration_plot(plot, runs, truth, robot, new_robot, side, clock_fitted)
+        if drawn is not None:  # else a warning has said why nothing was drawn
+            outputs["plot"] = str(drawn)
     summary["method"] = method
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
@@ -261,31 +264,46 @@ def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapp
 
 
 def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,
-                      robot: Robot, new_robot: Robot, side: float | None) -> Path:
-    """The runs from their truth start pose (the log's own truth, or ``--truth``), and with
-    square runs of a differential drive UMBmark's return errors before and after."""
+                      robot: Robot, new_robot: Robot, side: float | None, clock_fitted: bool = False
+                      ) -> Path | None:
+    """The runs against their truth, and with square runs of a differential drive UMBmark's
+    return errors before and after; None, with a warning saying why, when there is nothing
+    to draw. The log's own truth starts each run at its first pose; ``--truth`` fixes (on
+    the log's clock by the offset calibrated) are the ones the calibration compared (inside
+    the log's span; with ``clock_fitted``, their own stamps :data:`MAX_TIME_OFFSET` inside
+    it), each run started from the pose fitted to them as the calibration fits it
+    (:func:`odomkit.workflows.figures.calibration_figure`): position-only truth (GPS) has no
+    start heading to take."""
     import numpy as np
 
+    from odomkit.calibrate.positions import MAX_TIME_OFFSET
     from odomkit.calibrate.realdata import return_errors_from_runs
-    from odomkit.truth import start_pose
     from odomkit.workflows.figures import calibration_figure
 
-    shown, paths, starts = [], [], []
+    shown, paths, starts, times, left_out = [], [], [], [], []
     for i, log in enumerate(runs):
         if truth is not None:
             found = load_truth(truth[i], log)
             assert found is not None  # the calibration found it
-            try:
-                start, _ = start_pose(found, float(log.t[0]), truth[i].max_gap)
-            except InputError:
-                continue  # no truth at the log's first row: the run is left out of the figure
-            xy = found.xy
+            # the fixes calibrate_positions compared: with the clock fitted, those whose own
+            # stamps lie MAX_TIME_OFFSET inside the log (the same ones at every offset tried)
+            margin, own = ((MAX_TIME_OFFSET, found.t + (truth[i].time_offset or 0.0)) if clock_fitted
+                           else (0.0, found.t))
+            inside = ((own >= log.t[0] + margin) & (own <= log.t[-1] - margin)
+                      & np.all(np.isfinite(found.xy), axis=1))
+            if np.count_nonzero(inside) < 2:
+                left_out.append(f"{log.source}: fewer than 2 truth fixes inside the log's time span")
+                continue
+            times.append(np.asarray(found.t[inside], dtype=float))
+            paths.append(np.asarray(found.xy[inside], dtype=float))
         else:
             assert log.ground_truth is not None  # the calibration needs it
-            start, xy = log.ground_truth[0], log.ground_truth[:, :2]
+            if not np.all(np.isfinite(log.ground_truth[0])):
+                left_out.append(f"{log.source}: no ground-truth pose at the log's first row to start from")
+                continue
+            starts.append(np.asarray(log.ground_truth[0], dtype=float))
+            paths.append(np.asarray(log.ground_truth[:, :2], dtype=float))
         shown.append(log)
-        paths.append(np.asarray(xy, dtype=float))
-        starts.append(np.asarray(start, dtype=float))
     umbmark = None
     if side is not None and isinstance(robot, DiffDrive) and isinstance(new_robot, DiffDrive):
         try:
@@ -295,7 +313,14 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
             cw = ccw = np.empty((0, 2))
         if len(cw) and len(ccw):
             umbmark = (cw, ccw, *after)
-    return calibration_figure(plot, shown, paths, starts, robot, new_robot, umbmark=umbmark)
+    if not shown and umbmark is None:
+        warnings.warn(f"--plot {plot} not written: no run can be drawn against its truth ("
+                      f"{'; '.join(left_out)})", UserWarning, stacklevel=3)
+        return None
+    if left_out:
+        warnings.warn(f"left out of --plot: {'; '.join(left_out)}", UserWarning, stacklevel=3)
+    return calibration_figure(plot, shown, paths, None if truth is not None else starts, robot, new_robot,
+                              umbmark=umbmark, fix_times=times if truth is not None else None)
 
 
 # The CLI flag of each keyword argument of calibrate_exact, for messages.

@@ -153,36 +153,99 @@ def umbmark_figure(path: str | Path, cw: ArrayLike, ccw: ArrayLike, *, cw_after:
 
 
 def calibration_figure(path: str | Path, runs: Sequence[OdometryLog], truths: Sequence[NDArray[np.float64]],
-                       starts: Sequence[ArrayLike], before: Robot, after: Robot | Sequence[Robot], *,
-                       umbmark: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None = None) -> Path:
-    """``odomkit calibrate --plot``: every run dead-reckoned from its start pose with the
-    robot file's parameters and with the calibrated ones, against the truth; with square
-    runs (``--side``) UMBmark's return errors before and after.
+                       starts: Sequence[ArrayLike] | None, before: Robot, after: Robot | Sequence[Robot], *,
+                       umbmark: tuple[ArrayLike, ArrayLike, ArrayLike, ArrayLike] | None = None,
+                       fix_times: Sequence[NDArray[np.float64]] | None = None) -> Path:
+    """``odomkit calibrate --plot``: every run dead-reckoned with the robot file's
+    parameters and with the calibrated ones, against the truth; with square runs
+    (``--side``) UMBmark's return errors before and after.
 
-    ``truths`` holds each run's truth positions (K, 2 or 3) [m], ``starts`` each run's
-    start pose (3,) [m, m, rad] (the truth's at the log's first row)."""
+    ``truths`` holds each run's truth positions (K, 2 or 3) [m]. Without ``fix_times``,
+    ``starts`` holds each run's start pose (3,) [m, m, rad] (the truth's at the log's first
+    row). With ``fix_times`` (each run's (K,) fix times [s] on the log's clock, inside its
+    span), the truth is position fixes (``calibrate --truth``, GPS) and ``starts`` is not
+    used: as :func:`odomkit.calibrate.positions.calibrate_positions` does, each run's start
+    pose is the least-squares fit to the fixes, here for each parameter set (an SE(2)
+    alignment of the track at the fixes, :func:`odomkit.evaluate.umeyama_se2`); the fixes
+    are drawn as points and a panel below shows each track's distance from every fix."""
     from odomkit.plot import draw_track, draw_umbmark, new_figure, save_figure
     from odomkit.plot.spatial import legend
     from odomkit.track import dead_reckon_log
 
     afters = list(after) if isinstance(after, Sequence) else [after] * len(runs)
-    mosaic = [["before", "after"] + (["umbmark"] if umbmark is not None else [])]
-    fig, axes = new_figure(mosaic=mosaic, size=(6.0 * len(mosaic[0]), 6.0))
+    top = ["before", "after"] + (["umbmark"] if umbmark is not None else [])
+    mosaic = [top] + ([["error"] * len(top)] if fix_times is not None else [])
+    if fix_times is None and starts is None:
+        raise ValueError("calibration_figure needs the runs' start poses or the truth's fix times")
+    fig, axes = new_figure(mosaic=mosaic, size=(6.0 * len(top), 6.0 + 3.4 * (len(mosaic) - 1)))
     assert isinstance(axes, dict)
-    for i, (log, truth, start, robot) in enumerate(zip(runs, truths, starts, afters, strict=True)):
-        name = Path(log.source).stem
+    for i, (log, truth, robot) in enumerate(zip(runs, truths, afters, strict=True)):
+        name, colour = Path(log.source).stem, f"C{i % 10}"
         for key, rob in (("before", before), ("after", robot)):
-            track = dead_reckon_log(log, rob, "exact", start)
-            draw_track(axes[key], track.poses, truth=truth, label=name, color=f"C{i % 10}")
+            if fix_times is None:
+                assert starts is not None
+                poses = dead_reckon_log(log, rob, "exact", starts[i]).poses
+                draw_track(axes[key], poses, truth=truth, label=name, color=colour)
+                continue
+            poses, error = _fitted_to_fixes(log, rob, fix_times[i], truth)
+            draw_track(axes[key], poses, truth=truth, label=name, color=colour, truth_label="truth fixes",
+                       truth_points=True)
+            _draw_fix_errors(axes["error"], fix_times[i] - log.t[0], error, colour=colour,
+                             label=f"{name}, {'robot file' if key == 'before' else 'calibrated'}",
+                             style="--" if key == "before" else "-")
+    fitted = "\n(each run's start pose fitted to the truth fixes)" if fix_times is not None else ""
     for key, text in (("before", "robot file's parameters"), ("after", "calibrated parameters")):
-        axes[key].set_title(f"dead reckoning with the {text}")
+        axes[key].set_title(f"dead reckoning with the {text}{fitted}")
         legend(axes[key], loc="upper left", bbox_to_anchor=(0.0, -0.1), ncols=2)
+    if fix_times is not None:
+        axes["error"].set_xlabel("time since the run's start [s]")
+        axes["error"].set_ylabel("distance from the truth fix [m]")
+        axes["error"].grid(True, lw=0.4, alpha=0.5)
+        axes["error"].set_title("each track's distance from the truth's fixes (dashed: robot file's "
+                                "parameters, solid: calibrated)", loc="left")
+        legend(axes["error"], loc="upper left", bbox_to_anchor=(1.01, 1.0), borderaxespad=0.0)
     if umbmark is not None:
         cw, ccw, cw_after, ccw_after = umbmark
         draw_umbmark(axes["umbmark"], cw, ccw, cw_after=cw_after, ccw_after=ccw_after)
         axes["umbmark"].set_title("UMBmark return errors")
         legend(axes["umbmark"], loc="upper left", bbox_to_anchor=(0.0, -0.1), ncols=2)
     return save_figure(fig, path)
+
+
+def _fitted_to_fixes(log: OdometryLog, robot: Robot, t: NDArray[np.float64], xy: NDArray[np.float64]
+                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The log dead-reckoned with ``robot`` from the start pose that best fits the fixes
+    ``xy`` (K, 2) [m] at times ``t`` (K,) [s] on the log's clock, and its position error
+    (K, 2) [m] at them (odometry − fix).
+
+    The track from the origin, interpolated linearly at the fixes (as
+    :mod:`odomkit.calibrate.positions` compares them), is aligned to them by SE(2) least
+    squares (Umeyama 1991, :func:`odomkit.evaluate.umeyama_se2`): for a fixed parameter set
+    that is the start pose ``calibrate --truth`` fits. A start pose (x₀, y₀, θ₀) moves the
+    whole track rigidly, so the aligned track is integrated again from it."""
+    from odomkit.evaluate import umeyama_se2
+    from odomkit.track import dead_reckon_log
+
+    log_t = np.asarray(log.t, dtype=float)
+
+    def at_fixes(poses: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.column_stack([np.interp(t, log_t, poses[:, 0]), np.interp(t, log_t, poses[:, 1])])
+
+    origin = dead_reckon_log(log, robot, "exact", np.zeros(3)).poses
+    phi, shift = umeyama_se2(at_fixes(origin), xy[:, :2])
+    poses = dead_reckon_log(log, robot, "exact", (float(shift[0]), float(shift[1]), phi)).poses
+    return poses, at_fixes(poses) - xy[:, :2]
+
+
+def _draw_fix_errors(ax: Axes, t: NDArray[np.float64], error: NDArray[np.float64], *, colour: str, label: str,
+                     style: str) -> None:
+    """The distance |odometry − fix| [m] at each fix over time ``t`` [s], its RMS in the label."""
+    from odomkit.plot.figure import thin
+
+    d = np.hypot(error[:, 0], error[:, 1])
+    rows = thin(d.size)
+    ax.plot(t[rows], d[rows], style, color=colour, lw=1.1,
+            label=f"{label} (RMS {float(np.sqrt(np.mean(d ** 2))):.3g} m)")
 
 
 def honesty_figure(path: str | Path, *, coverages: Mapping[str, Mapping[str, float | None]],
