@@ -171,6 +171,8 @@ def calibrate_files(
             summary = cal.to_dict()
             if len(runs) > 1:
                 summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None)
+            else:
+                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
                 {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
@@ -249,6 +251,25 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: li
     if said:
         warnings.warn(said, UserWarning, stacklevel=2)
     return rows
+
+
+def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
+                     clock_fitted: bool) -> list[dict[str, Any]] | None:
+    """One drive's halves calibrated alone and tried on each other (JSON ``halves``), and a
+    warning where the calibration does not hold along the drive
+    (:func:`odomkit.calibrate.stability.halves_disagree`); None where a half cannot be
+    fitted alone."""
+    from odomkit.calibrate.stability import calibrate_halves, halves_disagree
+
+    if clock_fitted and joint.time_offset is not None:  # the fixes on the log's clock
+        truth = replace(truth, t=truth.t - joint.time_offset)
+    halves = calibrate_halves(log, truth, robot)
+    if halves is None:
+        return None
+    said = halves_disagree(halves)
+    if said:
+        warnings.warn(said, UserWarning, stacklevel=2)
+    return [half.to_dict() for half in halves]
 
 
 def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any]) -> None:

@@ -168,6 +168,7 @@ def calibration_figure(path: str | Path, runs: Sequence[OdometryLog], truths: Se
     pose is the least-squares fit to the fixes, here for each parameter set (an SE(2)
     alignment of the track at the fixes, :func:`odomkit.evaluate.umeyama_se2`); the fixes
     are drawn as points and a panel below shows each track's distance from every fix."""
+    from odomkit.calibrate.stability import track_fitted_to_fixes
     from odomkit.plot import draw_track, draw_umbmark, new_figure, save_figure
     from odomkit.plot.spatial import legend
     from odomkit.track import dead_reckon_log
@@ -187,7 +188,7 @@ def calibration_figure(path: str | Path, runs: Sequence[OdometryLog], truths: Se
                 poses = dead_reckon_log(log, rob, "exact", starts[i]).poses
                 draw_track(axes[key], poses, truth=truth, label=name, color=colour)
                 continue
-            poses, error = _fitted_to_fixes(log, rob, fix_times[i], truth)
+            poses, error = track_fitted_to_fixes(log, rob, fix_times[i], truth)
             draw_track(axes[key], poses, truth=truth, label=name, color=colour, truth_label="truth fixes",
                        truth_points=True)
             _draw_fix_errors(axes["error"], fix_times[i] - log.t[0], error, colour=colour,
@@ -210,31 +211,6 @@ def calibration_figure(path: str | Path, runs: Sequence[OdometryLog], truths: Se
         axes["umbmark"].set_title("UMBmark return errors")
         legend(axes["umbmark"], loc="upper left", bbox_to_anchor=(0.0, -0.1), ncols=2)
     return save_figure(fig, path)
-
-
-def _fitted_to_fixes(log: OdometryLog, robot: Robot, t: NDArray[np.float64], xy: NDArray[np.float64]
-                     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """The log dead-reckoned with ``robot`` from the start pose that best fits the fixes
-    ``xy`` (K, 2) [m] at times ``t`` (K,) [s] on the log's clock, and its position error
-    (K, 2) [m] at them (odometry − fix).
-
-    The track from the origin, interpolated linearly at the fixes (as
-    :mod:`odomkit.calibrate.positions` compares them), is aligned to them by SE(2) least
-    squares (Umeyama 1991, :func:`odomkit.evaluate.umeyama_se2`): for a fixed parameter set
-    that is the start pose ``calibrate --truth`` fits. A start pose (x₀, y₀, θ₀) moves the
-    whole track rigidly, so the aligned track is integrated again from it."""
-    from odomkit.evaluate import umeyama_se2
-    from odomkit.track import dead_reckon_log
-
-    log_t = np.asarray(log.t, dtype=float)
-
-    def at_fixes(poses: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.column_stack([np.interp(t, log_t, poses[:, 0]), np.interp(t, log_t, poses[:, 1])])
-
-    origin = dead_reckon_log(log, robot, "exact", np.zeros(3)).poses
-    phi, shift = umeyama_se2(at_fixes(origin), xy[:, :2])
-    poses = dead_reckon_log(log, robot, "exact", (float(shift[0]), float(shift[1]), phi)).poses
-    return poses, at_fixes(poses) - xy[:, :2]
 
 
 def _draw_fix_errors(ax: Axes, t: NDArray[np.float64], error: NDArray[np.float64], *, colour: str, label: str,
