@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.calibrate.exact import ExactCalibration
+from odomkit.calibrate.residuals import CalibratedRobot
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
 from odomkit.robot import Robot
@@ -125,7 +126,7 @@ def _rms(log: OdometryLog, robot: Robot, truth: Truth) -> float:
     return float(np.sqrt(np.mean(np.sum(error**2, axis=1))))
 
 
-def calibrate_halves(log: OdometryLog, truth: Truth, robot: Any) -> list[HalfFit] | None:
+def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot) -> list[HalfFit] | None:
     """Each half of one drive calibrated alone from its fixes, and each half's parameters
     tried on the other half.
 
