@@ -146,12 +146,43 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
              or name.lower() in HEADER_ALIASES]
     unknown = [name for name in header if name not in times and name not in known]
     if len(times) != 1 or not known or unknown:
-        why = (f"its header names {', '.join(repr(u) for u in unknown)}, not odomkit's own names" if unknown
-               else "its header names no time column (t, time, timestamp or stamp)" if not times
-               else "its header names more than one time column" if len(times) > 1
-               else "its header names no channel")
-        raise InputError(f"{hint}; {why}", source=source)
+        raise InputError(f"{hint}; {_why_not_read(times, known, unknown)}", source=source)
     return {"t": times[0], **{HEADER_ALIASES.get(name.lower(), name): name for name in known}}
+
+
+def _time_like(name: str) -> bool:
+    """Whether a header name not in :data:`TIME_NAMES` may still hold a time (``Seconds``,
+    ``time_s``, ``Timestamp (ns)``), for the ``--columns`` hint."""
+    import re
+
+    words = set(re.findall(r"[a-z]+", name.lower()))
+    return "time" in name.lower() or "stamp" in name.lower() or bool(
+        words & {"t", "sec", "secs", "second", "seconds"})
+
+
+def _why_not_read(times: Sequence[str], known: Sequence[str], unknown: Sequence[str]) -> str:
+    """Why a header is not read by its own names: every name odomkit does not know, and
+    which time column it has (none, several, or one beside other names that look like a
+    time, e.g. a CAN log's wall-clock ``Time`` and its ``Seconds``)."""
+    def names(found: Sequence[str]) -> str:
+        return ", ".join(repr(n) for n in found)
+
+    said = [f"its header names {names(unknown)}, not odomkit's own names"] if unknown else []
+    other = [n for n in unknown if _time_like(n)]
+    pick = "map the one that holds the time as t=<header name>"
+    if len(times) > 1:
+        said.append(f"it names {len(times)} time columns, {names([*times, *other])}: {pick}")
+    elif not times:
+        said.append("it names no time column (t, time, timestamp or stamp)"
+                    + (f"; {names(other)} may be one: map it as t=<header name>" if other else ""))
+    elif other:
+        said.append(f"it names more than one time column, {times[0]!r} (odomkit's name for t) and "
+                    f"{names(other)}: {pick}")
+    elif unknown:
+        said.append(f"{times[0]!r} would be taken as the time column t")
+    if not known and not unknown:
+        said.append("it names no channel")
+    return "; ".join(said)
 
 
 def _check_targets(targets: Sequence[str], source: str) -> None:
@@ -181,17 +212,25 @@ def _check_targets(targets: Sequence[str], source: str) -> None:
                          source=source)
 
 
-def _in_order(columns: Sequence[str], layout: TextLayout, source: str) -> dict[str, int]:
-    """Column index of each channel named in order."""
-    if layout.header is not None and any(map(is_number, layout.header)):
-        raise InputError("this line mixes names and numbers: a header holds names only, a data row "
-                         "numbers only; fix the row, or delete it if it is a header",
-                         source=source, line=layout.header_line)
+def _in_order(columns: Sequence[str], layout: TextLayout, text: str,
+              source: str) -> tuple[TextLayout, dict[str, int]]:
+    """Column index of each channel named in order (and the layout: a first line taken for
+    a header, because a column not read holds text, is a data row when every column read
+    holds a number there)."""
+    index = {key: i for i, key in enumerate(columns) if key != SKIP_COLUMN}
+    if layout.header is not None and len(columns) <= layout.ncols:
+        read = [layout.header[i] for i in index.values()]
+        if all(map(is_number, read)):
+            layout = sniff_layout(text, source, header=False)
+        elif any(map(is_number, read)):
+            raise InputError("this line mixes names and numbers: a header holds names only, a data row "
+                             "numbers in the columns --columns reads; fix the row, or delete it if it "
+                             "is a header", source=source, line=layout.header_line)
     if len(columns) > layout.ncols:
         raise InputError(f"--columns names {len(columns)} columns, the file has {layout.ncols} "
                          f"({layout.delimiter_name}-separated)", source=source,
                          line=layout.header_line or None)
-    return {key: i for i, key in enumerate(columns) if key != SKIP_COLUMN}
+    return layout, index
 
 
 def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
@@ -306,26 +345,26 @@ def read_csv_log(
         layout, index = _by_header(columns, layout, text, source)
         labels = {key: f"column {name!r}" for key, name in columns.items()}
     else:
-        index = _in_order(columns, layout, source)
+        layout, index = _in_order(columns, layout, text, source)
         labels = {key: f"column {i + 1}" for key, i in index.items()}
     counters = sorted({col for key, col in index.items() if key in INCREMENT_CHANNELS}) if cumulative else []
+    # Only the columns named are read as numbers: the others may hold text (a CAN log's date).
     table = read_table(path, layout.ncols, delimiter=layout.delimiter, skip_header=layout.header_line,
-                       integer_columns=counters, text=text)
-    data = table.values
-    check_time_order(data[:, index["t"]], table)
-    t = to_seconds(data[:, index["t"]], seconds)
+                       integer_columns=counters, text=text, usecols=sorted(set(index.values())))
+    check_time_order(table.column(index["t"]), table)
+    t = to_seconds(table.column(index["t"]), seconds)
     channels = {}
     for key, col in index.items():
         if key in UNIT_COLUMNS:
             channel, si_per_unit = UNIT_COLUMNS[key]
-            channels[channel] = data[:, col] * si_per_unit
+            channels[channel] = table.column(col) * si_per_unit
             continue
         if key not in KNOWN_CHANNELS:
             continue
         if key in INCREMENT_CHANNELS and cumulative:
             channels[key] = counter_increments(table.counter(col, wrap_bits), wrap_bits)
             continue
-        channels[key] = data[:, col].copy()
+        channels[key] = table.column(col).copy()
         if key in INCREMENT_CHANNELS:
             warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
         elif key in ("steer", "yaw_rate", "speed"):
@@ -335,6 +374,6 @@ def read_csv_log(
     if gt_keys:
         if len(gt_keys) != 3:
             raise InputError("ground truth needs all of gt_x, gt_y, gt_theta", source=source)
-        truth = np.column_stack([data[:, index[k]] for k in GROUND_TRUTH_FIELDS])
+        truth = np.column_stack([table.column(index[k]) for k in GROUND_TRUTH_FIELDS])
         truth[:, 2] = unwrap_angle(truth[:, 2])
     return OdometryLog(t, channels, truth, source, {"format": "csv", "delimiter": layout.delimiter_name})

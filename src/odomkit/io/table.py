@@ -5,6 +5,10 @@ and give the same numbers and the same messages: polars (the ``fast`` extra, 10x
 large single-character-delimited files) when it accepts the whole table, numpy otherwise.
 Counter columns can be read as exact 64-bit integers (:meth:`NumericTable.counter`), so
 that a 64-bit encoder count keeps its low bits (a float64 holds 2**63 only to ±1024).
+
+Only the columns asked for (``usecols``) are read as numbers; the others may hold anything
+(a wall-clock date, a gear name, nothing), but every row must still have every column: a
+delimiter inside a text field would shift the numbers after it into the wrong columns.
 """
 
 from __future__ import annotations
@@ -54,14 +58,17 @@ class NumericTable:
 
     Parameters
     ----------
-    values : ndarray, shape (N, ncols)
-        Every field as float64.
+    values : ndarray, shape (N, len(columns))
+        The fields of the columns read, as float64 (:meth:`column` finds one by its place
+        in the file).
     integers : mapping of int to ndarray of int64, shape (N,)
-        Exact integers of the requested columns (0-based) that hold integers only; a
-        count at or above 2**63 is kept modulo 2**64 (two's complement), which is all that
-        differencing and unwrapping need.
+        Exact integers of the requested columns (0-based, as in the file) that hold
+        integers only; a count at or above 2**63 is kept modulo 2**64 (two's complement),
+        which is all that differencing and unwrapping need.
     source : str
         The file, for messages.
+    columns : tuple of int
+        The file's column (0-based) of each column of ``values``, increasing.
     """
 
     values: NDArray[np.float64]
@@ -69,6 +76,13 @@ class NumericTable:
     source: str
     _text: str = field(repr=False)  # the file's text, read again only to name a line
     _skip: int = field(repr=False)
+    columns: tuple[int, ...]
+
+    def column(self, column: int) -> NDArray[np.float64]:
+        """The values of file column ``column`` (0-based), shape (N,); it must have been read."""
+        if column not in self.columns:
+            raise ValueError(f"column {column} was not read (read: {self.columns})")
+        return self.values[:, self.columns.index(column)]
 
     def line(self, row: int) -> int:
         """File line number of data row ``row`` (blank and comment lines do not count)."""
@@ -90,7 +104,7 @@ class NumericTable:
         """
         counts = self.integers.get(column)
         if counts is None:
-            column_values = self.values[:, column]
+            column_values = self.column(column)
             whole = np.abs(column_values) <= 2.0**53
             whole &= column_values == np.round(column_values)
             if whole.all():
@@ -115,9 +129,10 @@ class NumericTable:
 
 def read_table(
     path: str | Path, ncols: int, delimiter: str | None = None, skip_header: int = 0, *,
-    integer_columns: Sequence[int] = (), text: str | None = None,
+    integer_columns: Sequence[int] = (), text: str | None = None, usecols: Sequence[int] | None = None,
 ) -> NumericTable:
-    """Read an ``(N, ncols)`` numeric table; reject missing files, ragged rows, text, NaN.
+    """Read a table of ``ncols`` columns, the ones in ``usecols`` as numbers; reject missing
+    files, ragged rows, and text or NaN in a column read.
 
     Parameters
     ----------
@@ -126,9 +141,22 @@ def read_table(
     delimiter : None for any whitespace, else e.g. ","
     skip_header : lines to skip at the top
     integer_columns : columns (0-based) to read also as exact integers where they hold them
+        (they are read whether or not ``usecols`` names them)
     text : the file's text if the caller has read it already
+    usecols : columns (0-based) to read as numbers; None: all. The others may hold text or
+        nothing: a table of numbers only is read whole (the fast path, which also checks
+        every row's field count), any other by these columns only, and its field counts
+        checked after.
+
+    Returns
+    -------
+    NumericTable
+        ``values`` of shape (N, number of columns read), in file order (:meth:`NumericTable.column`).
     """
     source = str(path)
+    used = tuple(range(ncols)) if usecols is None else tuple(sorted({*usecols, *integer_columns}))
+    if not used or used[0] < 0 or used[-1] >= ncols:
+        raise ValueError(f"usecols {usecols} must name columns 0 .. {ncols - 1}")
     if text is None:
         text = read_text(path)
     body = text.split("\n", skip_header)[-1] if skip_header else text
@@ -137,11 +165,27 @@ def read_table(
     if _INDENTED_EMPTY.search(body):
         # numpy and polars take '  # note' or '   ' for a row when a delimiter is set
         body = _INDENTED_EMPTY.sub("", body)
-    found = _read_with_polars(body, ncols, delimiter, integer_columns)
+    # First as a table of numbers only (the fast path of a numeric file, which also checks
+    # that every row has every column), then, if some other column holds text, its columns
+    # ``used`` only.
+    every = tuple(range(ncols))
+    found = _read_with_polars(body, ncols, delimiter, integer_columns, every)
+    whole = found is not None
+    if found is None and used != every:
+        found = _read_with_polars(body, ncols, delimiter, integer_columns, used)
     if found is None:
-        found = _read_with_numpy(body, ncols, delimiter, integer_columns, source, text, skip_header)
+        found, whole = _read_with_numpy(body, ncols, delimiter, integer_columns, source, text,
+                                        skip_header, used)
     values, integers = found
-    table = NumericTable(values, integers, source, text, skip_header)
+    if used != every and whole:
+        values = values[:, used]
+    elif used != every:
+        # Neither parser looked at the other columns, so neither checked that each row has
+        # them all: a delimiter inside a text field would shift the numbers after it.
+        ragged = _first_bad_line(text, ncols, delimiter, skip_header, source, used=())
+        if ragged is not None:
+            raise ragged
+    table = NumericTable(values, integers, source, text, skip_header, used)
     _check_finite(table)
     return table
 
@@ -166,42 +210,64 @@ _Parsed = tuple[NDArray[np.float64], dict[int, NDArray[np.int64]]]
 
 
 def _read_with_polars(body: str, ncols: int, delimiter: str | None,
-                      integer_columns: Sequence[int]) -> _Parsed | None:
+                      integer_columns: Sequence[int], used: Sequence[int]) -> _Parsed | None:
     """The fast path. Returns None, so that numpy's path reads the text and names the
     offending line, when polars is missing, the table is whitespace-separated (polars needs
-    one separator character), or polars finds anything it cannot read as ``ncols`` numbers
-    (integers in ``integer_columns``: a count written as ``12.0`` or above 2**63 is left
-    to numpy, whose rules then decide alike for both paths)."""
+    one separator character), or polars finds anything it cannot read as numbers in the
+    columns ``used`` (integers in ``integer_columns``: a count written as ``12.0`` or above
+    2**63 is left to numpy, whose rules then decide alike for both paths). The other
+    columns are typed as text and not read."""
     pl: Any = polars_module()
     if pl is None or delimiter is None or len(delimiter) != 1:
         return None
-    schema = {f"c{i}": pl.Int64 if i in integer_columns else pl.Float64 for i in range(ncols)}
+    schema = {f"c{i}": pl.Int64 if i in integer_columns else pl.Float64 if i in used else pl.String
+              for i in range(ncols)}
+    # With text columns, quotes are plain characters, as they are to numpy: a quoted text
+    # field could otherwise swallow the delimiters and line ends up to the next quote.
+    options = {} if len(used) == ncols else {"columns": list(used), "quote_char": None}
     try:
         frame = pl.read_csv(body.encode(), has_header=False, separator=delimiter,
-                            comment_prefix="#", schema=schema)
+                            comment_prefix="#", schema=schema, **options)
     except Exception:  # noqa: BLE001 - any refusal: let numpy find and name the problem
         return None
     if frame.height == 0 or frame.null_count().sum_horizontal().item() > 0:
         return None
     integers = {i: frame[f"c{i}"].to_numpy().astype(np.int64, copy=False) for i in integer_columns}
     values = frame.select(pl.all().cast(pl.Float64)).to_numpy().astype(float, copy=False)
-    return values.reshape(-1, ncols), integers
+    return values.reshape(-1, len(used)), integers
 
 
-def _read_with_numpy(body: str, ncols: int, delimiter: str | None, integer_columns: Sequence[int],
-                     source: str, text: str, skip: int) -> _Parsed:
+def _loadtxt(body: str, delimiter: str | None, usecols: Sequence[int] | None,
+             source: str) -> NDArray[np.float64]:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("error")  # numpy warns on an empty file
-            data = np.loadtxt(io.StringIO(body), delimiter=delimiter, ndmin=2, dtype=float,
-                              comments="#")
+            return np.loadtxt(io.StringIO(body), delimiter=delimiter, ndmin=2, dtype=float,
+                              comments="#", usecols=usecols)
     except UserWarning:
         raise InputError("the file is empty: no data rows", source=source) from None
+
+
+def _read_with_numpy(body: str, ncols: int, delimiter: str | None, integer_columns: Sequence[int],
+                     source: str, text: str, skip: int,
+                     used: Sequence[int]) -> tuple[_Parsed, bool]:
+    """The table read by numpy: every column if all are numbers, else the columns ``used``;
+    and whether every column was read (so that numpy checked each row's field count)."""
+    whole = True
+    try:
+        try:
+            data = _loadtxt(body, delimiter, None, source)
+        except ValueError:
+            if len(used) == ncols:
+                raise
+            whole = False  # perhaps a column not read holds text: read the others
+            data = _loadtxt(body, delimiter, used, source)
     except ValueError as exc:
-        raise _first_bad_line(text, ncols, delimiter, skip, source, exc) from None
+        raise (_first_bad_line(text, ncols, delimiter, skip, source, used)
+               or InputError(f"could not be read as a numeric table ({exc})", source=source)) from None
     if data.size == 0:
         raise InputError("the file is empty: no data rows", source=source)
-    if data.shape[1] != ncols:
+    if whole and data.shape[1] != ncols:
         raise InputError(f"expected {ncols} columns, found {data.shape[1]}", source=source,
                          line=skip + 1)
     integers = {}
@@ -209,7 +275,7 @@ def _read_with_numpy(body: str, ncols: int, delimiter: str | None, integer_colum
         exact = _exact_integers(body, delimiter, col)
         if exact is not None:
             integers[col] = exact
-    return data, integers
+    return (data, integers), whole
 
 
 def _exact_integers(body: str, delimiter: str | None, col: int) -> NDArray[np.int64] | None:
@@ -227,8 +293,10 @@ def _exact_integers(body: str, delimiter: str | None, col: int) -> NDArray[np.in
 
 
 def _first_bad_line(text: str, ncols: int, delimiter: str | None, skip: int, source: str,
-                    exc: ValueError) -> InputError:
-    """Re-scan a table that numpy refused, to say exactly where and why."""
+                    used: Sequence[int]) -> InputError | None:
+    """Re-scan a table to say exactly where and why it cannot be read: the error for the
+    first line without ``ncols`` fields or with a field in a column of ``used`` that is not
+    a number; None if there is none."""
     for lineno, raw in enumerate(text.split("\n"), start=1):
         fields = None if lineno <= skip else _fields(raw, delimiter)
         if fields is None:
@@ -236,11 +304,11 @@ def _first_bad_line(text: str, ncols: int, delimiter: str | None, skip: int, sou
         if len(fields) != ncols:
             return InputError(f"expected {ncols} columns, found {len(fields)}",
                               source=source, line=lineno)
-        for col, text_field in enumerate(fields, start=1):
-            if not is_number(text_field):
-                return InputError(f"column {col}: {text_field.strip()!r} is not a number",
+        for col in used:
+            if not is_number(fields[col]):
+                return InputError(f"column {col + 1}: {fields[col].strip()!r} is not a number",
                                   source=source, line=lineno)
-    return InputError(f"could not be read as a numeric table ({exc})", source=source)
+    return None
 
 
 def _check_finite(table: NumericTable) -> None:
@@ -248,7 +316,7 @@ def _check_finite(table: NumericTable) -> None:
     if bad.any():
         row, col = np.argwhere(bad)[0]
         raise InputError(
-            f"column {col + 1} is {table.values[row, col]}; odometry needs finite numbers "
+            f"column {table.columns[col] + 1} is {table.values[row, col]}; odometry needs finite numbers "
             "(drop or interpolate the row first)",
             source=table.source, line=table.line(int(row)),
         )

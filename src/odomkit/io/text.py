@@ -194,9 +194,11 @@ class TextLayout:
 
 
 def _candidate(sample: list[tuple[int, str]], delimiter: str | None,
-               header: bool | None) -> tuple[TextLayout, int, int]:
-    """The layout ``delimiter`` gives the sample, how many data lines it reads as ``ncols``
-    numbers (at least two), and how many fields the first data line has."""
+               header: bool | None) -> tuple[TextLayout, int, int, int, int]:
+    """The layout ``delimiter`` gives the sample; how many data lines it reads as ``ncols``
+    numbers (at least two); how many as ``ncols`` fields of any kind (a column that is not
+    read may hold text) and how many numbers those lines hold; and how many fields the
+    first data line has."""
     first_line, first = sample[0]
     fields = split_fields(first, delimiter)
     has_header = not all(map(is_number, fields)) if header is None else header
@@ -204,12 +206,16 @@ def _candidate(sample: list[tuple[int, str]], delimiter: str | None,
     names = tuple(_header_fields(first, delimiter)) if has_header else None
     width = len(split_fields(data[0][1], delimiter)) if data else 0
     ncols = len(names) if names is not None else width
-    fits = 0
+    fits = even = numbers = 0
     for _, content in data:
         row = split_fields(content, delimiter)
-        fits += ncols >= 2 and len(row) == ncols and all(map(is_number, row))
+        if ncols >= 2 and len(row) == ncols:
+            even += 1
+            count = sum(map(is_number, row))
+            numbers += count
+            fits += count == ncols
     layout = TextLayout(delimiter, names, first_line if has_header else 0, ncols)
-    return layout, fits, width
+    return layout, fits, even, numbers, width
 
 
 def _decimal_comma(sample: list[tuple[int, str]], source: str) -> InputError | None:
@@ -244,9 +250,11 @@ def sniff_layout(text: str, source: str, *, header: bool | None = None) -> TextL
     tried on the first 64 lines that hold something; the first line is a header when some
     of its fields are not numbers (or as ``header`` says). The first separator that reads
     every sampled data line as the same number (two or more) of numbers wins. When none
-    does, the one that reads the most lines so (then: splits the first data line into the
-    most fields, then the most names) is returned, so that the table reader names the line and field that is
-    wrong.
+    does, the one that reads the most lines so (then: splits the most lines into as many
+    fields as the table has columns, as a column of text leaves it doing, with the most
+    numbers among them; where none does, splits the first data line into the most fields,
+    then the most names) is returned, so that the table reader reads the columns asked for
+    or names the line and field that is wrong.
 
     Parameters
     ----------
@@ -272,15 +280,20 @@ def sniff_layout(text: str, source: str, *, header: bool | None = None) -> TextL
     if not sample:
         raise InputError("the file is empty: no data rows", source=source)
     candidates = [_candidate(sample, d, header) for d in DELIMITERS]
-    for layout, fits, _ in candidates:
+    for layout, fits, *_ in candidates:
         data_lines = len(sample) - (layout.header_line > 0)
         if data_lines and fits == data_lines:
             return layout
     problem = _decimal_comma(sample, source)
     if problem is not None:
         raise problem
-    # max() keeps the first of equals: the order of DELIMITERS breaks ties.
-    layout, fits, width = max(candidates, key=lambda c: (c[1], c[2], c[0].ncols))
+    # max() keeps the first of equals: the order of DELIMITERS breaks ties. After the lines
+    # of numbers, the lines of as many fields as columns count, then their numbers: a column
+    # of text (a date, a note) leaves no line all numbers, but its own separator still
+    # splits every line alike, and whitespace splitting a date in two gains no number.
+    # Only where no separator splits a line so do the most fields decide.
+    layout, fits, _, _, width = max(candidates, key=lambda c: (
+        c[1], c[2], c[3], 0 if c[2] else c[4], 0 if c[2] else c[0].ncols))
     if layout.ncols < 2 and width < 2:
         raise InputError("one column only: expected columns separated by commas, semicolons, tabs "
                          "or whitespace (t and at least one channel)", source=source,

@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -111,28 +112,41 @@ def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
     return items
 
 
-def _table(path: Path, rows: list[tuple[int, list[str]]], ncols: int) -> NDArray[np.float64]:
-    """The fields as an (n, ncols) float array; errors name the line and column."""
+def _table(path: Path, rows: list[tuple[int, list[str]]], ncols: int,
+           used: Sequence[int] | None = None) -> NDArray[np.float64]:
+    """The fields as an (n, ncols) float array; errors name the line and column.
+
+    Only the columns ``used`` (None: all) are read as numbers; the others may hold anything
+    (a wall-clock date, nothing) and are NaN in the array. Every row must still have
+    ``ncols`` fields: a delimiter inside a text field would shift the numbers after it.
+    """
     for lineno, fields in rows:
         if len(fields) != ncols:
             raise InputError(f"expected {ncols} columns, found {len(fields)}", source=str(path),
                              line=lineno)
+    cols = list(range(ncols)) if used is None else list(used)
     try:
-        data = np.array([f for _, f in rows], dtype=float)
+        picked = np.array([f for _, f in rows] if used is None
+                          else [[f[i] for i in cols] for _, f in rows], dtype=float)
     except ValueError:
         for lineno, fields in rows:
-            for col, text in enumerate(fields, start=1):
-                if not is_number(text):
-                    raise InputError(f"column {col}: {text!r} is not a number", source=str(path),
+            for col in cols:
+                if not is_number(fields[col]):
+                    raise InputError(f"column {col + 1}: {fields[col]!r} is not a number", source=str(path),
                                      line=lineno) from None
         raise
-    bad = ~np.isfinite(data)
+    picked = picked.reshape(-1, len(cols))
+    bad = ~np.isfinite(picked)
     if bad.any():
-        row, col = np.argwhere(bad)[0]
-        raise InputError(f"column {col + 1} is {data[row, col]}; truth needs finite numbers (leave "
+        row, k = np.argwhere(bad)[0]
+        raise InputError(f"column {cols[k] + 1} is {picked[row, k]}; truth needs finite numbers (leave "
                          "the fix out: a gap is left out of the scores and counted)",
                          source=str(path), line=rows[row][0])
-    return data.reshape(-1, ncols)
+    if used is None:
+        return picked
+    data = np.full((len(rows), ncols), np.nan)
+    data[:, cols] = picked
+    return data
 
 
 def _csv_columns(path: Path, header: list[str] | None, ncols: int,
@@ -350,6 +364,12 @@ def read_truth(
         raise InputError(f"--truth-columns applies to csv truth, not {fmt}")
     text = read_text(path, kind="truth file")
     layout = sniff_layout(text, str(path))
+    if isinstance(spec, list) and layout.header is not None and fmt in ("auto", "csv"):
+        read = [layout.header[i] for i, key in enumerate(spec) if key != "_" and i < layout.ncols]
+        if read and all(map(is_number, read)):
+            # Numbers in every column read: a data row, taken for a header because a column
+            # not read holds text (a date); there is no header.
+            layout = sniff_layout(text, str(path), header=False)
     delimiter = layout.delimiter
     header = None if layout.header is None else list(layout.header)
     lines = [(n, s) for n, s in content_lines(text) if n > layout.header_line]
@@ -370,7 +390,9 @@ def read_truth(
                          "(13 numbers: t r11 r12 r13 px r21 r22 r23 py r31 r32 r33 pz)", source=str(path))
     want = {"tum": 8, "kitti": 13}.get(fmt, ncols)
     rows = [(n, split_fields(s, delimiter)) for n, s in lines]
-    data = _table(path, rows, want)
+    index = _csv_columns(path, header, ncols, spec) if fmt == "csv" else {}
+    # Only the columns named are read as numbers: the others may hold text (a GPS log's date).
+    data = _table(path, rows, want, sorted(set(index.values())) if fmt == "csv" else None)
     theta: NDArray[np.float64] | None
     geo, north = None, False  # GPS fixes (lat, lon, alt, heading) and whether the heading is given
     if fmt == "tum":
@@ -388,7 +410,6 @@ def read_truth(
         t, xy = data[:, 0], data[:, [4, 8]]
         theta = np.arctan2(data[:, 5], data[:, 1])  # atan2(r21, r11)
     else:
-        index = _csv_columns(path, header, ncols, spec)
         t = data[:, index["t"]]
         if "lat" in index:
             _check_geo_range(path, rows, data, header, index)
