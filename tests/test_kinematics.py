@@ -196,6 +196,10 @@ def test_a_steering_wheel_angle_read_as_the_road_wheel_angle_is_warned_about():
     wheel = np.radians(80.0)
     with pytest.warns(UserWarning, match=r"road-wheel angle reaches 1.4 rad \(80°\).*steering_ratio"):
         body_steps(Car(2.7), _log({"speed": 5.0, "steer": wheel}))
+    # 100° read as the road wheel's angle is refused outright, naming the ratio (it was
+    # refused as a rear wheel "beyond the centre of the turn", with no wheel offset at all).
+    with pytest.warns(UserWarning), pytest.raises(InputError, match=r"past ±90°.*steering_ratio"):
+        body_steps(Car(2.7), _log({"speed": 5.0, "steer": np.radians(100.0)}))
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         body_steps(Car(2.7, steering_ratio=15.0), _log({"speed": 5.0, "steer": wheel}))

@@ -110,7 +110,12 @@ def _car_denominator(steer: NDArray[np.float64], wheel_base: float, encoder_offs
                                                NDArray[np.float64], NDArray[np.float64]]:
     """cos α, sin α, D and r = cos α − sin α·H/L of :func:`car_body_steps` (D = r for a rear
     wheel, √(r² + sin² α) for a front wheel); a ModelError where a rear measuring wheel is at
-    or beyond the centre of the turn (r ≤ 0: its speed says nothing about the car's)."""
+    or beyond the centre of the turn (r ≤ 0: its speed says nothing about the car's), or
+    the steering angle is at or past ±90°."""
+    if np.any(np.abs(steer) >= np.pi / 2):
+        raise ModelError(f"a steering angle of {float(np.max(np.abs(steer))):.3g} rad is at or past ±90°: "
+                         "no car's road wheel steers so (a steering-wheel angle needs the robot file's "
+                         "steering_ratio; degrees need steer_deg)")
     c, sn = np.cos(steer), np.sin(steer)
     r = c - sn * (encoder_offset / wheel_base)
     if encoder_at == "front":

@@ -234,5 +234,9 @@ def test_calibrate_prints_the_fitted_clock_offset_in_its_text(run_cli, tmp_path)
     line = next(x for x in text.splitlines() if "truth clock" in x)
     assert f"{offset['value']:+.6f} s ± {offset['std_error']:.2g}" in line
     assert abs(offset["value"] - 0.3) < 0.01
+    assert f"(the truth's fixes lag the log by {abs(offset['value']):.3g} s)" in line
     code, text, _ = run_cli(*args, "--truth-time-offset", "0.25")
     assert code == 0 and "+0.250000 s (given)" in text
+    # an early truth clock leads: a negative lag read oddly
+    code, text, _ = run_cli(*args, "--truth-time-offset", "-0.25")
+    assert code == 0 and "-0.250000 s (given)  (the truth's fixes lead the log by 0.25 s)" in text

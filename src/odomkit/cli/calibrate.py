@@ -119,8 +119,9 @@ def _print_text(out: dict[str, Any]) -> None:
         offset = out.get("truth_time_offset")
         if offset is not None:  # a fix stamped t is the pose at log time t - offset
             how = f"± {offset['std_error']:.2g}" if offset.get("fitted") else "(given)"
+            way = "lag" if offset["value"] >= 0 else "lead"
             print(f"  {'truth clock':16s} {offset['value']:+.6f} s {how}  "
-                  "(the truth's fixes lag the log by this)")
+                  f"(the truth's fixes {way} the log by {abs(offset['value']):.3g} s)")
         if "E_d" in out:
             print(f"  E_d = {out['E_d']:.6f}  E_b = {out['E_b']:.6f}  E_s = {out['E_s']:.6f}  "
                   f"wheel base {out['wheel_base']:.6f} m")
