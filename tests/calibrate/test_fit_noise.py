@@ -185,6 +185,22 @@ def test_too_few_windows_are_warned_about():
     assert any("too few windows" in w for w in fit.warnings)
 
 
+def test_fewer_numbers_than_free_parameters_are_refused():
+    """One 30 s window of one log (3 numbers: x, y, θ at its end) for 5 free variances (two
+    wheels' k, three biases): no fit can be determined, and none is written. (It was fitted
+    and written with a warning, as a real car's 60 s window was with 8 parameters.) Two
+    windows (6 numbers) are fitted, with the too-few warning."""
+    from odomkit.errors import InputError
+
+    bases, models = synthetic_bases(1, n_logs=1, n=620, window=30.0)
+    assert sum(len(b.windows) for b in bases) == 1
+    with pytest.raises(InputError, match=r"1 window\(s\) give 3 numbers for 5 free noise parameter\(s\)"):
+        fit_noise(bases, models, ROBOT, kinds=("white", "bias"))
+    two, models = synthetic_bases(1, n_logs=1, n=1240, window=30.0)
+    fit = fit_noise(two, models, ROBOT, kinds=("white", "bias"))
+    assert any("too few windows" in w for w in fit.warnings)
+
+
 def test_cross_validation_refits_without_each_log():
     bases, models = synthetic_bases(5, n_logs=4, bias=False)
     fit = fit_noise(bases, models, ROBOT, cross_validate=True)

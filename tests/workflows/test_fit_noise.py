@@ -187,8 +187,8 @@ def test_it_never_overwrites_without_force(run_cli, tmp_path):
     line = _error(run_cli, "--robot", ROBOT, "--log", RUNS[0], "--out", out)
     assert "--force" in line
     assert out.read_text() == "precious"
-    code, _, stderr = run_cli("fit-noise", "--robot", ROBOT, "--log", RUNS[0], "--out", out, "--force",
-                              "--json")
+    code, _, stderr = run_cli("fit-noise", "--robot", ROBOT, "--log", RUNS[0], "--window", "10s",
+                              "--out", out, "--force", "--json")
     assert code == 0, stderr
     assert "[noise]" in out.read_text()
 

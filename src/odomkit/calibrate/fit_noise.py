@@ -34,7 +34,7 @@ from scipy.optimize import brentq
 from scipy.stats import chi2
 
 from odomkit.calibrate.window_likelihood import WindowLikelihood
-from odomkit.errors import ModelError
+from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import coverage
 from odomkit.noise import NOISE_MODELS, NoiseModel, NoiseSet
 from odomkit.noise.base import variance_power
@@ -510,6 +510,13 @@ def fit_noise(
     free = np.array([k for k, p in enumerate(params) if p.free], dtype=np.intp)
     if free.size == 0:
         raise ModelError("nothing to fit: no free noise parameter of the asked kinds")
+    observed = int(np.sum(everything.nobs))
+    if observed <= free.size:
+        # Each window end gives 2 numbers (3 with a truth heading): no more numbers than
+        # variances leaves the likelihood flat in some direction, whatever it prints.
+        raise InputError(f"{everything.n_windows} window(s) give {observed} numbers for {free.size} free "
+                         "noise parameter(s): the fit is undetermined; use shorter windows or more logs, "
+                         "or fit fewer kinds (--kinds white)")
     v0 = np.array([held.get(p.name, 0.0) ** 2 if p.kind == "truth"
                    else models[p.model].variance_parameters()[p.name] for p in params])
     lik = everything
