@@ -103,3 +103,24 @@ def test_section_keys_are_anchors_and_must_differ():
     assert anchors == ["#a", "#b"] and ids == ["a", "b"]
     with pytest.raises(ValueError, match="must differ"):
         render_report("t", [Section("a", "A", ()), Section("a", "B", ())])
+
+
+def test_the_noise_sections_coverage_table_counts_each_noises_own_window_ends():
+    """Against a noisy GPS, the fitted truth noise can leave out window starts whose heading
+    its fixes no longer support, so the two noises score different numbers of ends (a real
+    car: 29 and 22). The table said "Fraction of 22 window ends" over both columns; it must
+    give each count."""
+    from odomkit.workflows.report import ReportFigures, _noise_section
+
+    cover = {"0.5": 0.5, "0.9": 0.9, "0.95": 0.95, "0.99": 0.99}
+    fit = {"windows": 27, "parameters": {"k_left": 0.001}, "interval95": {"k_left": [0.0, 0.002]}}
+    figures = ReportFigures()
+    figures.enabled = False
+    section = _noise_section(fit, None, {"k_left": 0.001}, {"windows": 29, "coverage": cover},
+                             {"windows": 22, "coverage": cover}, figures)
+    captions = [block.caption for block in section.blocks if hasattr(block, "caption")]
+    said = next(c for c in captions if c.startswith("Fraction of"))
+    assert "29 with the robot file's noise, 22 with the fitted noise" in said
+    same = _noise_section(fit, None, {"k_left": 0.001}, {"windows": 22, "coverage": cover},
+                          {"windows": 22, "coverage": cover}, figures)
+    assert any(getattr(b, "caption", "").startswith("Fraction of 22 window ends") for b in same.blocks)

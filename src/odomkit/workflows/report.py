@@ -332,9 +332,13 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
                         f"Fitted on {fit['windows']} windows (in the robot file's units: k_* m^½, "
                         "sigma_* as named)"))
     n = ev_fit["windows"]
+    # The two noises may score different ends: a position-only truth's fitted noise can leave
+    # out starts whose heading its fixes no longer support (odomkit.truth.MAX_HEADING_SIGMA).
+    scored = (f"{n} window ends" if ev["windows"] == n else
+              f"the window ends ({ev['windows']} with the robot file's noise, {n} with the fitted noise: "
+              "a start heading the truth's fitted noise cannot support is left out)")
     blocks.append(coverage_table([("robot file's noise", ev["coverage"], ""),
-                                  ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")],
-                                 f"{n} window ends"))
+                                  ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")], scored))
     fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
         ax[0], {"robot file's noise": ev["coverage"], "fitted noise (in-sample)": ev_fit["coverage"]},
         n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
