@@ -338,3 +338,10 @@ def test_few_window_ends_are_warned_about_with_an_honest_models_spread(tmp_path)
     said = [str(w.message) for w in caught if "window end" in str(w.message)]
     assert f"{low / 6:.2f}..{high / 6:.2f}" in said[0]
     assert any("only 6 window end" in w for w in out["warnings"])
+    # Each window end is in the JSON, to find an outlier by: 10 s apart, consecutive, their
+    # NEES averaging to the pooled mean.
+    ends = out["per_log"][0]["window_ends"]
+    assert len(ends) == 6
+    assert all(e["end"] - e["start"] == pytest.approx(10.0, abs=0.02) for e in ends)
+    assert all(a["end"] == b["start"] for a, b in zip(ends[:-1], ends[1:], strict=True))
+    assert np.mean([e["nees"] for e in ends]) == pytest.approx(out["nees_position_mean"], rel=1e-12)

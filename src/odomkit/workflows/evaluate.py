@@ -71,6 +71,8 @@ class Scored:
     # (m,) log time of each window end [s], for figures over time; empty when the honesty
     # samples are track rows
     honesty_t: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    # (m,) log time of each window's start [s] (empty as honesty_t)
+    honesty_t0: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
     # The evaluated rows themselves (the whole run of a log), for figures
     rows: TrackRows | None = None
     # Why a log asked for windows has none (None: it has some, or none were asked for)
@@ -231,11 +233,25 @@ def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[
     }
 
 
+def _window_ends(s: Scored) -> dict[str, Any]:
+    """``window_ends`` of a log scored in windows: each window's ``start`` and ``end`` [s, log
+    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, so that
+    an outlier can be found and looked at; nothing for a whole-track score."""
+    if not s.honesty_t0.size:
+        return {}
+    from odomkit.evaluate import nees
+
+    q = nees(s.honesty_errors, s.honesty_cov)
+    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, strict=True)
+    return {"window_ends": [{"start": float(a), "end": float(b), "error": [float(e[0]), float(e[1])],
+                             "nees": float(n)} for a, b, e, n in rows]}
+
+
 def _report(scored: list[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
     """The pooled figures, ``per_log``, and ``warnings`` (each also raised as a UserWarning,
     which the CLI prints on stderr)."""
     out = summarise(scored, rpe_distances)
-    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances)} for s in scored]
+    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances), **_window_ends(s)} for s in scored]
     out["warnings"] = list(dict.fromkeys(w for s in scored for w in s.warnings))
     few = _few_ends_note(out["windows"])
     if few:
@@ -575,5 +591,6 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
     # found.cov holds the truth's noise at both window ends already (odomkit.window_errors).
     return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
                    honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
-                   honesty_t=log.t[found.end_rows])
+                   honesty_t=log.t[found.end_rows],
+                   honesty_t0=log.t[np.array([w.start for w in found.windows], dtype=np.int64)])
 
