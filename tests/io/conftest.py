@@ -1,4 +1,5 @@
-"""ROS bags for the tests, written with rosbags' own writers (ROS 1, ROS 2 SQLite, ROS 2 MCAP)."""
+"""ROS bags for the tests, written with rosbags' own writers (ROS 1, ROS 2 SQLite, ROS 2 MCAP), and
+the ``parser`` fixture that runs a reader test through both table parsers."""
 
 from __future__ import annotations
 
@@ -10,6 +11,18 @@ import numpy as np
 import pytest
 
 BAG_FORMATS = ("ros1", "db3", "mcap")
+
+
+@pytest.fixture(params=["polars", "numpy"])
+def parser(request, monkeypatch):
+    """Run a test through both table parsers: polars (fast extra) and numpy."""
+    import odomkit.io.table as table
+
+    if request.param == "polars":
+        pytest.importorskip("polars")
+    else:
+        monkeypatch.setattr(table, "polars_module", lambda: None)
+    return request.param
 
 
 def _build(store: Any, msgtype: str, values: dict[str, Any]) -> Any:

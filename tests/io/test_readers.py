@@ -135,17 +135,6 @@ def test_bad_robot_files(tmp_path, body, message):
     assert str(path) in str(info.value)
 
 
-@pytest.fixture(params=["polars", "numpy"])
-def parser(request, monkeypatch):
-    """Run a reader test through both parsers: polars (fast extra) and numpy."""
-    import odomkit.io.table as table
-
-    if request.param == "polars":
-        pytest.importorskip("polars")
-    else:
-        monkeypatch.setattr(table, "polars_module", lambda: None)
-    return request.param
-
 
 @pytest.mark.parametrize(("text", "message"), [
     ("t,L,R\n0,0,0\n1,2,3,4\n", "line 3: expected 3 columns, found 4"),

@@ -16,17 +16,6 @@ from odomkit.io.halmstad import read_khepera
 COLUMNS = {"t": "t", "ticks_left": "L", "ticks_right": "R"}
 
 
-@pytest.fixture(params=["polars", "numpy"])
-def parser(request, monkeypatch):
-    """Run a test through both parsers: polars (fast extra) and numpy."""
-    import odomkit.io.table as table
-
-    if request.param == "polars":
-        pytest.importorskip("polars")
-    else:
-        monkeypatch.setattr(table, "polars_module", lambda: None)
-    return request.param
-
 
 def write_bytes(tmp_path, name, data: bytes):
     path = tmp_path / name

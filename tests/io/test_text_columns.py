@@ -27,15 +27,6 @@ LOG_MAP = {"t": "Seconds", "speed_mph": "Speed (MPH)", "steer_deg": "Steering An
 GEO_MAP = "t=Seconds,lat=Latitude / Y Position (Degrees),lon=Longitude / X Position (Degrees)"
 
 
-@pytest.fixture(params=["polars", "numpy"])
-def parser(request, monkeypatch):
-    """Run a test through both table parsers: polars (fast extra) and numpy."""
-    if request.param == "polars":
-        pytest.importorskip("polars")
-    else:
-        monkeypatch.setattr(table, "polars_module", lambda: None)
-    return request.param
-
 
 def car_rows(n: int = 40, delimiter: str = ",") -> list[list[str]]:
     """Rows of a CAN log as a car writes it: a date, seconds, a fix, speed [mph], steering [deg],
