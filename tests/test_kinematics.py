@@ -187,6 +187,24 @@ def test_car_steering_wheel_angle_over_its_ratio_drives_the_circle_of_the_road_w
     assert np.hypot(*end[:2]) < 2 * v * dt  # back at the start, within a step's travel
 
 
+def test_a_variable_steering_ratio_maps_and_inverts_exactly():
+    """α = s + k·s³ + offset with s = measured / ratio, written out here; the inverse gives
+    back the measured angle; and a constant steering-wheel angle drives the circle of its
+    road-wheel angle."""
+    from odomkit.kinematics import car_measured_steer, car_road_wheel_angle
+
+    car = Car(2.7, steering_offset=0.003, steering_ratio=14.0, steering_cubic=40.0)
+    measured = np.linspace(-1.9, 1.9, 41)
+    s = measured / 14.0
+    np.testing.assert_allclose(car_road_wheel_angle(car, measured), s + 40.0 * s**3 + 0.003, rtol=1e-15)
+    for m in measured:
+        alpha = float(car_road_wheel_angle(car, m))
+        assert car_measured_steer(car, alpha) == pytest.approx(m, abs=1e-12)
+    steps = body_steps(car, _log({"speed": 5.0, "steer": 1.2}))
+    alpha = 1.2 / 14 + 40 * (1.2 / 14) ** 3 + 0.003
+    np.testing.assert_allclose(steps.dtheta, 0.5 * np.tan(alpha) / 2.7, rtol=1e-13)
+
+
 def test_a_steering_wheel_angle_read_as_the_road_wheel_angle_is_warned_about():
     """80° at the steering wheel read with ratio 1 would steer the bicycle past any car's
     lock (tan 1.4 rad = 5.7): a silently wrong track. Warned, naming steering_ratio; with the

@@ -33,7 +33,8 @@ from odomkit.log import OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
 __all__ = [
-    "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_speed_factor",
+    "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_measured_steer",
+    "car_road_wheel_angle", "car_speed_factor",
     "diff_body_jacobian", "diff_body_steps", "Method", "steering_body_jacobian", "steering_body_steps",
     "step_displacement", "step_jacobians", "tricycle_body_jacobian", "tricycle_body_steps", "unicycle_moving"
 ]
@@ -422,9 +423,30 @@ def unicycle_moving(dd: ArrayLike, yaw_rate: ArrayLike) -> NDArray[np.bool_]:
     return (np.asarray(dd) != 0) | (np.asarray(yaw_rate) != 0)
 
 
+def car_road_wheel_angle(robot: Car, measured: ArrayLike) -> NDArray[np.float64]:
+    """The bicycle's road-wheel angle α [rad] of a measured steering angle, shape as given:
+    α = s + steering_cubic·s³ + steering_offset with s = measured / steering_ratio
+    (:class:`~odomkit.robot.Car`)."""
+    s = np.asarray(measured, dtype=float) / robot.steering_ratio
+    return s + robot.steering_cubic * s**3 + robot.steering_offset
+
+
+def car_measured_steer(robot: Car, alpha: float) -> float:
+    """The measured steering angle that gives road-wheel angle ``alpha`` [rad]: the inverse
+    of :func:`car_road_wheel_angle` (Newton's method on s + k·s³ = α − offset from s = α −
+    offset; one step for k = 0)."""
+    target, k, s = alpha - robot.steering_offset, robot.steering_cubic, alpha - robot.steering_offset
+    for _ in range(50):
+        step = (s + k * s**3 - target) / (1 + 3 * k * s**2)
+        s -= step
+        if abs(step) <= 1e-15 * max(1.0, abs(s)):
+            break
+    return s * robot.steering_ratio
+
+
 def _car_steps(robot: Car, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
     travel = _travel(log, robot.m_per_tick, robot.c_scale)
-    steer = _steer_per_step(log) / robot.steering_ratio + robot.steering_offset
+    steer = car_road_wheel_angle(robot, _steer_per_step(log))
     _warn_past_lock(steer, robot, log.source)
     try:
         dd, dtheta = car_body_steps(travel, steer, robot.wheel_base, robot.encoder_offset,

@@ -294,8 +294,8 @@ class Car:
         Distance per tick of the measuring wheel [m]; converts a ``ticks`` channel only
         (``dist`` [m] and ``speed`` [m/s] are metres already).
     steering_offset : float
-        Added to the road-wheel angle [rad]: α = α_measured / steering_ratio +
-        steering_offset.
+        Added to the road-wheel angle [rad]: α = s + steering_cubic·s³ + steering_offset
+        with s = α_measured / steering_ratio.
     c_scale : float
         Dimensionless scale correction of the measuring wheel (ticks, ``dist`` and
         ``speed`` alike).
@@ -305,6 +305,12 @@ class Car:
         Read as a road-wheel angle, a steering-wheel angle of 100° would steer the bicycle
         past its lock (tan α of 1.7 rad); the offset and the steering noise are road-wheel
         radians either way.
+    steering_cubic : float
+        k [rad⁻²] of a steering ratio that varies with the angle (a variable-ratio rack):
+        the road wheel turns s + k·s³ for s = α_measured / steering_ratio. 0 (default) is a
+        constant ratio. On a real car whose calibration failed without it (a BMW, CAN
+        steering-wheel angle over 15) k came out near 40: 60 % more road-wheel angle than
+        s at 110° of steering wheel (docs/results/honesty.md).
     """
 
     type_name: ClassVar[str] = "car"
@@ -319,10 +325,12 @@ class Car:
     steering_offset: float = 0.0
     c_scale: float = 1.0
     steering_ratio: float = 1.0
+    steering_cubic: float = 0.0
 
     def __post_init__(self) -> None:
         _positive_fields(self, "wheel_base", "m_per_tick", "c_scale", "steering_ratio")
         validate.finite(self.encoder_offset, "Car.encoder_offset")
+        validate.finite(self.steering_cubic, "Car.steering_cubic")
         validate.finite(self.steering_offset, "Car.steering_offset")
         if self.encoder_at not in ENCODER_POSITIONS:
             raise ModelError(f"Car.encoder_at must be 'rear' or 'front', got {self.encoder_at!r}")

@@ -164,6 +164,25 @@ def test_car_trajectory_recovers_scale_offset_and_wheel_base():
     np.testing.assert_allclose(cal.values, [1.03, 0.005, 2.8], rtol=1e-7)
 
 
+def test_a_steering_ratio_that_varies_with_the_angle_is_fitted_when_asked():
+    """A car whose road wheel turns s + 40 s³ (a variable-ratio rack), driven through turns
+    up to 0.13 rad of s: the trajectory fit with the cubic recovers it, the wheel base and
+    the offset; without it the fit cannot (its residuals stay), as a real car's did."""
+    nominal = Car(2.7, steering_ratio=15.0)
+    truth = Car(2.7, steering_offset=0.0005, c_scale=0.98, steering_ratio=15.0, steering_cubic=40.0)
+    t = np.arange(4001) * 0.05
+    wheel = 15.0 * 0.13 * np.sin(t / 9.0) * np.abs(np.sin(t / 23.0))  # steering-wheel angle [rad]
+    ch = {"speed": 6.0 + 2 * np.sin(t / 17.0), "steer": wheel}
+    gt = dead_reckon_log(OdometryLog(t, ch, None), truth).poses
+    cal = calibrate_exact([OdometryLog(t, ch, gt)], nominal, "trajectory", steering_cubic=True)
+    assert cal.names == ("c_scale", "steering_offset", "wheel_base", "steering_cubic")
+    np.testing.assert_allclose(cal.values, [0.98, 0.0005, 2.7, 40.0], rtol=1e-6, atol=1e-9)
+    assert cal.robot.steering_cubic == pytest.approx(40.0, rel=1e-6)
+    linear = calibrate_exact([OdometryLog(t, ch, gt)], nominal, "trajectory")
+    assert linear.names == ("c_scale", "steering_offset", "wheel_base")
+    assert abs(linear.values[2] - 2.7) > 0.05  # the wheel base absorbs what the cubic is
+
+
 def test_car_with_a_steering_ratio_is_calibrated_in_road_wheel_radians():
     """A steering-wheel angle (ratio 15): the fitted offset is the road wheel's, as the
     robot file's ``steering_offset`` is, and the rest is recovered as with ratio 1."""
@@ -177,7 +196,7 @@ def test_car_with_a_steering_ratio_is_calibrated_in_road_wheel_radians():
     assert cal.robot.steering_ratio == 15.0
 
 
-@pytest.mark.parametrize("kind", ["diff", "tricycle", "car-rear", "car-front"])
+@pytest.mark.parametrize("kind", ["diff", "tricycle", "car-rear", "car-front", "car-cubic"])
 def test_sensitivities_match_finite_differences(kind):
     rng = np.random.default_rng(3)
     n = 300
@@ -186,11 +205,14 @@ def test_sensitivities_match_finite_differences(kind):
         ch = {"ticks_left": np.r_[0, rng.uniform(-5, 20, n)], "ticks_right": np.r_[0, rng.uniform(-5, 20, n)]}
     else:
         robot = (Tricycle(0.3, 1e-3, 0.05, 1.01) if kind == "tricycle"
+                 else Car(2.7, 0.8, "rear", 1e-3, 0.05, 1.01, steering_ratio=2.0, steering_cubic=0.7)
+                 if kind == "car-cubic"
                  else Car(2.7, 0.8 if kind == "car-rear" else -0.8, kind[4:], 1e-3, 0.05, 1.01))
         ch = {"ticks": np.r_[0, rng.uniform(0, 20, n)], "steer": rng.uniform(-0.6, 0.6, n + 1)}
     log = OdometryLog(np.arange(n + 1.0), ch, np.zeros((n + 1, 3)))
     models = {"diff": DiffCalibrationModel, "tricycle": TricycleCalibrationModel}
-    model = models.get(kind, CarCalibrationModel)(robot, [log])  # type: ignore[arg-type]
+    model = (CarCalibrationModel(robot, [log], cubic=True) if kind == "car-cubic"  # type: ignore[arg-type]
+             else models.get(kind, CarCalibrationModel)(robot, [log]))  # type: ignore[arg-type]
     pose0 = np.array([0.3, -0.2, 0.7])
 
     def poses(p):
@@ -201,7 +223,8 @@ def test_sensitivities_match_finite_differences(kind):
     # The re-integration is the library's dead reckoning with the same robot.
     np.testing.assert_allclose(got, dead_reckon_log(log, model.make_robot(p0), pose0=pose0).poses,
                                atol=1e-12)
-    for j in range(3):
+    assert len(p0) == (4 if kind == "car-cubic" else 3)
+    for j in range(len(p0)):
         h = 1e-6 * max(abs(p0[j]), 1e-2)
         up, dn = p0.copy(), p0.copy()
         up[j] += h

@@ -111,9 +111,9 @@ def test_car_and_unicycle_files_read_and_round_trip(tmp_path):
 
     written = tomllib.loads(again.read_text())["noise"]["parameters"]
     assert set(written) == {"sigma_wheel_base", "sigma_scale_left", "sigma_steering_offset", "mode"}
-    geared = '[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 15.5\n'
+    geared = '[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 15.5\nsteering_cubic = 39.0\n'
     ratio, _ = read_robot(robot_file(tmp_path, geared))
-    assert ratio == Car(2.69, steering_ratio=15.5)
+    assert ratio == Car(2.69, steering_ratio=15.5, steering_cubic=39.0)
     assert read_robot(write_robot(tmp_path / "ratio.toml", ratio)) == (ratio, ())
     with pytest.raises(InputError, match="steering_ratio"):
         read_robot(robot_file(tmp_path, '[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 0\n'))

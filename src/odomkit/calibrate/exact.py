@@ -224,6 +224,7 @@ def calibrate_exact(
     noise: NoiseArg | None = None,
     every: int = 1,
     method: Method = "exact",
+    steering_cubic: bool = False,
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to ground truth on the exact kinematics.
 
@@ -263,6 +264,8 @@ def calibrate_exact(
         Trajectory source: use every ``every``-th row.
     method : {"exact", "midpoint", "euler"}
         Integration method, as in dead reckoning.
+    steering_cubic : bool
+        A car's ``steering_cubic`` [rad⁻²] is fitted too, as a fourth parameter.
 
     Returns
     -------
@@ -287,7 +290,7 @@ def calibrate_exact(
     """
     _check_runs(runs, source)
     every = validate.positive_int(every, "every")
-    model = calibration_model(robot, runs)
+    model = calibration_model(robot, runs, steering_cubic=steering_cubic)
     if heading_weight is None:
         lengths = [float(np.sum(np.abs(model.steps(model.p0, i)[0]))) for i in range(len(runs))]
         heading_weight = 0.25 * float(np.mean(lengths))

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from odomkit import validate
 from odomkit.errors import ModelError
-from odomkit.kinematics import car_speed_factor
+from odomkit.kinematics import car_measured_steer, car_speed_factor
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
@@ -170,8 +170,7 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
         # ω = v·tan α / L (the bicycle); the measuring wheel travels d / car_speed_factor(α)
         alpha = math.atan2(turn * robot.wheel_base, d)
         s = d / float(car_speed_factor(alpha, robot.wheel_base, robot.encoder_offset, robot.encoder_at))
-        channels = {"dist": ones * s / robot.c_scale,
-                    "steer": ones * (alpha - robot.steering_offset) * robot.steering_ratio}
+        channels = {"dist": ones * s / robot.c_scale, "steer": ones * car_measured_steer(robot, alpha)}
     elif isinstance(robot, CompassOdometry):
         channels = {"speed": ones * speed, "heading": yaw_rate * t - robot.heading_offset}
     else:

@@ -53,6 +53,7 @@ from odomkit.calibrate.residuals import (
     CALIBRATED_ROBOTS,
     CalibratedRobot,
     CalibrationModel,
+    CarCalibrationModel,
     calibration_model,
     integrate_with_sensitivity,
 )
@@ -213,7 +214,8 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
             ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Plausible ranges of q = (free robot parameters, clock offset, start poses): a scale
     or length within half to twice the robot file's value (a factor 2 is a wrong robot
-    file, not a calibration), a steering offset within ±0.5 rad, the clock offset within
+    file, not a calibration), a steering offset within ±0.5 rad, a car's steering_cubic
+    within ±1/s² for the largest steering angle s driven, the clock offset within
     ±:data:`MAX_TIME_OFFSET`; start poses free."""
     n = free.size + int(fit_time_offset) + 3 * n_runs
     lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
@@ -223,6 +225,12 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
         value = float(model.p0[k])
         if model.names[k] == "steering_offset":
             lower[j], upper[j] = value - _MAX_STEERING_OFFSET, value + _MAX_STEERING_OFFSET
+        elif model.names[k] == "steering_cubic" and isinstance(model, CarCalibrationModel):
+            # k s³ at most the angle s itself at the largest angle driven: a ratio that
+            # varies by more than a factor 2 over the logs' range is no rack's.
+            largest = max((float(np.max(np.abs(steer))) for _, steer in model.raw if len(steer)), default=0.0)
+            if largest > 0:
+                lower[j], upper[j] = -1 / largest**2, 1 / largest**2
         elif model.positive[k]:  # a scale or a length (an offset or bias may be any sign)
             lower[j], upper[j] = value / 2, value * 2
     return lower, upper
@@ -288,6 +296,7 @@ def calibrate_positions(
     min_first_fixes: int = MIN_FIRST_FIXES,
     method: Method = "exact",
     fit_time_offset: bool = False,
+    steering_cubic: bool = False,
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to truth positions on the truth's own clock.
 
@@ -312,6 +321,9 @@ def calibrate_positions(
         Fit the truth's clock offset δ [s] too, one for all runs (a fix stamped t is the pose
         at log time t − δ), within ±:data:`MAX_TIME_OFFSET`; fixes within that of either
         end of a log are left out.
+    steering_cubic : bool
+        A car's ``steering_cubic`` [rad⁻²] is fitted too, as a fourth parameter (a steering
+        ratio that varies with the angle; only large steering angles identify it).
 
     Returns
     -------
@@ -327,7 +339,7 @@ def calibrate_positions(
         raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle, Car, Unicycle "
                          f"and GyroOdometry robots, got {type(robot).__name__}")
     min_first_fixes = validate.positive_int(min_first_fixes, "min_first_fixes")
-    model = calibration_model(robot, runs)
+    model = calibration_model(robot, runs, steering_cubic=steering_cubic)
     unknown = sorted(set(fixed) - set(model.names))
     if unknown:
         raise ModelError(f"fixed names {', '.join(unknown)}; the parameters are {', '.join(model.names)}")

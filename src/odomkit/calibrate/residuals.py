@@ -152,11 +152,14 @@ class DiffCalibrationModel:
 
 class _ScaleFirst:
     """A model whose first parameter is the travel scale (c_scale, m_per_tick): with the
-    overall scale unobservable it is kept and the other two are fitted."""
+    overall scale unobservable it is kept and the others are fitted."""
 
     def fixed_scale_map(self, p0: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """p = offset + T q keeping p[0]; q = (p[1], p[2])."""
-        return np.array([p0[0], 0.0, 0.0]), np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+        """p = offset + T q keeping p[0]; q = (p[1], p[2], ...)."""
+        n = len(p0)
+        offset = np.zeros(n)
+        offset[0] = p0[0]
+        return offset, np.eye(n)[:, 1:]
 
 
 class TricycleCalibrationModel(_ScaleFirst):
@@ -191,34 +194,46 @@ class TricycleCalibrationModel(_ScaleFirst):
 
 class CarCalibrationModel(_ScaleFirst):
     """p = (c_scale, steering_offset, wheel_base) of a Car (its encoder offset and position
-    are geometry, known)."""
+    are geometry, known), and ``steering_cubic`` fourth where asked (``cubic``): a steering
+    ratio that varies with the angle, which only large steering angles identify."""
 
-    names = ("c_scale", "steering_offset", "wheel_base")
-    positive = (True, False, True)
+    positive: tuple[bool, ...]
 
-    def __init__(self, robot: Car, runs: Sequence[OdometryLog]):
-        self.robot = robot
-        raw = replace(robot, c_scale=1.0, steering_offset=0.0)
+    def __init__(self, robot: Car, runs: Sequence[OdometryLog], cubic: bool = False):
+        self.robot, self.cubic = robot, cubic
+        self.names = ("c_scale", "steering_offset", "wheel_base") + (("steering_cubic",) if cubic else ())
+        self.positive = (True, False, True) + ((False,) if cubic else ())
+        # The raw angle s = measured / ratio when the cubic is fitted (α = s + k s³ + offset),
+        # else the robot's own mapping without its offset.
+        raw = replace(robot, c_scale=1.0, steering_offset=0.0,
+                      steering_cubic=0.0 if cubic else robot.steering_cubic)
         steps = [body_steps(raw, log) for log in runs]
         self.raw = [(s.inputs["travel"], s.inputs["steer"]) for s in steps]
-        self.p0 = np.array([robot.c_scale, robot.steering_offset, robot.wheel_base])
+        p0 = [robot.c_scale, robot.steering_offset, robot.wheel_base]
+        self.p0 = np.array(p0 + ([robot.steering_cubic] if cubic else []))
         self.unobservable: dict[str, str] = {}
 
     def steps(self, p: NDArray[np.float64], i: int) -> tuple[NDArray[np.float64], ...]:
         s0, a0 = self.raw[i]
-        s, alpha, length = p[0] * s0, a0 + p[1], p[2]
+        cubed = a0**3 if self.cubic else None
+        s, length = p[0] * s0, p[2]
+        alpha = a0 + p[1] + (p[3] * cubed if cubed is not None else 0.0)
         r = self.robot
         # Car model (kinematics.car_body_steps); c_scale enters through s = c·s0, so its
-        # column is s0·∂/∂s; the offset's is ∂/∂α, the wheel base's ∂/∂L.
+        # column is s0·∂/∂s; the offset's is ∂/∂α, the wheel base's ∂/∂L, and the cubic's
+        # s³·∂/∂α.
         dd, dtheta = car_body_steps(s, alpha, length, r.encoder_offset, r.encoder_at)
         jac = car_body_jacobian(s, alpha, length, r.encoder_offset, r.encoder_at)
-        ddd = np.stack([s0 * jac[:, 0, 0], jac[:, 0, 1], jac[:, 0, 2]], axis=1)
-        ddt = np.stack([s0 * jac[:, 1, 0], jac[:, 1, 1], jac[:, 1, 2]], axis=1)
-        return dd, dtheta, ddd, ddt
+        columns_d = [s0 * jac[:, 0, 0], jac[:, 0, 1], jac[:, 0, 2]]
+        columns_t = [s0 * jac[:, 1, 0], jac[:, 1, 1], jac[:, 1, 2]]
+        if cubed is not None:
+            columns_d.append(cubed * jac[:, 0, 1])
+            columns_t.append(cubed * jac[:, 1, 1])
+        return dd, dtheta, np.stack(columns_d, axis=1), np.stack(columns_t, axis=1)
 
     def make_robot(self, p: NDArray[np.float64]) -> Car:
-        return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]),
-                       wheel_base=float(p[2]))
+        return replace(self.robot, c_scale=float(p[0]), steering_offset=float(p[1]), wheel_base=float(p[2]),
+                       steering_cubic=float(p[3]) if self.cubic else self.robot.steering_cubic)
 
 
 
@@ -325,20 +340,24 @@ p = offset + T q keeping the speed scale.
 """
 
 
-def calibration_model(robot: CalibratedRobot, runs: Sequence[OdometryLog]) -> CalibrationModel:
+def calibration_model(robot: CalibratedRobot, runs: Sequence[OdometryLog], *,
+                      steering_cubic: bool = False) -> CalibrationModel:
     """The :data:`CalibrationModel` of ``robot`` over ``runs`` (ModelError if unsupported).
 
     Parameters fitted: DiffDrive (c_left, c_right, c_wheel_base); Tricycle (c_scale,
     steering_offset [rad], wheel_to_axle [m]); Car (c_scale, steering_offset [rad],
-    wheel_base [m]); Unicycle (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale);
-    GyroOdometry (m_per_tick [m], gyro_bias [rad/s], gyro_scale).
+    wheel_base [m], and with ``steering_cubic`` the Car's steering_cubic [rad⁻²]);
+    Unicycle (c_scale, yaw_rate_bias [rad/s], yaw_rate_scale); GyroOdometry (m_per_tick
+    [m], gyro_bias [rad/s], gyro_scale).
     """
+    if steering_cubic and not isinstance(robot, Car):
+        raise ModelError(f"steering_cubic is a car's; the robot is a {type(robot).__name__}")
     if isinstance(robot, DiffDrive):
         return DiffCalibrationModel(robot, runs)
     if isinstance(robot, Tricycle):
         return TricycleCalibrationModel(robot, runs)
     if isinstance(robot, Car):
-        return CarCalibrationModel(robot, runs)
+        return CarCalibrationModel(robot, runs, cubic=steering_cubic)
     if isinstance(robot, Unicycle):
         return UnicycleCalibrationModel(robot, runs)
     if isinstance(robot, GyroOdometry):
@@ -365,8 +384,8 @@ class ResidualProblem:
             self.truth.append((rows, gt[rows]))
         self.w = heading_weight
         self.whiten = whiten
-        self.offset = np.zeros(3)
-        self.T = np.eye(3)
+        self.offset = np.zeros(len(model.p0))
+        self.T = np.eye(len(model.p0))
         self._cache: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def full(self, q: NDArray[np.float64]) -> NDArray[np.float64]:

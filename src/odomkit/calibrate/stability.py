@@ -126,7 +126,8 @@ def _rms(log: OdometryLog, robot: Robot, truth: Truth) -> float:
     return float(np.sqrt(np.mean(np.sum(error**2, axis=1))))
 
 
-def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot) -> list[HalfFit] | None:
+def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
+                     steering_cubic: bool = False) -> list[HalfFit] | None:
     """Each half of one drive calibrated alone from its fixes, and each half's parameters
     tried on the other half.
 
@@ -136,6 +137,7 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot) -> 
     truth : Truth
         Its fixes, on the log's clock (a fitted clock offset already applied).
     robot : the nominal robot (:func:`odomkit.calibrate.positions.calibrate_positions`)
+    steering_cubic : fit a car's steering_cubic in each half too
 
     Returns
     -------
@@ -152,14 +154,19 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot) -> 
         try:
             with warnings.catch_warnings():  # the whole drive's fit has said what they would say
                 warnings.simplefilter("ignore")
-                fits.append(calibrate_positions([half], [fixes], robot))
+                fits.append(calibrate_positions([half], [fixes], robot, steering_cubic=steering_cubic))
         except (InputError, ModelError):
             return None
     out = []
     for k, label in enumerate(("first half", "second half")):
         (own_log, own_fixes), (other_log, other_fixes) = halves[k], halves[1 - k]
-        out.append(HalfFit(label, fits[k], _rms(own_log, fits[k].robot, own_fixes),
-                           _rms(other_log, fits[k].robot, other_fixes)))
+        try:
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                out.append(HalfFit(label, fits[k], _rms(own_log, fits[k].robot, own_fixes),
+                                   _rms(other_log, fits[k].robot, other_fixes)))
+        except (InputError, ModelError):
+            return None  # one half's parameters cannot drive the other half at all
     return out
 
 

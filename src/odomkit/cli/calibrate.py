@@ -80,6 +80,9 @@ def calibrate_command(
         "--plot", help="Draw the runs with the robot file's and the calibrated parameters against the "
                        "truth (with --side: UMBmark's return errors before and after) into this file "
                        "(.png, .svg or .pdf; needs the plot extra).")] = None,
+    fit_steering_cubic: Annotated[bool, typer.Option(
+        "--fit-steering-cubic", help="car: fit steering_cubic too, a steering ratio that varies with the "
+                                     "angle (needs large steering angles in the logs).")] = False,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
     truth: TruthListOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
@@ -102,7 +105,7 @@ def calibrate_command(
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
                               overwrite=force, log_options=options, truth=per_run, own_truth=base,
-                              heading_weight=heading_weight)
+                              heading_weight=heading_weight, steering_cubic=fit_steering_cubic)
     if json_out:
         print_json(with_warnings(out, warned))
         return

@@ -34,6 +34,7 @@ A car (rear-axle reference, speed measured at one wheel, front steering angle)::
     encoder_at = "rear"         # "rear" | "front": axle of the measuring wheel
     steering_ratio = 15.0       # measured steering angle per road-wheel angle: 1 (default)
                                 #    for a road-wheel steer, ~12-18 for a steering wheel's
+    steering_cubic = 0.0        # [rad^-2], a ratio varying with the angle: s + k s^3 (s = steer/ratio)
     steering_offset = 0.0       # [rad], added to the road-wheel angle (after the ratio)
     c_scale = 1.0               # measuring-wheel scale correction
     wheel_diameter = 0.65       # optional size of the measuring wheel (ticks only):
@@ -221,7 +222,8 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
                     m_per_tick=sizes.optional_scale(None, "measuring"),
                     steering_offset=f.number("steering_offset", 0.0),
                     c_scale=f.number("c_scale", 1.0),
-                    steering_ratio=f.number("steering_ratio", 1.0))
+                    steering_ratio=f.number("steering_ratio", 1.0),
+                    steering_cubic=f.number("steering_cubic", 0.0))
     else:
         raise InputError(f"[robot] type must be one of {', '.join(ROBOT_TYPES)}; got {kind!r}",
                          source=source)

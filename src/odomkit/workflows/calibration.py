@@ -62,6 +62,7 @@ def calibrate_files(
     truth: Sequence[TruthOptions] | None = None,
     own_truth: TruthOptions | None = None,
     plot: str | Path | None = None,
+    steering_cubic: bool = False,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -99,6 +100,8 @@ def calibrate_files(
     plot : .png, .svg or .pdf file, optional
         Draw the runs before and after calibration against the truth and, with ``side``,
         UMBmark's return errors (:func:`odomkit.workflows.figures.calibration_figure`).
+    steering_cubic : fit a car's ``steering_cubic`` too (exact, from a trajectory or truth
+        fixes; ``--fit-steering-cubic``).
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -121,6 +124,10 @@ def calibrate_files(
         stray = [_EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
         if source is not None:
             stray.insert(0, "--from")
+        if stray:
+            raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
+        if steering_cubic:
+            stray.append("--fit-steering-cubic")
         if stray:
             raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
         if side is None:
@@ -167,12 +174,14 @@ def calibrate_files(
             # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
             # truths above are already on the log's clock).
             given = truth[0].time_offset
-            cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None)
+            cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None,
+                                      steering_cubic=steering_cubic)
             summary = cal.to_dict()
             if len(runs) > 1:
-                summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None)
+                summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None, steering_cubic)
             else:
-                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None)
+                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None,
+                                                     steering_cubic)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
                 {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
@@ -180,7 +189,8 @@ def calibrate_files(
             truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
             truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
         else:
-            cal = calibrate_exact(runs, robot, source or "endpoints", **exact_kwargs)  # type: ignore[arg-type]
+            cal = calibrate_exact(runs, robot, source or "endpoints",  # type: ignore[arg-type]
+                                  steering_cubic=steering_cubic, **exact_kwargs)
             summary = cal.to_dict()
             new_robot = cal.robot
             if side is not None and isinstance(robot, DiffDrive):
@@ -228,7 +238,7 @@ def calibrate_files(
 
 
 def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: list[Truth], robot: Any,
-                    fit_time_offset: bool) -> list[dict[str, Any]]:
+                    fit_time_offset: bool, steering_cubic: bool = False) -> list[dict[str, Any]]:
     """Each run calibrated from its truth positions alone (JSON ``per_run``: ``log``,
     ``parameters``, ``std_errors``, or ``error`` where it cannot be fitted alone), and a
     warning where the joint fit is no compromise of them (:func:`runs_disagree`)."""
@@ -238,7 +248,8 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: li
         try:
             with warnings.catch_warnings():  # the joint fit has said what they would say
                 warnings.simplefilter("ignore")
-                one = calibrate_positions([log], [found], robot, fit_time_offset=fit_time_offset)
+                one = calibrate_positions([log], [found], robot, fit_time_offset=fit_time_offset,
+                                          steering_cubic=steering_cubic)
         except (InputError, ModelError) as exc:
             alone.append(None)
             rows.append({"log": log.source, "error": str(exc)})
@@ -254,7 +265,7 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: li
 
 
 def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
-                     clock_fitted: bool) -> list[dict[str, Any]] | None:
+                     clock_fitted: bool, steering_cubic: bool = False) -> list[dict[str, Any]] | None:
     """One drive's halves calibrated alone and tried on each other (JSON ``halves``), and a
     warning where the calibration does not hold along the drive
     (:func:`odomkit.calibrate.stability.halves_disagree`); None where a half cannot be
@@ -263,7 +274,7 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
 
     if clock_fitted and joint.time_offset is not None:  # the fixes on the log's clock
         truth = replace(truth, t=truth.t - joint.time_offset)
-    halves = calibrate_halves(log, truth, robot)
+    halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic)
     if halves is None:
         return None
     said = halves_disagree(halves)
