@@ -24,7 +24,8 @@ from odomkit.robot import (
 
 # Fields that may be any finite number (offsets and biases); every other field of every
 # robot is a length, a scale or a correction factor and must be positive.
-MAY_BE_ANY_FINITE = {"steering_offset", "gyro_bias", "heading_offset", "yaw_rate_bias", "encoder_offset"}
+MAY_BE_ANY_FINITE = {"steering_offset", "gyro_bias", "heading_offset", "yaw_rate_bias", "encoder_offset",
+                     "steering_cubic"}
 # Fields that are a word from a fixed set.
 WORDS = {"encoder_at": ("rear", "front")}
 
