@@ -31,7 +31,7 @@ from odomkit.io.optiodom import read_experiment
 from odomkit.io.robotfile import read_robot, read_robot_name, read_truth_table, robot_to_dict, write_robot
 from odomkit.io.ros import write_ros2_yaml
 from odomkit.progress import NO_PROGRESS, Progress, stage
-from odomkit.robot import DiffDrive, Tricycle
+from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.truth import Truth
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
@@ -278,6 +278,10 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     if halves is None:
         return None
     said = halves_disagree(halves)
+    if said and isinstance(robot, Car) and not steering_cubic:
+        # What the real car's disagreement was (docs/results/honesty.md): a variable-ratio rack.
+        said += ("; for a car that turns hard in one part of the drive and not in another, try "
+                 "--fit-steering-cubic (a steering ratio that varies with the angle)")
     if said:
         warnings.warn(said, UserWarning, stacklevel=2)
     return [half.to_dict() for half in halves]
