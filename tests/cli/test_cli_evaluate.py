@@ -236,3 +236,21 @@ def test_every_command_says_the_same_about_a_truth_that_misses_the_log(run_cli, 
     sparse.write_text("t,x,y,theta\n" + "".join(f"{x:.17g},0,0,0\n" for x in times))
     code, _, err = run_cli("evaluate", tmp_path / "track.csv", "--truth", sparse, "--max-gap", "1")
     assert code == 2 and "overlap, but" in err and "--max-gap" in err
+
+
+def test_the_windowed_text_gives_the_nees_verdict_its_bounds_imply(run_cli):
+    """Below, inside or above the χ² bounds, in words, on the line of numbers it judges
+    (the report said so; the command line did not)."""
+    import re
+
+    code, text, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "10s")
+    assert code == 0
+    line = next(x for x in text.splitlines() if x.startswith("position NEES over"))
+    found = re.search(r"mean ([\d.e+]+) \(95 % bounds ([\d.e+]+)\.\.([\d.e+]+)", line)
+    assert found is not None
+    mean, lo, hi = map(float, found.groups())
+    want = ("above its bounds" if mean > hi else "below its bounds" if mean < lo else "inside its bounds")
+    assert line.endswith(want) or want + "," in line
+    code, text, _ = run_cli("evaluate", RUN, "--robot", ROBOT)  # track rows: no verdict
+    line = next(x for x in text.splitlines() if x.startswith("position NEES over"))
+    assert "bounds," not in line and "its bounds" not in line

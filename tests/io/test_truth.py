@@ -172,3 +172,33 @@ def test_parse_truth_columns():
     assert parse_truth_columns("x=b,t=a,y=c") == {"x": "b", "t": "a", "y": "c"}
     with pytest.raises(InputError):
         parse_truth_columns("t,x,x")
+
+
+def test_fixes_a_logger_held_at_its_own_rows_are_thinned_to_when_each_arrived(tmp_path):
+    """A 5 Hz GPS written at each row of a 10 Hz log repeats every fix once (a real car's CAN
+    logger did, 1,245 of 4,708 rows). Read as they are, the repeats are positions stamped
+    0.1 s late. Each fix is kept at its first row; a repeat longer than 1 s (the car
+    standing) keeps its last row too, so that the truth stands still over it; positions
+    are untouched. A 1 Hz GPS whose car stands once (few repeats) is read as it is."""
+    t = np.round(np.arange(0.0, 30.0, 0.1), 3)
+    arrived = np.floor(t * 5) / 5  # the fix of the last 0.2 s update
+    x = np.where(arrived < 10, 10.0 * arrived, np.where(arrived < 15, 100.0, 100.0 + 10.0 * (arrived - 15)))
+    rows = np.column_stack((t, x, 0.5 * x))
+    path = tmp_path / "held.csv"
+    np.savetxt(path, rows, delimiter=",", header="t,x,y", comments="", fmt="%.4f")
+    with pytest.warns(UserWarning, match=r"of 300 fixes repeat the one before"):
+        truth = read_truth(path)
+    # Each 0.2 s update at its first row; the stand at x = 100 holds from the update at 10.0 s
+    # to the row before the update at 15.2 s (the one at 15.0 s is still at 100 m).
+    even = np.round(t * 10) % 2 == 0
+    expected_times = np.concatenate([t[even & (t < 10)], [10.0, 15.1], t[even & (t >= 15.2)]])
+    np.testing.assert_allclose(truth.t, expected_times)
+    np.testing.assert_allclose(truth.xy[:, 0], np.interp(truth.t, t, x))  # each fix at its arrival
+    assert np.all(truth.xy[(truth.t >= 10) & (truth.t <= 15), 0] == 100.0)  # standing: both ends
+    sparse = tmp_path / "sparse.csv"
+    t1 = np.arange(0.0, 60.0)
+    x1 = np.where((t1 > 20) & (t1 < 24), 200.0, 10.0 * t1)
+    np.savetxt(sparse, np.column_stack((t1, x1, 0 * t1)), delimiter=",", header="t,x,y", comments="")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(read_truth(sparse).t) == 60

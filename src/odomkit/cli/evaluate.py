@@ -126,8 +126,14 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
     what = f"{out['windows']} window ends" if windowed else "track rows"
     if out["nees_position_mean"] is not None:
         lo, hi = out["nees_bounds"]
-        print(f"position NEES over {what}: mean {out['nees_position_mean']:.3g} (95 % bounds "
-              f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}")
+        mean = out["nees_position_mean"]
+        # A verdict only where the ends are independent samples (windows), as the bounds assume.
+        verdict = ("" if not windowed or whole_runs else
+                   ": above its bounds, the covariance is too small (optimistic)" if mean > hi else
+                   ": below its bounds, the covariance is too large (pessimistic)" if mean < lo else
+                   ": inside its bounds")
+        print(f"position NEES over {what}: mean {mean:.3g} (95 % bounds "
+              f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}{verdict}")
         print("inside the predicted 50/90/95/99 % ellipses: "
               + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")))
     if windowed and not whole_runs and len(out["per_log"]) > 1:

@@ -37,8 +37,9 @@ FormatOption = Annotated[str, typer.Option(
 ColumnsOption = Annotated[str | None, typer.Option(
     "--columns", help="Text log columns: header names t=time,ticks_left=L,ticks_right=R, or in order "
                       "for a headerless file t,ticks_left,_,ticks_right (_ skips a column). Comma, "
-                      "semicolon, tab or whitespace separated; # comments. Angles are radians; "
-                      "steer_deg, yaw_rate_deg, heading_deg read degrees.")]
+                      "semicolon, tab or whitespace separated; # comments; columns not named may hold "
+                      "text. Angles are radians and speeds m/s; steer_deg, yaw_rate_deg, heading_deg read "
+                      "degrees, speed_kmh and speed_mph km/h and mph.")]
 CumulativeOption = Annotated[bool, typer.Option(
     "--cumulative/--no-cumulative",
     help="CSV ticks_*/dist_* columns are cumulative counters (differenced, integers exactly).")]

@@ -112,6 +112,42 @@ def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
     return items
 
 
+#: Position-only fixes that repeat the one before in at least this share of the rows are a
+#: logger writing the receiver's last fix at each of its own rows (a 5 Hz GPS in a 10 Hz
+#: CAN log), not a receiver standing still now and then.
+HELD_SHARE = 0.2
+#: A repeat that lasts longer than this [s] is a standstill: its last row is kept too.
+HELD_SPAN = 1.0
+
+
+def _held_fixes(t: NDArray[np.float64], position: NDArray[np.float64], path: Path
+                ) -> NDArray[np.bool_] | None:
+    """Rows to keep of position-only fixes that a logger held (repeated at its own rows), or
+    None where there are few repeats. A held fix stamped at a later row is the position of
+    an earlier time: read so, the truth lags the vehicle by up to a fix's period, and the
+    clock offset and the noise fitted to it are wrong. The first row of each repeat is kept
+    (when the fix arrived), and the last of one longer than :data:`HELD_SPAN` (a vehicle
+    standing still, whose position holds)."""
+    if len(t) < 3:
+        return None
+    same = np.all(position[1:] == position[:-1], axis=1)
+    first = np.concatenate(([True], ~same))
+    starts = np.flatnonzero(first)
+    ends = np.concatenate((starts[1:], [len(t)])) - 1
+    standing = t[ends] - t[starts] > HELD_SPAN
+    # Only short repeats count: a receiver standing still repeats its fix too, for longer.
+    held = int(np.sum((ends - starts)[~standing]))
+    if held < HELD_SHARE * (len(t) - 1):
+        return None
+    keep = first.copy()
+    keep[ends[standing]] = True
+    warnings.warn(f"{path}: {held} of {len(t)} fixes repeat the one before (a logger "
+                  "writing its last fix at every row): the first row of each fix is kept, when it "
+                  f"arrived, and the last of a repeat longer than {HELD_SPAN:g} s (standing still)",
+                  stacklevel=3)
+    return keep
+
+
 def _table(path: Path, rows: list[tuple[int, list[str]]], ncols: int,
            used: Sequence[int] | None = None) -> NDArray[np.float64]:
     """The fields as an (n, ncols) float array; errors name the line and column.
@@ -437,6 +473,11 @@ def read_truth(
         t, xy = t[keep], xy[keep]
         theta = None if theta is None else theta[keep]
         geo = None if geo is None else geo[keep]
+    if theta is None:
+        held = _held_fixes(t, geo[:, :2] if geo is not None else xy, path)
+        if held is not None:
+            t, xy = t[held], xy[held]
+            geo = None if geo is None else geo[held]
     if not math.isfinite(sigma) or sigma < 0:
         raise InputError(f"--truth-sigma must be a non-negative number of metres, got {sigma!r}")
     if geo is not None:

@@ -278,7 +278,7 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     if halves is None:
         return None
     said = halves_disagree(halves)
-    if said and isinstance(robot, Car) and not steering_cubic:
+    if said and isinstance(robot, Car) and not steering_cubic and robot.steering_cubic == 0:
         # What the real car's disagreement was (docs/results/honesty.md): a variable-ratio rack.
         said += ("; for a car that turns hard in one part of the drive and not in another, try "
                  "--fit-steering-cubic (a steering ratio that varies with the angle)")

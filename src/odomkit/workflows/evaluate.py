@@ -505,8 +505,11 @@ def score_logs(
 
     robot, noise = read_robot(robot_path)
     if not noise:
-        raise InputError("the robot file has no [noise] table: the honesty test scores a predicted "
-                         "covariance", source=str(robot_path))
+        raise InputError("the robot file has no [noise] table: evaluate --robot scores a predicted "
+                         "covariance (add one: fit-noise writes it); for the errors alone, write the "
+                         "track (odomkit track LOG --robot ROBOT --out TRACK.csv) and evaluate TRACK.csv "
+                         "--truth ...",
+                         source=str(robot_path))
     truth = resolved_truth(robot_path, truth)
     noise_arg = noise if len(noise) > 1 else noise[0]
     spec = parse_window(window) if window else None
