@@ -44,7 +44,7 @@ from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from odomkit import validate
@@ -63,7 +63,7 @@ from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.truth import Truth, scatter_sigma
 
-__all__ = ["MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions", "runs_disagree"]
+__all__ = ["MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions", "compared_fixes", "runs_disagree"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -114,13 +114,23 @@ class _FixRows:
         return step * inverse[:, None]
 
 
+def compared_fixes(log_t: ArrayLike, fix_t: ArrayLike, margin: float = 0.0) -> NDArray[np.bool_]:
+    """Which fixes (stamped ``fix_t``, shape (K,), on their own clock) a calibration compares
+    with a log of times ``log_t`` [s]: those inside its span, ``margin`` [s] in from either
+    end (:data:`MAX_TIME_OFFSET` where the clock offset is fitted, so that every offset tried
+    compares the same fixes)."""
+    t = np.asarray(log_t, dtype=float)
+    stamps = np.asarray(fix_t, dtype=float)
+    return (stamps >= t[0] + margin) & (stamps <= t[-1] - margin)
+
+
 def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margin: float) -> list[_Run]:
     if len(runs) != len(truths):
         raise InputError(f"give one truth per run: {len(runs)} run(s), {len(truths)} truth(s)")
     out = []
     for log, truth in zip(runs, truths, strict=True):
         t = np.asarray(log.t, dtype=float)
-        inside = (truth.t >= t[0] + margin) & (truth.t <= t[-1] - margin)
+        inside = compared_fixes(t, truth.t, margin)
         tau = truth.t[inside]
         if tau.size < 4:
             within = f" (less {margin:g} s at each end, the largest clock offset fitted)" if margin else ""

@@ -124,8 +124,6 @@ def calibrate_files(
         stray = [_EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
         if source is not None:
             stray.insert(0, "--from")
-        if stray:
-            raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
         if steering_cubic:
             stray.append("--fit-steering-cubic")
         if stray:
@@ -312,7 +310,7 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
     start heading to take."""
     import numpy as np
 
-    from odomkit.calibrate.positions import MAX_TIME_OFFSET
+    from odomkit.calibrate.positions import MAX_TIME_OFFSET, compared_fixes
     from odomkit.calibrate.realdata import return_errors_from_runs
     from odomkit.workflows.figures import calibration_figure
 
@@ -325,8 +323,7 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
             # stamps lie MAX_TIME_OFFSET inside the log (the same ones at every offset tried)
             margin, own = ((MAX_TIME_OFFSET, found.t + (truth[i].time_offset or 0.0)) if clock_fitted
                            else (0.0, found.t))
-            inside = ((own >= log.t[0] + margin) & (own <= log.t[-1] - margin)
-                      & np.all(np.isfinite(found.xy), axis=1))
+            inside = compared_fixes(log.t, own, margin) & np.all(np.isfinite(found.xy), axis=1)
             if np.count_nonzero(inside) < 2:
                 left_out.append(f"{log.source}: fewer than 2 truth fixes inside the log's time span")
                 continue
