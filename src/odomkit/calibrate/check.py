@@ -19,6 +19,10 @@ what to do about it:
   best: its travel and turn with a heading truth, its path's shape with a position-only
   one), or from a spin in a known direction, or, with neither, the hint a flipped sign
   leaves (a robot that spins all the time);
+* :func:`~odomkit.calibrate.check_truth.check_truth_heading` — a truth's heading against
+  the direction its positions move;
+* :func:`~odomkit.calibrate.check_ratios.check_truth_motion` — the odometry's travel and
+  turning against the truth's (a unit read wrong, a robot-file entry missing);
 * :func:`check_motion` — distance and turning both ways;
 * :func:`~odomkit.calibrate.check_identifiable.check_identifiable` — how well each
   calibration parameter of every robot ``odomkit calibrate`` calibrates is pinned by this
@@ -44,6 +48,7 @@ from numpy.typing import NDArray
 from odomkit.calibrate.check_channels import check_channels
 from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_identifiable import check_identifiable, identifiability_sigma
+from odomkit.calibrate.check_ratios import check_truth_motion
 from odomkit.calibrate.check_truth import check_truth_heading
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.robot import Robot
@@ -268,8 +273,8 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
 def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spin: str | None = None,
               max_gap: float | None = 0.5) -> list[Finding]:
     """Every check, in the order a user fixes things: values and time, counters, stuck
-    channels, the channel mapping, the truth's own heading, then what the motion can
-    identify."""
+    channels, the channel mapping, the truth's own heading, the odometry's travel and turning
+    against the truth's, then what the motion can identify."""
     found = check_values(log)
     if any(f.status == "fail" for f in found):
         return found
@@ -282,6 +287,7 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     if any(f.status == "fail" and f.check == "channels" for f in found):
         return found  # what the motion identifies means nothing until the channels are right
     found += check_truth_heading(log, robot, truth, max_gap)
+    found += check_truth_motion(log, robot, truth, max_gap)
     found += check_motion(log, robot)
     found += check_identifiable(log, robot, identifiability_sigma(truth))
     return found

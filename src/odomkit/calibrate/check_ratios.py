@@ -1,0 +1,365 @@
+"""How far and how much the odometry turns against the truth (part of ``odomkit check``).
+
+A unit read wrong or a robot-file entry left out scales the whole track: a speed in mph read
+as m/s drives 2.24× as far as the car did, a steering-wheel angle read as the road wheels'
+turns a car about 15× as much (its ``steering_ratio``), a gyro in °/s read as rad/s turns
+57× as much. ``calibrate`` then bends a scale or a wheel base to the edge of its range and
+the user is told nothing about why. Both show plainly against a truth, position-only or not:
+
+* **travel**: over straight stretches of a few seconds, the distance the odometry says it
+  rolled against the straight-line distance (chord) between the truth's fixes at the
+  stretch's ends. Straight, because a chord is the path only there (and a speed read 2×
+  too large drives the odometry twice round the same bend, so chords would not compare);
+  the truth's noise adds to its chords (by σ²/chord relative, 0.5 % at the
+  :data:`CHORD_SIGMAS` kept), so only stretches with a chord well beyond the noise count.
+* **turning**: with a heading truth, its heading change over each stretch against the
+  odometry's; with a position-only truth, the change of direction between consecutive
+  stretches' chords, the same on both sides (a chord's direction is the heading at its
+  middle for a steady turn, and flips alike on both sides where the robot reverses).
+
+Each is a ratio of sums (odometry over truth), with a standard error from the spread of the
+stretches' own ratios. The ratios name a likely cause where they sit on a known unit factor,
+and the robot-file entry that would absorb them otherwise (for a differential drive, the
+turning ratio over the travel ratio is the wheel base's error; for a car, about the
+steering ratio's).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.calibrate.check_finding import Finding, Status
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, DiffDrive, Robot, Tricycle
+from odomkit.truth import Truth, heading_span, scatter_sigma
+
+__all__ = ["check_truth_motion", "MotionRatios", "motion_ratios", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN"]
+
+#: A stretch's truth chord counts where it exceeds this many times the chord's own noise
+#: (σ√2 for two fixes of σ per axis): a 7 % error on one stretch's ratio at worst, and a
+#: bias of its length below 0.5 %.
+CHORD_SIGMAS = 10.0
+#: ... and this many metres (a motion capture's fixes are nearly exact; an encoder's
+#: quantisation is not).
+MIN_CHORD = 0.05
+#: A stretch is straight where the odometry turns less than this [rad] over it (its chord
+#: is then its path within 0.1 %) and the truth's middle fix lies within this share of the
+#: chord from it (a turn of about 0.4 rad) plus its noise.
+STRAIGHT_TURN = 0.15
+STRAIGHT_SAGITTA = 0.05
+#: ... and the odometry turns no more than a circle of this radius [m] would, plus
+#: :data:`STRAIGHT_TURN_FLOOR` [rad] (an encoder's quantisation).
+STRAIGHT_RADIUS = 20.0
+STRAIGHT_TURN_FLOOR = 0.01
+#: Each half of a straight stretch holds at least this share of its distance.
+EVEN_SHARE = 0.3
+#: A turn counts where odometry or truth turns more than this [rad], and more than
+#: :data:`TURN_SIGMAS` times the truth turn's own noise.
+MIN_TURN = 0.1
+TURN_SIGMAS = 4.0
+#: Fewer stretches than this give no ratio.
+MIN_STRETCHES = 5
+#: The longest stretch tried [s]: a stretch span doubles from the truth's heading span until
+#: :data:`ENOUGH_STRETCHES` stretches have chords beyond the noise.
+LONGEST_STRETCH = 32.0
+ENOUGH_STRETCHES = 10
+#: Travel off by more than this factor either way is warned about: a wheel's radius or a
+#: speed's scale is seldom more than a few percent off, and calibrate fits that much.
+TRAVEL_WARN = 1.15
+#: Turning off by more than this factor: a wheel base (which slips in turns) or a steering
+#: gain is more often off, by up to about 20 %.
+TURN_WARN = 1.25
+#: Off by more than this factor either way is no calibration error: a unit or a missing
+#: robot-file entry (the check fails).
+RATIO_FAIL = 2.0
+
+# (factor, what it is, what to do): odometry over truth near a unit factor (within 4 %).
+_TRAVEL_UNITS = (
+    (1 / 0.44704, "a speed in mph read as m/s", "name the column speed_mph in --columns"),
+    (3.6, "a speed in km/h read as m/s", "name the column speed_kmh in --columns"),
+    (0.44704, "a speed in m/s read as mph", "name the column speed (m/s), not speed_mph"),
+    (1 / 3.6, "a speed in m/s read as km/h", "name the column speed (m/s), not speed_kmh"),
+    (0.44704 * 3.6, "a speed in km/h read as mph", "name the column speed_kmh, not speed_mph"),
+    (1 / (0.44704 * 3.6), "a speed in mph read as km/h", "name the column speed_mph, not speed_kmh"),
+    (1 / 0.3048, "feet read as metres", "convert feet to metres (m_per_tick, or the speed's unit)"),
+    (1000.0, "millimetres read as metres", "check the distance channels' unit or m_per_tick (1000x too big)"),
+    (100.0, "centimetres read as metres", "check the distance channels' unit or m_per_tick (100x too big)"),
+    (0.001, "metres read as millimetres",
+     "check the distance channels' unit or m_per_tick (1000x too small)"),
+    (0.01, "metres read as centimetres", "check the distance channels' unit or m_per_tick (100x too small)"),
+)
+_TURN_UNITS = (
+    (180 / math.pi, "degrees read as radians",
+     "name a column in degrees with its _deg name (steer_deg, yaw_rate_deg, heading_deg)"),
+    (math.pi / 180, "radians read as degrees", "name a column in radians without _deg"),
+)
+_UNIT_TOLERANCE = 0.04
+
+
+@dataclass(frozen=True)
+class MotionRatios:
+    """The odometry's travel and turning over the truth's (:func:`motion_ratios`).
+
+    Parameters
+    ----------
+    travel, travel_se : float
+        Σ odometry distance / Σ truth chord over the straight stretches kept, and its standard error
+        (NaN when fewer than :data:`MIN_STRETCHES` are kept).
+    travel_stretches : int
+        Stretches kept for the travel.
+    turn, turn_se : float
+        Σ |odometry turn| / Σ |truth turn| over the turns kept, and its standard error (NaN
+        when fewer than :data:`MIN_STRETCHES` turns are kept).
+    turns : int
+        Turns kept.
+    span : float
+        The stretches' length [s].
+    truth_turned, odometry_turned : float
+        Σ |turn| of the truth and of the odometry over the turns compared [rad].
+    """
+
+    travel: float
+    travel_se: float
+    travel_stretches: int
+    turn: float
+    turn_se: float
+    turns: int
+    span: float
+    truth_turned: float
+    odometry_turned: float
+
+
+def _ratio(odometry: NDArray[np.float64], truth: NDArray[np.float64]) -> tuple[float, float]:
+    """Σ odometry / Σ truth (both ≥ 0) and its standard error: the ratio estimator's, from the
+    residuals odometry − ratio·truth (a linearised delta method)."""
+    n = truth.size
+    total = float(np.sum(truth))
+    if n < MIN_STRETCHES or total <= 0:
+        return math.nan, math.nan
+    ratio = float(np.sum(odometry)) / total
+    resid = odometry - ratio * truth
+    return ratio, float(math.sqrt(n * np.sum(resid**2) / (n - 1)) / total)
+
+
+def _stretch_ends(truth_t: NDArray[np.float64], start: float, stop: float, span: float, max_gap: float
+                  ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """Fix indices (first, last) of consecutive stretches of ``span`` seconds in
+    [start, stop], each without a gap between fixes beyond ``max_gap``; the last fix of
+    one is the first of the next, so consecutive stretches share an end."""
+    bounds = np.arange(start, stop + 1e-9 * span, span)
+    idx = np.unique(np.searchsorted(truth_t, bounds))
+    idx = idx[idx < truth_t.size]
+    if idx.size < 2:
+        return np.empty(0, np.intp), np.empty(0, np.intp)
+    first, last = idx[:-1], idx[1:]
+    gaps = np.diff(truth_t)
+    widest = np.maximum.reduceat(gaps, first) if gaps.size else np.zeros(first.size)
+    keep = (widest <= max_gap) & (truth_t[last] - truth_t[first] <= 1.5 * span)
+    return first[keep], last[keep]
+
+
+def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5) -> MotionRatios:
+    """The odometry's travel and turning against the truth's over stretches of a few seconds.
+
+    Parameters
+    ----------
+    log : the odometry log, dead-reckoned with ``robot`` from the origin
+    robot : the robot the log is read with
+    truth : Truth, with or without heading; its noise is the larger of its stated σ and its
+        fixes' own scatter (:func:`odomkit.truth.scatter_sigma`)
+    max_gap : a stretch holding a gap between fixes longer than this [s] is left out; a
+        sparse truth (a 1 Hz GPS) is allowed twice its median spacing
+
+    Returns
+    -------
+    MotionRatios
+    """
+    from odomkit.track import dead_reckon_log
+
+    t = np.asarray(log.t, dtype=float)
+    inside = (truth.t >= t[0]) & (truth.t <= t[-1])
+    tt, xy = truth.t[inside], truth.xy[inside]
+    nothing = MotionRatios(math.nan, math.nan, 0, math.nan, math.nan, 0, math.nan, 0.0, 0.0)
+    if tt.size < 3:
+        return nothing
+    track = dead_reckon_log(log, robot, pose0=np.zeros(3))
+    odo_heading = np.unwrap(track.poses[:, 2])
+    odo = np.column_stack([np.interp(tt, t, track.poses[:, 0]), np.interp(tt, t, track.poses[:, 1]),
+                           np.interp(tt, t, odo_heading)])
+    # Signed (backwards is negative), and the distance rolled either way.
+    travelled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(track.steps.dd))))
+    rolled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(np.abs(track.steps.dd)))))
+    # ∫ θ over the distance rolled: its mean over a stretch is the direction of the stretch's
+    # chord to first order, as the truth's chord direction is (the same smoothing on both
+    # sides: the heading at the stretch's middle turns 2 % more on a car's random bends).
+    mid_heading = 0.5 * (odo_heading[:-1] + odo_heading[1:])
+    heading_sum = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(mid_heading * np.abs(track.steps.dd)))))
+    heading = None if truth.theta is None else np.unwrap(truth.theta[inside])
+    noise = max(truth.sigma, scatter_sigma(truth) or 0.0)
+    spacing = float(np.median(np.diff(tt)))
+    gap = max(max_gap if max_gap is not None else math.inf, 2.0 * spacing)
+    least_chord = max(MIN_CHORD, CHORD_SIGMAS * math.sqrt(2.0) * noise)
+
+    def straight(first: NDArray[np.intp], last: NDArray[np.intp]) -> NDArray[np.bool_]:
+        """Stretches driven straight on, with a truth chord long beyond the noise:
+
+        * the odometry turns less than :data:`STRAIGHT_TURN` over it, and no more than a
+          circle of :data:`STRAIGHT_RADIUS` would (a point of the body off its reference
+          point, a motion capture's marker, draws a wider circle on a bend);
+        * the truth's middle fix lies within :data:`STRAIGHT_SAGITTA` of the chord plus 3σ
+          of it (an odometry that turns too little cannot call a truth's bend straight);
+        * each half of the stretch holds at least :data:`EVEN_SHARE` of its motion, on both
+          sides (a start or a stop in it would compare the truth's lag on its own clock).
+        """
+        step = xy[last] - xy[first]
+        chord = np.linalg.norm(step, axis=1)
+        middle = (first + last) // 2
+        off = xy[middle] - xy[first]
+        odo_turn = np.abs(odo[last, 2] - odo[first, 2])
+        odo_rolled = rolled[last] - rolled[first]
+        with np.errstate(invalid="ignore", divide="ignore"):
+            sagitta = np.abs(step[:, 0] * off[:, 1] - step[:, 1] * off[:, 0]) / chord
+        odo_halves = np.minimum(rolled[middle] - rolled[first], rolled[last] - rolled[middle])
+        truth_halves = np.minimum(np.linalg.norm(off, axis=1), np.linalg.norm(xy[last] - xy[middle], axis=1))
+        even = (odo_halves >= EVEN_SHARE * odo_rolled) & (truth_halves >= EVEN_SHARE * chord)
+        return ((chord >= least_chord) & (odo_turn <= STRAIGHT_TURN)
+                & (odo_turn <= STRAIGHT_TURN_FLOOR + odo_rolled / STRAIGHT_RADIUS)
+                & (sagitta <= STRAIGHT_SAGITTA * chord + 3.0 * noise) & even)
+
+    best: tuple[int, float, NDArray[np.intp], NDArray[np.intp]] | None = None
+    span = heading_span(truth)
+    while True:
+        first, last = _stretch_ends(tt, tt[0], tt[-1], span, gap)
+        kept = int(np.count_nonzero(straight(first, last)))
+        if best is None or kept > best[0]:
+            best = (kept, span, first, last)
+        if kept >= ENOUGH_STRETCHES or 2 * span > LONGEST_STRETCH:
+            break
+        span *= 2
+    _, span, first, last = best
+    truth_step = xy[last] - xy[first]
+    truth_chord = np.linalg.norm(truth_step, axis=1)
+    # On a straight stretch the truth's chord is its path; the odometry's path is the
+    # distance its wheels (or its speed) say it rolled, whatever it thinks it turned.
+    is_straight = straight(first, last)
+    travel, travel_se = _ratio((rolled[last] - rolled[first])[is_straight], truth_chord[is_straight])
+    long_enough = truth_chord >= least_chord
+
+    if heading is not None:
+        truth_turn = heading[last] - heading[first]
+        odo_turn = odo[last, 2] - odo[first, 2]
+        turn_noise = np.full(truth_turn.shape, math.sqrt(2.0) * truth.heading_sigma)
+    else:
+        # Consecutive stretches (sharing a fix), both with chords beyond the noise and driven
+        # the same way: the truth's turn between their chords' directions (a chord's direction
+        # is the heading at its middle on a steady turn, turned by π when reversing), with its
+        # noise from each direction's σ√2/chord, against the change of the odometry's own
+        # mean heading over each stretch (unwrapped: an odometry that spins more than a turn
+        # between them still counts every turn).
+        way = np.sign(travelled[last] - travelled[first])
+        pair = long_enough[:-1] & long_enough[1:] & (last[:-1] == first[1:]) & (way[:-1] == way[1:])
+        a, b = np.flatnonzero(pair), np.flatnonzero(pair) + 1
+        ang = np.arctan2(truth_step[:, 1], truth_step[:, 0])
+        truth_turn = np.angle(np.exp(1j * (ang[b] - ang[a])))
+        mean_heading = (heading_sum[last] - heading_sum[first]) / np.maximum(
+            rolled[last] - rolled[first], 1e-300)
+        odo_turn = mean_heading[b] - mean_heading[a]
+        with np.errstate(divide="ignore"):
+            turn_noise = math.sqrt(2.0) * noise * np.hypot(1 / truth_chord[a], 1 / truth_chord[b])
+    # Chosen on the larger of the two turns, so that neither side's turns alone pick them: a
+    # truth that barely turns against an odometry that spins still gives its ratio.
+    larger = np.maximum(np.abs(truth_turn), np.abs(odo_turn))
+    turning = (larger >= MIN_TURN) & (larger >= TURN_SIGMAS * turn_noise)
+    way_turned = np.sign(odo_turn + truth_turn)[turning]
+    turn, turn_se = _ratio(way_turned * odo_turn[turning], way_turned * truth_turn[turning])
+    return MotionRatios(travel, travel_se, int(np.count_nonzero(is_straight)), turn, turn_se,
+                        int(np.count_nonzero(turning)), span, float(np.sum(np.abs(truth_turn[turning]))),
+                        float(np.sum(np.abs(odo_turn[turning]))))
+
+
+def _unit(ratio: float, units: tuple[tuple[float, str, str], ...]) -> tuple[str, str] | None:
+    for factor, what, fix in units:
+        if abs(math.log(ratio / factor)) <= _UNIT_TOLERANCE:
+            return what, fix
+    return None
+
+
+def _status(ratio: float, warn: float) -> Status:
+    off = abs(math.log(ratio))
+    return "fail" if off > math.log(RATIO_FAIL) else "warn" if off > math.log(warn) else "ok"
+
+
+def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool) -> Finding:
+    said = (f"the odometry travels {r.travel:.3g} ± {r.travel_se:.2g} × the truth's distance "
+            f"over {r.travel_stretches} straight stretches of {r.span:.3g} s")
+    status = _status(r.travel, TRAVEL_WARN)
+    if status == "ok":
+        return Finding("travel_ratio", "ok", said, value=r.travel)
+    unit = _unit(r.travel, _TRAVEL_UNITS)
+    if unit is not None:
+        return Finding("travel_ratio", status, f"{said}: {unit[0]}?", unit[1], r.travel)
+    if isinstance(robot, DiffDrive):
+        entry = "m_per_tick (the wheels' radius and ticks per revolution)"
+    else:
+        entry = "the speed's unit and c_scale" if speed_fed else "m_per_tick"
+    why = ("no calibration error is this large" if status == "fail"
+           else "calibrate fits a scale, but one this far off is more often a unit or the robot file")
+    return Finding("travel_ratio", status, f"{said}: {why}",
+                   f"check {entry} in the robot file and the log's distance unit", r.travel)
+
+
+def _turn_finding(r: MotionRatios, robot: Robot) -> Finding:
+    per_metre = r.turn / r.travel if math.isfinite(r.travel) and r.travel > 0 else math.nan
+    said = (f"the odometry turns {r.turn:.3g} ± {r.turn_se:.2g} × as much as the truth "
+            f"({r.odometry_turned:.3g} rad against {r.truth_turned:.3g} rad over {r.turns} turns"
+            + (f"; {per_metre:.3g} × per metre driven)" if math.isfinite(per_metre) else ")"))
+    # A wheeled base turns by the distance its wheels roll (a car and a tricycle by the
+    # steering angle per metre), so a distance's scale scales its turning alike: only the
+    # turning per metre speaks of the steering or the wheel base. A gyro's or a compass's
+    # turning is its own, whatever the speed.
+    by_distance = isinstance(robot, (DiffDrive, Car, Tricycle))
+    gain = per_metre if by_distance and math.isfinite(per_metre) else r.turn
+    status = _status(gain, TURN_WARN)
+    if status == "ok":
+        return Finding("turn_ratio", "ok", said, value=gain)
+    unit = _unit(gain, _TURN_UNITS)
+    if unit is not None:
+        return Finding("turn_ratio", status, f"{said}: {unit[0]}?", unit[1], gain)
+    if isinstance(robot, DiffDrive):
+        advice = (f"check wheel_base in the robot file: the turning per metre says about "
+                  f"{robot.wheel_base * gain:.3g} m (the file has {robot.wheel_base:.3g} m)")
+    elif isinstance(robot, Car) and gain > 1:
+        # Small angles: the turn per metre is tan(α)/L ≈ steer / (ratio · L).
+        advice = (f"a steering-wheel angle read as the road wheels' angle? set steering_ratio to about "
+                  f"{robot.steering_ratio * gain:.2g} (the file has {robot.steering_ratio:.3g}), or check "
+                  "wheel_base and the steering's unit")
+    elif isinstance(robot, (Car, Tricycle)):
+        advice = "check the steering's unit, steering_ratio and wheel_base in the robot file"
+    else:
+        advice = "check the yaw rate's unit and scale (yaw_rate_deg for °/s)"
+    return Finding("turn_ratio", status, said, advice, gain)
+
+
+def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
+                       max_gap: float | None = 0.5) -> list[Finding]:
+    """The ``travel_ratio`` and ``turn_ratio`` findings (none without truth)."""
+    if truth is None:
+        return []
+    r = motion_ratios(log, robot, truth, max_gap)
+    found = []
+    if math.isfinite(r.travel):
+        found.append(_travel_finding(r, robot, "speed" in log.channels))
+    else:
+        found.append(Finding("travel_ratio", "ok", f"only {r.travel_stretches} straight stretch(es) where "
+                             "the truth moves beyond its noise: the odometry's travel not compared with the "
+                             "truth's"))
+    if math.isfinite(r.turn):
+        found.append(_turn_finding(r, robot))
+    else:
+        found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
+                             "odometry's turning not compared with the truth's"))
+    return found

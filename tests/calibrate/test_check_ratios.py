@@ -1,0 +1,208 @@
+"""The odometry's travel and turning against the truth's (``odomkit check``: ``travel_ratio``,
+``turn_ratio``).
+
+Independent truth: the true path of a simulated vehicle, sampled as a 1 Hz GPS with 2 m of
+noise (position-only) or as a motion capture (with heading), and a log of the same drive
+written the way a user gets it wrong — a speed in mph or km/h read as m/s, a
+steering-wheel angle read as the road wheels', a gyro in °/s read as rad/s, a wheel base
+set too small. The units' factors are their definitions (a mile is 1609.344 m), not the
+check's table. An honest log must come back within a few of its standard errors of 1, and
+those standard errors must be honest over many seeds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.check import check_log
+from odomkit.calibrate.check_ratios import check_truth_motion, motion_ratios
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, DiffDrive, GyroOdometry
+from odomkit.track import dead_reckon_log
+from odomkit.truth import Truth
+
+MPH = 1609.344 / 3600  # m/s per mph
+KMH = 1000 / 3600  # m/s per km/h
+CAR = Car(2.7, 0.8, "rear")
+
+
+def car_drive(seed, n=3000, dt=0.1, max_steer=0.15, speed=8.0):
+    """A car's log (speed [m/s], steer [rad]) of smooth random turns between straights (each
+    10 s knot of the steering is a turn with probability 0.5), and its true poses."""
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(n)
+    knots = rng.uniform(-max_steer, max_steer, n // 100 + 2) * (rng.random(n // 100 + 2) < 0.5)
+    log = OdometryLog(t, {"speed": speed + 0.25 * speed * np.sin(t / 37.0),
+                          "steer": np.interp(t, np.arange(knots.size) * 100 * dt, knots)})
+    return log, dead_reckon_log(log, CAR, pose0=(100.0, -50.0, 0.7)).poses
+
+
+def gps(log, poses, seed, sigma=2.0):
+    """1 Hz fixes, off the log's rows by 0.37 s, with σ per axis."""
+    rng = np.random.default_rng(seed + 1000)
+    tg = np.arange(0.37, log.t[-1], 1.0)
+    xy = np.column_stack([np.interp(tg, log.t, poses[:, k]) for k in (0, 1)])
+    return Truth(tg, xy + rng.normal(0.0, sigma, xy.shape), None, sigma, "gps")
+
+
+def with_channel(log, name, factor):
+    return OdometryLog(log.t, {**log.channels, name: factor * log.channels[name]})
+
+
+def by_check(found):
+    return {f.check: f for f in found}
+
+
+def test_an_honest_car_against_gps_is_within_its_standard_errors_of_one():
+    log, poses = car_drive(1)
+    r = motion_ratios(log, CAR, gps(log, poses, 1))
+    assert r.travel_stretches >= 15 and r.turns >= 10
+    assert abs(r.travel - 1) < 4 * r.travel_se and r.travel_se < 0.02
+    assert abs(r.turn - 1) < 4 * r.turn_se and r.turn_se < 0.1
+    found = by_check(check_truth_motion(log, CAR, gps(log, poses, 1)))
+    assert found["travel_ratio"].status == found["turn_ratio"].status == "ok"
+
+
+def test_the_standard_errors_are_honest_over_many_drives():
+    """Over 20 drives the ratios' errors in standard errors spread about 1: within [0.5, 1.6]
+    (a 20-sample standard deviation has a relative standard error of about 16 %)."""
+    z = []
+    for seed in range(20):
+        log, poses = car_drive(100 + seed)
+        r = motion_ratios(log, CAR, gps(log, poses, seed))
+        z.append(((r.travel - 1) / r.travel_se, (r.turn - 1) / r.turn_se))
+    spread = np.std(z, axis=0)
+    assert np.all((spread > 0.5) & (spread < 1.6)), spread
+
+
+@pytest.mark.parametrize(("factor", "said", "fix"), [
+    (1 / MPH, "mph read as m/s", "speed_mph"),
+    (1 / KMH, "km/h read as m/s", "speed_kmh"),
+    (KMH / MPH, "mph read as km/h", "speed_mph"),
+    (MPH / KMH, "km/h read as mph", "speed_kmh"),
+])
+def test_a_speed_in_another_unit_is_named(factor, said, fix):
+    """The log holds the true speed in another unit (its numbers times ``factor``) read as
+    m/s or as the wrong unit; only the distance is wrong: the turning per metre stays 1."""
+    log, poses = car_drive(2)
+    wrong = with_channel(log, "speed", factor)
+    r = motion_ratios(wrong, CAR, gps(log, poses, 2))
+    assert abs(r.travel - factor) < 4 * r.travel_se + 0.01 * factor
+    found = by_check(check_truth_motion(wrong, CAR, gps(log, poses, 2)))
+    travel = found["travel_ratio"]
+    assert travel.status == ("fail" if not 0.5 < factor < 2 else "warn")
+    assert said in travel.message and fix in (travel.advice or "")
+    assert found["turn_ratio"].status == "ok"
+    assert found["turn_ratio"].value == pytest.approx(1.0, abs=0.15)
+
+
+def test_a_steering_wheel_angle_read_as_the_road_wheels_is_caught_on_small_angles():
+    """Steering 15:1 and small road-wheel angles (within 2.3°, so no angle reaches the 60°
+    warning): the odometry turns about 15× per metre (tan(15 s)/tan(s) grows to 16.5 at
+    the largest angle) and the advice names a steering ratio near it."""
+    log, poses = car_drive(3, max_steer=0.04)
+    wrong = with_channel(log, "steer", 15.0)
+    found = by_check(check_truth_motion(wrong, CAR, gps(log, poses, 3, sigma=1.0)))
+    turn = found["turn_ratio"]
+    assert turn.status == "fail" and turn.value is not None and 10 < turn.value < 22
+    assert "steering_ratio to about" in (turn.advice or "")
+    suggested = float((turn.advice or "").split("steering_ratio to about ")[1].split()[0])
+    assert 10 < suggested < 22
+    assert found["travel_ratio"].status == "ok"
+
+
+def test_a_gyro_in_degrees_read_as_radians_is_named():
+    robot = GyroOdometry()
+    rng = np.random.default_rng(4)
+    t = 0.05 * np.arange(4000)
+    rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25))
+    log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
+    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    truth = Truth(t[::2], poses[::2, :2] + rng.normal(0, 0.002, (t[::2].size, 2)), poses[::2, 2], 0.002)
+    found = by_check(check_truth_motion(with_channel(log, "yaw_rate", 180 / math.pi), robot, truth))
+    turn = found["turn_ratio"]
+    assert turn.status == "fail" and "degrees read as radians" in turn.message
+    assert turn.value == pytest.approx(180 / math.pi, rel=0.03)
+    assert "yaw_rate_deg" in (turn.advice or "")
+
+
+@pytest.mark.parametrize("heading", [True, False])
+def test_a_differential_drive_with_a_wrong_wheel_base_is_told_the_right_one(heading):
+    """Wheels 0.5 m apart, the robot file says 0.35 m: the odometry turns 0.5/0.35 = 1.43× per
+    metre; the advice names about 0.5 m. Against a motion capture with and without heading."""
+    true, told = DiffDrive(0.5), DiffDrive(0.35)
+    rng = np.random.default_rng(5)
+    t = 0.02 * np.arange(15000)
+    v = 0.3 + 0.1 * np.sin(t / 7)
+    w = np.interp(t, np.arange(31) * 10.0, rng.uniform(-0.6, 0.6, 31))
+    half = 0.5 * true.wheel_base * w * 0.02
+    log = OdometryLog(t, {"dist_left": np.r_[0.0, (v * 0.02 - half)[1:]],
+                          "dist_right": np.r_[0.0, (v * 0.02 + half)[1:]]})
+    poses = dead_reckon_log(log, true, pose0=np.zeros(3)).poses
+    xy = poses[:, :2] + rng.normal(0, 0.001, (t.size, 2))
+    truth = Truth(t, xy, poses[:, 2] if heading else None, 0.001)
+    found = by_check(check_truth_motion(log, told, truth))
+    turn = found["turn_ratio"]
+    assert turn.status == "warn" and turn.value == pytest.approx(0.5 / 0.35, rel=0.05)
+    said = float((turn.advice or "").split("says about ")[1].split()[0])
+    assert said == pytest.approx(0.5, rel=0.05)
+    assert by_check(check_truth_motion(log, true, truth))["turn_ratio"].status == "ok"
+
+
+def test_a_truth_that_barely_moves_compares_nothing_and_no_truth_gives_no_finding():
+    log, poses = car_drive(6, n=300)
+    still = Truth(np.arange(0.0, 30.0, 1.0), np.zeros((30, 2)), None, 2.0)
+    found = by_check(check_truth_motion(log, CAR, still))
+    assert found["travel_ratio"].status == "ok" and "not compared" in found["travel_ratio"].message
+    assert found["turn_ratio"].status == "ok" and "not compared" in found["turn_ratio"].message
+    assert check_truth_motion(log, CAR, None) == []
+
+
+def test_check_log_fails_a_speed_in_mph_read_as_m_per_s():
+    log, poses = car_drive(7)
+    found = check_log(with_channel(log, "speed", 1 / MPH), CAR, gps(log, poses, 7))
+    assert by_check(found)["travel_ratio"].status == "fail"
+
+
+@pytest.mark.slow
+def test_optiodom_runs_are_within_their_ratios(data_dir):
+    """Real runs against their motion capture, as given and position-only: no warning (the
+    robots' files are a few percent off at most)."""
+    import glob
+
+    from odomkit.io.optiodom import read_experiment
+    from odomkit.truth import truth_from_log
+
+    for kind in ("diff", "tricyc"):
+        for folder in sorted(glob.glob(str(data_dir / "optiodom" / kind / "*" / "*")))[::4]:
+            experiment = read_experiment(folder)
+            log = experiment.runs[0]
+            truth = truth_from_log(log)
+            assert truth is not None
+            for given in (truth, Truth(truth.t, truth.xy)):
+                found = check_truth_motion(log, experiment.metadata.robot(), given)
+                assert [f.status for f in found] == ["ok", "ok"], (folder, [f.message for f in found])
+
+
+def test_the_cli_fails_a_speed_in_mph_read_as_m_per_s_and_names_speed_mph(run_cli, tmp_path):
+    """Through ``odomkit check``: a CSV whose speed column holds mph, against a GPS-like truth
+    file; exit status 1, the finding in the JSON, the fix among the next steps."""
+    log, poses = car_drive(8)
+    truth = gps(log, poses, 8)
+    log_path, truth_path, robot_path = tmp_path / "log.csv", tmp_path / "gps.csv", tmp_path / "car.toml"
+    np.savetxt(log_path, np.column_stack((log.t, log.channels["speed"] / MPH, log.channels["steer"])),
+               delimiter=",", header="t,speed,steer", comments="")
+    np.savetxt(truth_path, np.column_stack((truth.t, truth.xy)), delimiter=",", header="t,x,y", comments="")
+    robot_path.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = 0.8\nencoder_at = "rear"\n')
+    code, out, err = run_cli("check", log_path, "--robot", robot_path, "--truth", truth_path, "--json")
+    assert code == 1, err
+    import json
+
+    report = json.loads(out)
+    [travel] = [f for f in report["findings"] if f["check"] == "travel_ratio"]
+    assert travel["status"] == "fail" and "mph read as m/s" in travel["message"]
+    assert travel["value"] == pytest.approx(1 / MPH, rel=0.04)
+    assert any("speed_mph" in step for step in report["next"])
