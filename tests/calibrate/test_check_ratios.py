@@ -187,16 +187,23 @@ def test_optiodom_runs_are_within_their_ratios(data_dir):
                 assert [f.status for f in found] == ["ok", "ok"], (folder, [f.message for f in found])
 
 
-def test_the_cli_fails_a_speed_in_mph_read_as_m_per_s_and_names_speed_mph(run_cli, tmp_path):
-    """Through ``odomkit check``: a CSV whose speed column holds mph, against a GPS-like truth
-    file; exit status 1, the finding in the JSON, the fix among the next steps."""
+def _mph_files(tmp_path):
+    """A car's CSV whose speed column holds mph (header ``speed``), its GPS, its robot file."""
     log, poses = car_drive(8)
     truth = gps(log, poses, 8)
     log_path, truth_path, robot_path = tmp_path / "log.csv", tmp_path / "gps.csv", tmp_path / "car.toml"
     np.savetxt(log_path, np.column_stack((log.t, log.channels["speed"] / MPH, log.channels["steer"])),
                delimiter=",", header="t,speed,steer", comments="")
     np.savetxt(truth_path, np.column_stack((truth.t, truth.xy)), delimiter=",", header="t,x,y", comments="")
-    robot_path.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = 0.8\nencoder_at = "rear"\n')
+    robot_path.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = 0.8\n'
+                          'encoder_at = "rear"\n')
+    return log_path, truth_path, robot_path
+
+
+def test_the_cli_fails_a_speed_in_mph_read_as_m_per_s_and_names_speed_mph(run_cli, tmp_path):
+    """Through ``odomkit check``: a CSV whose speed column holds mph, against a GPS-like truth
+    file; exit status 1, the finding in the JSON, the fix among the next steps."""
+    log_path, truth_path, robot_path = _mph_files(tmp_path)
     code, out, err = run_cli("check", log_path, "--robot", robot_path, "--truth", truth_path, "--json")
     assert code == 1, err
     import json
@@ -206,3 +213,27 @@ def test_the_cli_fails_a_speed_in_mph_read_as_m_per_s_and_names_speed_mph(run_cl
     assert travel["status"] == "fail" and "mph read as m/s" in travel["message"]
     assert travel["value"] == pytest.approx(1 / MPH, rel=0.04)
     assert any("speed_mph" in step for step in report["next"])
+
+
+def test_a_calibration_bent_by_a_unit_says_what_check_finds(run_cli, tmp_path):
+    """``calibrate --truth`` on the same files lands in a local minimum inside its range
+    (c_scale about 0.7 for the 0.447 that mph needs, and a wheel base bent to fit): it
+    warns with the cause the check finds."""
+    log_path, truth_path, robot_path = _mph_files(tmp_path)
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot_path, "--truth", truth_path)
+    assert code == 0
+    [said] = [line for line in err.splitlines() if "unit or robot-file error" in line]
+    assert "mph read as m/s" in said and "speed_mph" in said
+
+
+def test_a_calibration_run_off_its_range_says_what_check_finds(run_cli, tmp_path):
+    """The same car's speed written in km/h, read as m/s (3.6×), and c_scale fixed by the
+    robot file's range: the fit runs to its edge, and the one-line error names the cause."""
+    log_path, truth_path, robot_path = _mph_files(tmp_path)
+    data = np.loadtxt(log_path, delimiter=",", skiprows=1)
+    data[:, 1] *= MPH / KMH
+    np.savetxt(log_path, data, delimiter=",", header="t,speed,steer", comments="")
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot_path, "--truth", truth_path)
+    assert code == 2 and out == ""
+    assert "edge of the plausible range" in err and "km/h read as m/s" in err and "speed_kmh" in err
+    assert len(err.strip().splitlines()) == 1

@@ -172,8 +172,16 @@ def calibrate_files(
             # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
             # truths above are already on the log's clock).
             given = truth[0].time_offset
-            cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None,
-                                      steering_cubic=steering_cubic)
+            try:
+                cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None,
+                                          steering_cubic=steering_cubic)
+            except ModelError as exc:
+                raise ModelError(str(exc) + _why_off(runs, truths, robot)) from exc
+            # A unit read wrong can also land in a local minimum inside the range (mph read as
+            # m/s on a simulated car: c_scale 0.71, wheel base 1.65 m, 65 m residuals).
+            if off := _why_off(runs, truths, robot, only_failures=True):
+                warnings.warn("the calibration may be bent by a unit or robot-file error" + off, UserWarning,
+                              stacklevel=2)
             summary = cal.to_dict()
             if len(runs) > 1:
                 summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None, steering_cubic)
@@ -233,6 +241,21 @@ def calibrate_files(
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot, only_failures: bool = False
+             ) -> str:
+    """What ``odomkit check`` finds wrong with the odometry's travel or turning against the
+    truth (its warnings and failures, or only its failures: off by more than 2×), for a
+    calibration: a unit read wrong or a steering ratio left out runs a fit to the edge of
+    its range or into a local minimum, and the check names it where the fit cannot."""
+    from odomkit.calibrate.check_ratios import check_truth_motion
+
+    said = [f"{log.source or 'the log'}: {f.message}" + (f"; {f.advice}" if f.advice else "")
+            for log, found in zip(runs, truths, strict=True)
+            for f in check_truth_motion(log, robot, found)
+            if f.status == "fail" or (f.status == "warn" and not only_failures)]
+    return "".join(f"; odomkit check finds {s}" for s in dict.fromkeys(said))
 
 
 def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: list[Truth], robot: Any,
