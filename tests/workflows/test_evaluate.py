@@ -345,3 +345,23 @@ def test_few_window_ends_are_warned_about_with_an_honest_models_spread(tmp_path)
     assert all(e["end"] - e["start"] == pytest.approx(10.0, abs=0.02) for e in ends)
     assert all(a["end"] == b["start"] for a, b in zip(ends[:-1], ends[1:], strict=True))
     assert np.mean([e["nees"] for e in ends]) == pytest.approx(out["nees_position_mean"], rel=1e-12)
+
+
+def test_a_robot_file_without_noise_gives_the_errors_alone(tmp_path, run_cli):
+    """``evaluate LOG --robot R`` where R has no [noise]: the whole run's errors equal those
+    of ``track --out`` + ``evaluate TRACK.csv`` (a second route), NEES and coverage are None
+    and said to be missing; ``--window`` is refused (it scores a covariance)."""
+    text = Path(ROBOT).read_text()
+    bare = tmp_path / "bare.toml"
+    bare.write_text(text[: text.index("[noise]")] if "[noise]" in text else text)
+    run_track(RUN, bare, out=tmp_path / "track.csv")
+    a = evaluate_tracks([tmp_path / "track.csv"], [TruthOptions()])
+    with pytest.warns(UserWarning, match=r"no \[noise\] table: the errors alone"):
+        b = evaluate_logs([RUN], bare, [TruthOptions()])
+    for key in ("rows_evaluated", "final_position_error", "max_position_error", "ate_rmse", "drift_percent"):
+        assert b[key] == pytest.approx(a[key], rel=1e-12), key
+    assert b["nees_position_mean"] is None and b["coverage"]["0.95"] is None and b["windows"] == 0
+    code, out, err = run_cli("evaluate", RUN, "--robot", bare, "--window", "10s")
+    assert code == 2 and "no [noise] table" in err and "--window" in err
+    code, out, err = run_cli("evaluate", RUN, "--robot", bare)
+    assert code == 0 and "position error: final" in out and "NEES" not in out

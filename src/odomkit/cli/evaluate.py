@@ -144,5 +144,7 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
             c = one["coverage"]
             print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
                   f"{_fmt(c['0.5'], '.2f')}, NEES mean {one['nees_position_mean']:.3g}")
+    if out["nees_position_mean"] is None and whole_runs:
+        return  # a robot file without [noise]: errors alone, no covariance to judge
     note = (CONTAINMENT_NOTE if not windowed else WHOLE_RUN_NOTE if whole_runs else WINDOWED_NOTE)
     print(f"note: {note}")

@@ -384,7 +384,8 @@ def evaluate_logs(
     Parameters
     ----------
     logs : log paths
-    robot_path : robot file with a ``[noise]`` table
+    robot_path : robot file with a ``[noise]`` table (without one: the whole runs' errors
+        alone, and ``--window`` is refused)
     truth : one :class:`~odomkit.workflows.truth.TruthOptions` per log
     log_options : how to read the logs
     window : ``"30s"`` or ``"5m"``; None for one window per log from its first row
@@ -405,7 +406,7 @@ def evaluate_logs(
     _check_plot(plot, overwrite, [*logs, robot_path, *(t.path for t in truth if t.path is not None)])
     scored = score_logs(logs, robot_path, truth, log_options=log_options, window=window,
                         min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
-                        progress=progress)
+                        progress=progress, errors_only=True)
     out = _report(scored, rpe_distances)
     if plot is not None:
         from odomkit.evaluate import coverage
@@ -494,24 +495,27 @@ def score_logs(
     rpe_distances: Sequence[float] = (1.0,),
     method: str = "exact",
     progress: Progress = NO_PROGRESS,
+    errors_only: bool = False,
 ) -> list[Scored]:
     """Each log's raw figures of :func:`evaluate_logs` (same parameters), before pooling:
     its position errors, and its window-end errors, covariances and times (for figures).
-    Its notes are in each :class:`Scored`'s ``warnings``, not yet issued."""
+    Its notes are in each :class:`Scored`'s ``warnings``, not yet issued.
+
+    ``errors_only``: a robot file without ``[noise]`` gives the whole runs' errors alone
+    (no window ends, NEES or coverage; a windowed test is still refused) instead of an error.
+    """
     from odomkit.io.robotfile import read_robot
     from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions, load_log
     from odomkit.workflows.truth import resolved_truth
 
     robot, noise = read_robot(robot_path)
-    if not noise:
-        raise InputError("the robot file has no [noise] table: evaluate --robot scores a predicted "
-                         "covariance (add one: fit-noise writes it); for the errors alone, write the "
-                         "track (odomkit track LOG --robot ROBOT --out TRACK.csv) and evaluate TRACK.csv "
-                         "--truth ...",
-                         source=str(robot_path))
+    if not noise and (window is not None or not errors_only):
+        raise InputError("the robot file has no [noise] table: the windowed test scores a predicted "
+                         "covariance (add one: fit-noise writes it); without --window evaluate gives the "
+                         "errors alone", source=str(robot_path))
     truth = resolved_truth(robot_path, truth)
-    noise_arg = noise if len(noise) > 1 else noise[0]
+    noise_arg = None if not noise else noise if len(noise) > 1 else noise[0]
     spec = parse_window(window) if window else None
     scored = []
     with stage(progress, len(logs), "logs"):
@@ -521,6 +525,10 @@ def score_logs(
             scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
                                      align=align, rpe_distances=rpe_distances, method=method))
             progress.advance()
+    if noise_arg is None:
+        note = (f"{robot_path}: the robot file has no [noise] table: the errors alone, no NEES or coverage "
+                "(fit-noise writes one)")
+        return [replace(scored[0], warnings=[note, *scored[0].warnings]), *scored[1:]]
     return _windowless_left_out(scored)
 
 
@@ -538,7 +546,7 @@ def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
     return [replace(first, warnings=[*first.warnings, note]), *scored[1:]]
 
 
-def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, opts: TruthOptions,
+def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, opts: TruthOptions,
                spec: WindowSpec | None, *, min_travel: float, align: str, rpe_distances: Sequence[float],
                method: str) -> Scored:
     """Whole-run figures from truth at the first row, and the window ends of one log."""
@@ -565,6 +573,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, op
                          align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                          min_travel=0.0, honesty_from_rows=False, t=track.t)
     notes = list(whole.warnings)
+    if noise is None:  # the errors alone (score_logs' errors_only)
+        return replace(whole, rows_skipped=whole.rows_skipped + first, warnings=notes)
     # The honesty test: one window per span of the log, restarted from truth; the whole-log
     # window (no spec) starts with the whole run (as fit-noise's: odomkit.window_errors.log_window_basis).
     valid = samples.valid
