@@ -19,6 +19,7 @@ import numpy as np
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
+from odomkit.io._headers import no_such_column, time_like, time_text_error
 from odomkit.io.table import (
     check_time_order,
     counter_increments,
@@ -150,16 +151,6 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
     return {"t": times[0], **{HEADER_ALIASES.get(name.lower(), name): name for name in known}}
 
 
-def _time_like(name: str) -> bool:
-    """Whether a header name not in :data:`TIME_NAMES` may still hold a time (``Seconds``,
-    ``time_s``, ``Timestamp (ns)``), for the ``--columns`` hint."""
-    import re
-
-    words = set(re.findall(r"[a-z]+", name.lower()))
-    return "time" in name.lower() or "stamp" in name.lower() or bool(
-        words & {"t", "sec", "secs", "second", "seconds"})
-
-
 def _why_not_read(times: Sequence[str], known: Sequence[str], unknown: Sequence[str]) -> str:
     """Why a header is not read by its own names: every name odomkit does not know, and
     which time column it has (none, several, or one beside other names that look like a
@@ -168,7 +159,7 @@ def _why_not_read(times: Sequence[str], known: Sequence[str], unknown: Sequence[
         return ", ".join(repr(n) for n in found)
 
     said = [f"its header names {names(unknown)}, not odomkit's own names"] if unknown else []
-    other = [n for n in unknown if _time_like(n)]
+    other = [n for n in unknown if time_like(n)]
     pick = "map the one that holds the time as t=<header name>"
     if len(times) > 1:
         said.append(f"it names {len(times)} time columns, {names([*times, *other])}: {pick}")
@@ -249,10 +240,28 @@ def _by_header(columns: Mapping[str, str], layout: TextLayout, text: str,
     index = {}
     for key, name in columns.items():
         if name not in header:
-            raise InputError(f"no column named {name!r} in the header (it has {header})",
+            raise InputError(no_such_column(name, header, "--columns", key, "the log"),
                              source=source, line=layout.header_line)
         index[key] = header.index(name)
     return layout, index
+
+
+def _check_time_text(text: str, layout: TextLayout, index: Mapping[str, int], source: str,
+                     chosen: bool) -> None:
+    """Refuse a time column whose first data row holds a date or a clock time (a CAN logger's
+    wall-clock ``Time``), naming the header's numeric time columns to read instead (in a whole
+    ``--columns`` map where the user gave none, or gave the columns in order: ``chosen``)."""
+    column = index["t"]
+    for lineno, content in content_lines(text):
+        if lineno <= layout.header_line:
+            continue
+        row = split_fields(content, layout.delimiter)
+        said = None if column >= len(row) else time_text_error(
+            row[column], row, layout.header, column, "--columns", "--time-unit",
+            others=dict(index) if chosen else None)
+        if said:
+            raise InputError(said, source=source, line=lineno)
+        return
 
 
 def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -> None:
@@ -337,6 +346,7 @@ def read_csv_log(
                          "(parse --columns text with parse_columns)")
     text = read_text(path)
     layout = sniff_layout(text, source)
+    given = columns
     if columns is None:
         commented = _commented_names(text, layout.ncols) if layout.header is None else None
         columns = _columns_from_header(layout.header, source, example, commented)
@@ -347,6 +357,7 @@ def read_csv_log(
     else:
         layout, index = _in_order(columns, layout, text, source)
         labels = {key: f"column {i + 1}" for key, i in index.items()}
+    _check_time_text(text, layout, index, source, chosen=given is None or not isinstance(given, Mapping))
     counters = sorted({col for key, col in index.items() if key in INCREMENT_CHANNELS}) if cumulative else []
     # Only the columns named are read as numbers: the others may hold text (a CAN log's date).
     table = read_table(path, layout.ncols, delimiter=layout.delimiter, skip_header=layout.header_line,

@@ -352,16 +352,28 @@ def _document(path: Path) -> dict[str, Any]:
     return doc
 
 
+#: Robots whose ``[robot]`` table may go without a wheel size (their logs may give speeds or
+#: distances in metres): the reader then takes ``m_per_tick`` = 1.
+_SIZE_OPTIONAL = (Tricycle, GyroOdometry, CompassOdometry, Car)
+
+
 def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
                   truth: Mapping[str, float] | None = None, name: str | None = None) -> dict[str, Any]:
     """The TOML document of a robot (and noise, the ``[truth]`` table: :data:`TRUTH_KEYS`,
-    and ``[robot] name`` when given), as written by :func:`write_robot`."""
+    and ``[robot] name`` when given), as written by :func:`write_robot`: it reads back to the
+    same robot and noise (:func:`read_robot`), without the reader's default ``m_per_tick``
+    = 1 of a robot that needs no wheel size, and with ``[noise.parameters]``' ``mode`` after
+    its σ's."""
     from dataclasses import asdict
 
     table: dict[str, Any] = {"type": robot_type_name(robot)}
     if name is not None:
         table["name"] = name
     table.update(asdict(robot))
+    if isinstance(robot, _SIZE_OPTIONAL) and robot.m_per_tick == 1.0:
+        # The reader's default where no wheel size is given, and noise in the file of a robot
+        # fed speeds or metres (a car's speed channel is m/s, which m_per_tick never scales).
+        del table["m_per_tick"]
     doc: dict[str, Any] = {"robot": table}
     if noise:
         noise_table: dict[str, Any] = {}
@@ -370,8 +382,10 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
             if isinstance(model, ParameterUncertainty):
                 # Only the robot's own bias parameters (and any other that is set, which the
                 # reader then refuses by name): a car's file need not list a gyro's, at zero.
-                own = set(PARAMETERS[robot_type_name(robot)]) | {"mode"}
-                entry = {key: value for key, value in entry.items() if key in own or value}
+                own = set(PARAMETERS[robot_type_name(robot)])
+                entry = {key: value for key, value in entry.items()
+                         if key != "mode" and (key in own or value)}
+                entry["mode"] = model.mode  # after the σ's it qualifies, as documented above
             if model.toml_table.startswith("noise."):
                 noise_table[model.toml_table.split(".", 1)[1]] = entry
             else:

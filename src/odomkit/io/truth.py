@@ -54,6 +54,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
+from odomkit.io._headers import no_such_column, time_text_error
 from odomkit.io.table import to_seconds
 from odomkit.io.text import content_lines, is_number, read_text, seconds_per_unit, sniff_layout, split_fields
 from odomkit.truth import Truth
@@ -200,7 +201,7 @@ def _csv_columns(path: Path, header: list[str] | None, ncols: int,
         index = {}
         for key, name in columns.items():
             if name not in header:
-                raise InputError(f"no column named {name!r} in the header (it has {header})",
+                raise InputError(no_such_column(name, header, "--truth-columns", key, "the truth file"),
                                  source=str(path))
             index[key] = header.index(name)
     elif header is not None:
@@ -427,6 +428,11 @@ def read_truth(
     want = {"tum": 8, "kitti": 13}.get(fmt, ncols)
     rows = [(n, split_fields(s, delimiter)) for n, s in lines]
     index = _csv_columns(path, header, ncols, spec) if fmt == "csv" else {}
+    if "t" in index and index["t"] < len(rows[0][1]):
+        said = time_text_error(rows[0][1][index["t"]], rows[0][1], header, index["t"], "--truth-columns",
+                               "--truth-time-unit", others=None if isinstance(spec, dict) else index)
+        if said:
+            raise InputError(said, source=str(path), line=rows[0][0])
     # Only the columns named are read as numbers: the others may hold text (a GPS log's date).
     data = _table(path, rows, want, sorted(set(index.values())) if fmt == "csv" else None)
     theta: NDArray[np.float64] | None

@@ -41,7 +41,12 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.robot import Robot
 
-__all__ = ["calibrate_files", "file_wheel_radius", "noise_files", "optiodom_square_table"]
+__all__ = ["calibrate_files", "CUBIC_HINT", "file_wheel_radius", "noise_files", "optiodom_square_table"]
+
+
+#: What a car whose drive's halves disagree is told to try (a caller without the flag, the
+#: report, names its own way to it).
+CUBIC_HINT = "try --fit-steering-cubic (a steering ratio that varies with the angle)"
 
 
 def calibrate_files(
@@ -63,6 +68,7 @@ def calibrate_files(
     own_truth: TruthOptions | None = None,
     plot: str | Path | None = None,
     steering_cubic: bool = False,
+    cubic_hint: str = CUBIC_HINT,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -102,6 +108,8 @@ def calibrate_files(
         UMBmark's return errors (:func:`odomkit.workflows.figures.calibration_figure`).
     steering_cubic : fit a car's ``steering_cubic`` too (exact, from a trajectory or truth
         fixes; ``--fit-steering-cubic``).
+    cubic_hint : the advice a car whose drive's halves disagree gets (default
+        :data:`CUBIC_HINT`, the flag; a caller without it names its own way).
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -187,7 +195,7 @@ def calibrate_files(
                 summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None, steering_cubic)
             else:
                 summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None,
-                                                     steering_cubic)
+                                                     steering_cubic, cubic_hint)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
                 {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
@@ -286,7 +294,8 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: li
 
 
 def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
-                     clock_fitted: bool, steering_cubic: bool = False) -> list[dict[str, Any]] | None:
+                     clock_fitted: bool, steering_cubic: bool = False, cubic_hint: str = CUBIC_HINT
+                     ) -> list[dict[str, Any]] | None:
     """One drive's halves calibrated alone and tried on each other (JSON ``halves``), and a
     warning where the calibration does not hold along the drive
     (:func:`odomkit.calibrate.stability.halves_disagree`); None where a half cannot be
@@ -301,8 +310,7 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     said = halves_disagree(halves)
     if said and isinstance(robot, Car) and not steering_cubic and robot.steering_cubic == 0:
         # What the real car's disagreement was (docs/results/honesty.md): a variable-ratio rack.
-        said += ("; for a car that turns hard in one part of the drive and not in another, try "
-                 "--fit-steering-cubic (a steering ratio that varies with the angle)")
+        said += f"; for a car that turns hard in one part of the drive and not in another, {cubic_hint}"
     if said:
         warnings.warn(said, UserWarning, stacklevel=2)
     return [half.to_dict() for half in halves]

@@ -141,6 +141,12 @@ def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptio
     return scored, summarise(scored, (1.0,))
 
 
+#: calibrate's advice for a car whose halves disagree names its flag, which report lacks.
+_CUBIC_FROM_REPORT = ("try odomkit calibrate --fit-steering-cubic --out-robot FILE (a steering ratio that "
+                      "varies with the angle, which report's own calibration does not fit), then report with "
+                      "--robot FILE")
+
+
 def _attempt(what: str, step: Callable[[], Any], problems: list[str]) -> Any:
     """Run one optional step; a refusal (bad or unsuitable data) becomes a note, not a failure
     of the whole report."""
@@ -339,6 +345,11 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
               "a start heading the truth's fitted noise cannot support is left out)")
     blocks.append(coverage_table([("robot file's noise", ev["coverage"], ""),
                                   ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")], scored))
+    if n == 0:  # nothing to draw a fraction of
+        blocks.append(Paragraph("The fitted noise scores no window end: the truth's fitted noise is too "
+                                "large for its fixes to give any window a start heading, so this log cannot "
+                                "test it.", "warning"))
+        return Section("noise", "The fitted noise", tuple(blocks))
     fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
         ax[0], {"robot file's noise": ev["coverage"], "fitted noise (in-sample)": ev_fit["coverage"]},
         n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
@@ -505,7 +516,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
     """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS
     (``step`` advances once per step, :data:`_TRUTH_STEPS` in all; the workflows called
     report no progress of their own, so that stages do not nest)."""
-    from odomkit.io.robotfile import read_robot
+    from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_truth_table
     from odomkit.workflows.calibration import calibrate_files
     from odomkit.workflows.fit_amcl import fit_amcl_files
     from odomkit.workflows.fit_noise import fit_noise_files
@@ -526,7 +537,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         # truth file is compared position by position on its own clock.
         how: dict[str, Any] = ({"truth": [options]} if options.path is not None else {"source": "trajectory"})
         cal = _attempt("the calibration", lambda: calibrate_files(
-            [log], robot, out_robot=cal_path, log_options=log_options, **how), problems)
+            [log], robot, out_robot=cal_path, log_options=log_options, cubic_hint=_CUBIC_FROM_REPORT, **how),
+            problems)
         after = run_after = None
         if cal is not None:
             after = _scored(log, cal_path, options, log_options, window, method)[1]
@@ -546,6 +558,9 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             warnings.warn(f"the noise fit: {note}", stacklevel=2)
         guessed = {k: float(v) for m in read_robot(robot)[1] for k, v in vars(m).items()
                    if fit is not None and k in fit["parameters"]}
+        # The truth's own noise is no noise model: the robot file keeps it in [truth] (sigma,
+        # heading_sigma, time_sigma), which fit-noise fits as truth_sigma, ... and writes back there.
+        guessed.update({f"truth_{k}": v for k, v in read_truth_table(robot).items() if k in TRUTH_SIGMAS})
         sections.append(_noise_section(fit, problems[-1] if len(problems) > before else None, guessed, ev,
                                        ev_fit, figures))
         step.advance()

@@ -140,6 +140,7 @@ def run_track(
 
         check_plot_file(plot)
     robot, noise = read_robot(robot_path)
+    flagged = options.time_offset is not None  # --truth-time-offset, else the robot file's
     options = clock_from_robot(robot_path, [options])[0]  # the robot file's [truth] time_offset
     _refuse_covariance_flags(engine, cov0, with_covariance, bool(noise), robot_path)
     log = load_log(log_path, robot, log_options or LogOptions(), progress=progress)
@@ -158,8 +159,9 @@ def run_track(
                                                 hint="give --initial-pose")
             if first > 0:
                 note = late_start_note(log.source, "the track", log.t, first, int(np.argmax(samples.valid)))
-                warnings.warn(f"{note} of the track and its outputs; give --initial-pose to start at the "
-                              "first row", stacklevel=2)
+                why = _lead_within_a_period(log.t, found, first, options.time_offset or 0.0, flagged)
+                warnings.warn(f"{note} of the track and its outputs{why}; give --initial-pose to start at "
+                              "the first row", stacklevel=2)
                 log, truth_rows = log.from_row(first), truth_rows[first:]
             pose0 = (float(start[0]), float(start[1]), float(start[2]))
             if cov0 is None and start_cov.any():
@@ -194,6 +196,27 @@ def run_track(
 
         outputs["plot"] = str(track_figure(plot, run, robot))
     return run
+
+
+def _lead_within_a_period(t: NDArray[np.float64], truth: Truth, first: int, offset: float,
+                          flagged: bool) -> str:
+    """Why rows before ``first`` have no truth when the truth's first fix comes less than one
+    log period (the median step) after the log's first row: the rows are left out all the
+    same (an interpolation cannot reach before the first fix), but a lead that small looks
+    like a bug where log and truth come from one file, and is most often the clock offset
+    (``--truth-time-offset``, ``flagged``, or the robot file's ``[truth] time_offset``,
+    which calibrate fits) moving the fixes later. "" otherwise."""
+    if first == 0 or t.size < 2 or first != int(np.searchsorted(t, truth.t[0])):
+        return ""  # no rows left out, or left out for want of a heading: late_start_note says
+    lead, period = float(truth.t[0] - t[0]), float(np.median(np.diff(t)))
+    if not 0 < lead < period:
+        return ""
+    said = (f": the truth's first fix comes {lead:.4g} s after the log's first row, less than one log period "
+            f"({period:.4g} s)")
+    if offset and truth.t[0] + offset <= t[0]:  # on its own clock the truth covers the first row
+        source = "--truth-time-offset" if flagged else "the robot file's [truth] time_offset"
+        said += f", because {source} ({offset:.4g} s) moves the truth's clock"
+    return said
 
 
 def _own_path(log: OdometryLog, robot: Robot, method: Method, truth: Truth) -> NDArray[np.float64] | None:
