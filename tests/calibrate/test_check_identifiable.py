@@ -289,3 +289,63 @@ def test_a_noisy_truth_without_a_stated_sigma_is_judged_at_its_own_scatter():
     assert got != figures(check_identifiable(log, robot, None))  # the 5 mm default
     stated = figures(check_log(log, robot, Truth(gps.t, gps.xy, sigma=0.5)))
     assert stated == figures(check_identifiable(log, robot, 0.5))
+
+
+# --- the message states the σ it assumed, where it came from, and that it is a lower bound --
+
+def _car_drive():
+    """A car on a gentle S-curve for 300 s: the robot, its log and its exact track."""
+    t = np.arange(0.0, 300.0, 0.1)
+    robot = Car(2.7, 0.0, "rear")
+    log = OdometryLog(t, {"speed": 8.0 + 2.0 * np.sin(t / 20.0), "steer": 0.05 * np.sin(t / 15.0)})
+    poses = dead_reckon_log(log, robot).poses
+    return robot, log, poses
+
+
+def _sigma_in(message):
+    """The σ [m] and its source as the message prints them."""
+    import re
+
+    found = re.search(r"at σ = ([0-9.e+-]+) (mm|m) per axis \((.+?)\)", message)
+    assert found, message
+    return float(found.group(1)) * (1e-3 if found.group(2) == "mm" else 1.0), found.group(3)
+
+
+@pytest.mark.parametrize("source", ["stated", "scatter", "default", "no truth"])
+def test_the_figures_state_the_sigma_they_assume_and_where_it_came_from(source):
+    """BMW user study, finding 5: "±8.9e-09 rad" with neither its σ (the fixes' 26.5 mm
+    scatter, while the odometry drifts metres) nor that it is a lower bound. The σ printed is
+    the one the figure used: the figure is linear in σ, so the used σ is the finding's value
+    over the value at σ = 1 m, independently of the text."""
+    from odomkit.calibrate.check import check_log
+    from odomkit.truth import Truth, scatter_sigma
+
+    robot, log, poses = _car_drive()
+    rng = np.random.default_rng(3)
+    gps = Truth(log.t[::10], poses[::10, :2] + rng.normal(0.0, 1.0, (log.t[::10].size, 2)))
+    truth, expected, words = {
+        "stated": (Truth(gps.t, gps.xy, sigma=0.5), 0.5, "the truth's --truth-sigma"),
+        "scatter": (gps, scatter_sigma(gps), "the fixes' scatter"),
+        "default": (Truth(log.t, poses[:, :2]), 0.005, "the default"),
+        "no truth": (None, 0.005, "the default"),
+    }[source]
+    per_metre = {f.message.split(":")[0]: f.value for f in check_identifiable(log, robot, 1.0)}
+    found = [f for f in check_log(log, robot, truth) if f.check == "identifiable"]
+    assert len(found) == 3
+    for f in found:
+        label = f.message.split(":")[0]
+        used = f.value / per_metre[label]
+        assert used == pytest.approx(expected, rel=1e-9)  # the value is what it was
+        printed, said = _sigma_in(f.message)
+        assert printed == pytest.approx(used, rel=5e-3), f.message
+        assert said == words, f.message
+        assert "a lower bound" in f.message
+
+
+def test_a_sigma_given_by_the_caller_is_stated_as_given():
+    from odomkit.calibrate.check_identifiable import identifiability_sigma
+
+    robot, log, _ = _car_drive()
+    for f in check_identifiable(log, robot, 0.02):
+        assert _sigma_in(f.message) == (pytest.approx(0.02), "as given")
+    assert identifiability_sigma(None).value == 0.005 and identifiability_sigma(None).source == "default"

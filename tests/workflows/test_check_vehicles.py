@@ -58,7 +58,7 @@ def test_unicycle_straight_run_gives_the_bias_and_not_the_yaw_rate_scale(run_cli
     assert math.isclose(found["yaw-rate bias"]["value"], expected, rel_tol=1e-9)
     assert found["speed scale c_scale"]["status"] == "ok"
     assert found["yaw-rate scale"]["status"] == "fail" and found["yaw-rate scale"]["value"] is None
-    assert "2 mm position noise" in found["yaw-rate scale"]["message"]
+    assert "σ = 2 mm per axis" in found["yaw-rate scale"]["message"]
     assert any("turn more, both ways" in step for step in report["next"])
 
 

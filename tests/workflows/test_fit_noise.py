@@ -416,3 +416,55 @@ def test_the_text_reports_warnings_on_stderr_once_each_as_every_command_does(run
             if line.startswith("odomkit: warning: ")]
     assert said and sorted(said) == sorted(result["warnings"])
     assert "warning: " not in stdout
+
+
+def _uncalibrated_car(folder, scale_error=0.2, n=3000, period=0.1):
+    """A car sampled every ``period`` s whose log reads its speed ``scale_error`` short (never
+    calibrated), the truth its exact track with heading; the robot file names the car's
+    white noise (so sigma_dt is fitted)."""
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Car
+    from odomkit.track import dead_reckon_log
+
+    rng = np.random.default_rng(1)
+    t = np.arange(n) * period
+    speed, steer = 15 + 10 * np.sin(t / 20), 0.05 * np.sin(t / 7)
+    true = OdometryLog(t, {"speed": speed * (1 + scale_error) * (1 + rng.normal(0, 0.01, n)),
+                           "steer": steer + rng.normal(0, 0.002, n)})
+    poses = dead_reckon_log(true, Car(2.7)).poses
+    log, truth, robot = folder / "car.csv", folder / "gt.csv", folder / "car.toml"
+    np.savetxt(log, np.column_stack([t, speed, steer]), delimiter=",", header="t,speed,steer", comments="",
+               fmt="%.9g")
+    np.savetxt(truth, np.column_stack([t, poses]), delimiter=",", header="t,x,y,theta", comments="",
+               fmt="%.9g")
+    robot.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\n\n'
+                     "[noise]\nsigma_speed = 0.1\nsigma_steer = 0.002\nsigma_dt = 0.001\n")
+    return robot, ["--log", str(log), "--truth", str(truth), "--columns", "t=t,speed=speed,steer=steer"]
+
+
+def test_an_implausible_fitted_value_is_warned_about_in_text_and_json(run_cli, tmp_path):
+    """BMW user study, finding 2: fit-noise wrote sigma_dt 0.498 s for a log sampled every
+    0.086 s without a word. An uncalibrated car (speed 20 % short) makes the fit put the
+    error into the period's jitter: the warning names it, the 0.1 s period and its limit,
+    on stderr and in the JSON; held (--fix sigma_dt) it is not judged. The real OptiTrack
+    runs, white and bias, get no such warning."""
+    robot, args = _uncalibrated_car(tmp_path)
+    flags = ("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white")
+    code, stdout, stderr = run_cli(*flags, "--out", tmp_path / "a.toml")
+    assert code == 0, stderr
+    said = [line.removeprefix("odomkit: warning: ") for line in stderr.splitlines()
+            if line.startswith("odomkit: warning: sigma_dt = ")]
+    assert len(said) == 1
+    assert "is implausible (limit 0.05 s: half the logs' mean sample period, 0.1 s)" in said[0]
+    assert "--fix sigma_dt" in said[0] and " is implausible" not in stdout
+    code, stdout, stderr = run_cli(*flags, "--out", tmp_path / "b.toml", "--json")
+    assert code == 0, stderr
+    result = json.loads(stdout)
+    assert result["parameters"]["sigma_dt"] > 0.05 and said[0] in result["warnings"]
+    assert said[0].startswith(f"sigma_dt = {result['parameters']['sigma_dt']:.3g} s ")
+    code, stdout, stderr = run_cli(*flags, "--fix", "sigma_dt", "--out", tmp_path / "c.toml", "--json")
+    assert code == 0, stderr
+    assert not any(w.startswith("sigma_dt") for w in json.loads(stdout)["warnings"])
+    real, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--kinds", "white,bias",
+                   name="r.toml")
+    assert not any("implausible" in w for w in real["warnings"]), real["warnings"]

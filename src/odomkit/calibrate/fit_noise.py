@@ -18,8 +18,11 @@ data cannot identify that parameter.
 Warnings (the result's ``warnings``) say when a result could be silently wrong: a
 parameter the data cannot identify (flat profile, correlation near ±1, too little
 turning, too few windows or logs), a first-order model stretched too far (σθ large at
-window ends), and logs that disagree with the fit (each log's eᵀΣ⁻¹e against its χ²
-distribution, Bonferroni-corrected).
+window ends), logs that disagree with the fit (each log's eᵀΣ⁻¹e against its χ²
+distribution, Bonferroni-corrected), and a fitted value no real robot or truth has (a
+period jitter over half the sample period, a run-to-run scale over 10 %, a truth stamped
+seconds off: :mod:`odomkit.calibrate.noise_plausible`), where the fit has put error the
+model does not explain.
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import brentq
 from scipy.stats import chi2
 
+from odomkit.calibrate.noise_plausible import implausible_values
 from odomkit.calibrate.window_likelihood import WindowLikelihood
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import coverage
@@ -578,6 +582,10 @@ def fit_noise(
     informed = np.array([j for j in free if j not in flat], dtype=np.intp)
     corr = _correlation(prob, v_hat, informed) if informed.size > 1 else np.eye(informed.size)
     keys = [p.key for p in params]
+    # Only what the data fitted is judged: a value held or kept at the robot file's is the user's.
+    warnings += implausible_values([(params[j].key, params[j].name, params[j].kind,
+                                     params[j].to_value(float(v_hat[j]))) for j in free if j not in flat],
+                                   robot, [w for i in used for w in kept_bases[i].windows])
     _warn(warnings, lik, params, free, intervals, flat, informed, corr, cov, val.quad,
           [names[i] for i in used], bases=[kept_bases[i] for i in used])
     floor = _floor_note([kept_bases[i] for i in used], v_hat, params, free)
