@@ -237,3 +237,26 @@ def test_a_calibration_run_off_its_range_says_what_check_finds(run_cli, tmp_path
     assert code == 2 and out == ""
     assert "edge of the plausible range" in err and "km/h read as m/s" in err and "speed_kmh" in err
     assert len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize(("gain", "warned"), [(0.8, True), (1.0, False)])
+def test_a_car_wheel_base_bent_by_a_steering_gain_is_named(run_cli, tmp_path, gain, warned):
+    """The steering logged at ``gain`` × the road wheels' angle: the fitted wheel base comes
+    out near L·gain (tan(g·α)/(g·L) ≈ tan(α)/L on small angles) and, 20 % off the file's,
+    is named as standing in for the steering's gain; the honest log is not warned about."""
+    log, poses = car_drive(9, max_steer=0.08)
+    truth = gps(log, poses, 9, sigma=0.5)
+    log_path, truth_path, robot_path = tmp_path / "log.csv", tmp_path / "gps.csv", tmp_path / "car.toml"
+    np.savetxt(log_path, np.column_stack((log.t, log.channels["speed"], gain * log.channels["steer"])),
+               delimiter=",", header="t,speed,steer", comments="")
+    np.savetxt(truth_path, np.column_stack((truth.t, truth.xy)), delimiter=",", header="t,x,y", comments="")
+    robot_path.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\nencoder_offset = 0.8\n'
+                          'encoder_at = "rear"\n')
+    import json
+
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot_path, "--truth", truth_path, "--json")
+    assert code == 0, err
+    fitted = json.loads(out)["parameters"]["wheel_base"]
+    assert fitted == pytest.approx(2.7 * gain, rel=0.03)
+    said = [line for line in err.splitlines() if "stands in for every gain on the steering" in line]
+    assert bool(said) == warned, err

@@ -274,3 +274,19 @@ def test_runs_no_one_robot_fits_are_said_to_disagree():
     together = calibrate_positions(logs, truths, NOMINAL_CAR)
     each = [calibrate_positions([log], [truth], NOMINAL_CAR) for log, truth in zip(logs, truths, strict=True)]
     assert runs_disagree(together, each, ["run1", "run2"]) is None
+
+
+def test_the_note_tells_fixes_beyond_the_log_from_those_kept_clear_of_its_ends():
+    """BMW user study: "2468 truth fixes outside the log's span left out" counted the fixes
+    kept 2 s clear of the log's ends for the clock-offset fit with those beyond it. Here 5
+    fixes precede the log, and 2 + 2 lie within 2 s of its ends (1 Hz from 0.37 s on a log
+    of 0..599.9 s): the note counts each."""
+    log, truth = drive(3, TRUE_CAR)
+    early = np.arange(-5.0, 0.0)
+    before = Truth(np.r_[early, truth.t], np.r_[np.zeros((5, 2)) + truth.xy[0], truth.xy], None, truth.sigma)
+    cal = calibrate_positions([log], [before], NOMINAL_CAR, fit_time_offset=True)
+    [note] = [n for n in cal.notes if "start pose fitted" in n]
+    assert "truth fixes left out: 5 outside the log's span and 4 within 2 s of its ends" in note
+    held = calibrate_positions([log], [before], NOMINAL_CAR)
+    [note] = [n for n in held.notes if "start pose fitted" in n]
+    assert note.endswith("truth fixes left out: 5 outside the log's span")

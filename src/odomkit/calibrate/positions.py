@@ -81,6 +81,8 @@ class _Run:
     xy: NDArray[np.float64]  # (n, 2) truth positions [m]
     t: NDArray[np.float64]  # (n,) fix times [s]
     outside: int  # fixes outside the log's span
+    near_ends: int = 0  # fixes inside it but within the margin of its ends
+    margin: float = 0.0  # [s]
 
     def at(self, delta: float, keep: NDArray[np.bool_]) -> _FixRows:
         """Where the kept fixes fall on the log's clock at offset ``delta`` (each at its
@@ -138,7 +140,8 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
                              f"({t[0]:.6g}..{t[-1]:.6g} s{within}; the truth covers {truth.t[0]:.6g}.."
                              f"{truth.t[-1]:.6g} s): check the clocks (--truth-time-unit, "
                              "--truth-time-offset)", source=truth.source)
-        out.append(_Run(t, truth.xy[inside], tau, int(np.count_nonzero(~inside))))
+        beyond = int(np.count_nonzero(~compared_fixes(t, truth.t)))
+        out.append(_Run(t, truth.xy[inside], tau, beyond, int(np.count_nonzero(~inside)) - beyond, margin))
     return out
 
 
@@ -414,7 +417,10 @@ def calibrate_positions(
         raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; check the "
                          "channel signs and the robot file")
     for log, start, run in zip(runs, starts, with_truth, strict=True):
-        left_out = f"; {run.outside} truth fixes outside the log's span left out" if run.outside else ""
+        left = ([f"{run.outside} outside the log's span"] if run.outside else []) + (
+            [f"{run.near_ends} within {run.margin:g} s of its ends (where a fitted clock offset could "
+             "move them out)"] if run.near_ends else [])
+        left_out = f"; truth fixes left out: {' and '.join(left)}" if left else ""
         notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
                      f"{start[2]:.4g} rad){left_out}")
     travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(runs))]

@@ -210,6 +210,7 @@ def calibrate_files(
             if side is not None and isinstance(robot, DiffDrive):
                 summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
+    _warn_bent_length(robot, new_robot)
     robot_fields = robot_to_dict(new_robot)["robot"]
     check_result("the calibration", {
         "the parameters": [v for v in robot_fields.values() if not isinstance(v, str)],
@@ -249,6 +250,31 @@ def calibrate_files(
     summary["robot"] = robot_fields
     summary["outputs"] = outputs
     return summary
+
+
+#: A steered vehicle's calibrated length this far (relative) from the robot file's is named.
+BENT_LENGTH = 0.1
+
+
+def _warn_bent_length(robot: Robot, new_robot: Robot) -> None:
+    """A car's wheel base (a tricycle's wheel-to-axle distance) calibrated more than
+    :data:`BENT_LENGTH` from the robot file's: the turning per metre is tan α / L, so the
+    fitted L stands in for every gain on the steering (its ratio, the road wheels' own,
+    understeer), not only for the length. On the real BMW drive the halves gave 2.39 to
+    3.28 m for a 2.69 m car with nothing said."""
+    if isinstance(robot, Car):
+        name, law, gains = "wheel_base", "tan(steer)", "steering_ratio, the road wheels' gain, understeer"
+    elif isinstance(robot, Tricycle):
+        name, law, gains = "wheel_to_axle", "sin(steer)", "the steering angle's gain"
+    else:
+        return
+    before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
+    if before > 0 and abs(after / before - 1) > BENT_LENGTH:
+        warnings.warn(f"the calibrated {name} {after:.4g} m is {100 * (after / before - 1):+.0f} % from the "
+                      f"robot file's {before:.4g} m: the turning per metre is {law}/{name}, so it stands in "
+                      f"for every gain on the steering ({gains}) as well as the length; if the length is "
+                      "known, check the steering's unit and ratio (odomkit check --truth compares turning)",
+                      UserWarning, stacklevel=3)
 
 
 def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot, only_failures: bool = False
