@@ -392,11 +392,15 @@ def calibrate_positions(
                 if np.isclose(q[j], lower[j], rtol=1e-6, atol=0.0)
                 or np.isclose(q[j], upper[j], rtol=1e-6, atol=0.0)]
     if at_bound:
+        ranges = {"steering_offset": f"steering offset ±{_MAX_STEERING_OFFSET} rad",
+                  "steering_cubic": "steering_cubic ±1/s² for the largest angle s driven (a ratio that "
+                  "varies at most 2× over it: a drive that hardly turns cannot pin it)",
+                  "truth time offset": f"clock offset ±{MAX_TIME_OFFSET:g} s"}
+        scale = "a scale or length: half to twice the robot file's value"
+        said = "; ".join(dict.fromkeys(ranges.get(name, scale) for name in at_bound))
         raise ModelError(f"the calibration ran to the edge of the plausible range for "
-                         f"{', '.join(at_bound)} (half to twice the robot file's value; steering "
-                         f"offset ±{_MAX_STEERING_OFFSET} rad; clock offset ±{MAX_TIME_OFFSET:g} s): check "
-                         "the channel signs, the robot file and the truth's clock, and that the runs "
-                         "turn both ways")
+                         f"{', '.join(at_bound)} ({said}): check the channel signs, the robot file and the "
+                         "truth's clock, and that the runs turn both ways")
     res, jac = problem.residuals_and_jacobian(q)
     dof = res.size - q.size
     if dof <= 0:
