@@ -468,3 +468,22 @@ def test_an_implausible_fitted_value_is_warned_about_in_text_and_json(run_cli, t
     real, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:3]), "--window", "10s", "--kinds", "white,bias",
                    name="r.toml")
     assert not any("implausible" in w for w in real["warnings"]), real["warnings"]
+
+
+def test_a_speed_in_mph_read_as_m_per_s_is_named_by_fit_noise(run_cli, tmp_path):
+    """The same car's log with its speed in mph (true m/s ÷ 0.44704) read as m/s: the fit is
+    absurd whatever it does, and fit-noise says why in odomkit check's words (the travel
+    2.24 × the truth's, a speed in mph); the 20 % short speed above is a calibration error,
+    not a unit, and gets no such warning."""
+    robot, args = _uncalibrated_car(tmp_path, scale_error=0.44704 - 1)  # the car moves 0.447 m per unit
+    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white",
+                                   "--out", tmp_path / "a.toml", "--json")
+    assert code == 0, stderr
+    [said] = [w for w in json.loads(stdout)["warnings"] if "does not move as the truth does" in w]
+    assert "mph read as m/s" in said and "speed_mph" in said
+    folder = tmp_path / "short"
+    folder.mkdir()
+    robot, args = _uncalibrated_car(folder)
+    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white",
+                                   "--out", folder / "a.toml", "--json")
+    assert not any("does not move as the truth does" in w for w in json.loads(stdout)["warnings"])

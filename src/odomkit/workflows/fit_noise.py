@@ -78,6 +78,7 @@ class PreparedLog:
     skipped: int
     reason: str | None
     scatter: float | None = None  # the truth's fixes about a smooth path [m] (truth.scatter_sigma)
+    off: tuple[str, ...] = ()  # travel or turning off the truth's by more than 2x: a unit, a robot file
 
 
 def prepare_log(task: LogTask) -> PreparedLog:
@@ -100,7 +101,14 @@ def prepare_log(task: LogTask) -> PreparedLog:
                                       min_travel=task.min_travel, max_gap=task.truth.max_gap,
                                       method=task.method, truth_columns=True)
     if basis is not None:
-        return PreparedLog(name, basis, len(log), skipped, None, scatter_sigma(truth))
+        # A unit read wrong (mph as m/s) or a steering ratio left out makes a noise fit absurd
+        # with nothing else to say why: odomkit check's comparison with the truth does.
+        from odomkit.calibrate.check_ratios import check_truth_motion
+
+        found = check_truth_motion(log, task.robot, truth, task.truth.max_gap)
+        off = tuple(f"{name}: {f.message}" + (f"; {f.advice}" if f.advice else "")
+                    for f in found if f.status == "fail")
+        return PreparedLog(name, basis, len(log), skipped, None, scatter_sigma(truth), off)
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
@@ -288,6 +296,8 @@ def fit_noise_files(
     bases = [p.basis for p in used if p.basis is not None]
     dropped = sum(b.dropped for b in bases)
     notes += [n for b in bases for n in b.notes]  # where a whole-log window starts late, and why
+    notes += [f"the noise fit takes odometry that does not move as the truth does: {o}"
+              for p in used for o in p.off]
     if not any(len(b.windows) for b in bases):
         # Whole-log windows say why they have no start (no row gives a heading) in their notes.
         why = "; ".join(n for b in bases for n in b.notes[:1])
