@@ -487,3 +487,23 @@ def test_a_speed_in_mph_read_as_m_per_s_is_named_by_fit_noise(run_cli, tmp_path)
     code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white",
                                    "--out", folder / "a.toml", "--json")
     assert not any("does not move as the truth does" in w for w in json.loads(stdout)["warnings"])
+
+
+def test_a_robot_file_naming_its_white_models_is_told_which_defaults_it_leaves_out(run_cli, tmp_path):
+    """User study: the shipped OptiOdom file names k_left, k_right, so fit-noise fitted no
+    slip, unlike the published defaults, without a word. The note names the left-out
+    default models and the fields to add; with them added (at 0) they are fitted, and the
+    note is gone."""
+    result, _ = _fit(run_cli, tmp_path, *_logs(RUNS[:2]), "--window", "10s", "--kinds", "white")
+    [note] = [w for w in result["warnings"] if "names its white models (WheelNoise)" in w]
+    assert "SpeedNoise, LateralSlipNoise" in note and "alpha_ss = 0, alpha_lateral = 0" in note
+    assert "alpha_ss" not in result["parameters"]
+    text = Path(ROBOT).read_text().replace("[noise]", "[noise]\nalpha_ss = 0\nalpha_lateral = 0", 1)
+    full = tmp_path / "full.toml"
+    full.write_text(text)
+    code, stdout, stderr = run_cli("fit-noise", "--robot", full, *_logs(RUNS[:2]), "--window", "10s",
+                                   "--kinds", "white", "--out", tmp_path / "b.toml", "--json")
+    assert code == 0, stderr
+    second = json.loads(stdout)
+    assert "alpha_ss" in second["parameters"] and "alpha_lateral" in second["parameters"]
+    assert not any("names its white models" in w for w in second["warnings"])

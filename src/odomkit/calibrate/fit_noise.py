@@ -52,6 +52,7 @@ __all__ = [
     "DEFAULT_FIXED",
     "DEFAULT_TRIM",
     "DEFAULT_WHITE",
+    "defaults_left_out",
     "first_order_note",
     "FIRST_ORDER_SIGMA_THETA",
     "NoiseFit",
@@ -193,6 +194,22 @@ def models_to_fit(robot: Robot, models: Sequence[NoiseModel], kinds: Collection[
         raise ModelError("no noise models to fit")
     NoiseSet.of(out).check_robot(robot)
     return tuple(out), frozenset(fixed)
+
+
+def defaults_left_out(robot: Robot, models: Sequence[NoiseModel]) -> dict[str, tuple[str, ...]]:
+    """The default white models (:data:`DEFAULT_WHITE`) a fit leaves out because the given
+    models (a robot file's ``[noise]``) name white models of their own: class name -> its
+    variance fields (what a robot file adds, at 0, to fit it). Empty where the given models
+    name no white model (the defaults are then used) or all of the defaults."""
+    if not any(m.kind == "white" for m in models):
+        return {}
+    have = {type(m).__name__ for m in models}
+    out = {}
+    for name in DEFAULT_WHITE.get(robot.type_name, ()):
+        made = _zero_model(NOISE_MODELS[name]) if name in NOISE_MODELS else None
+        if name not in have and made is not None and _applies(made, robot):
+            out[name] = tuple(made.variance_parameters())
+    return out
 
 
 def noise_parameters(models: Sequence[NoiseModel], robot: Robot, kinds: Collection[str],

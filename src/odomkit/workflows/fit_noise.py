@@ -241,7 +241,7 @@ def fit_noise_files(
     dict: the JSON output of ``odomkit fit-noise`` (see DESIGN.md); an interval's upper
     bound is ``inf`` (JSON null) where the data do not bound the parameter.
     """
-    from odomkit.calibrate.fit_noise import fit_noise, models_to_fit
+    from odomkit.calibrate.fit_noise import defaults_left_out, fit_noise, models_to_fit
     from odomkit.io.files import check_outputs
     from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_robot_name, write_robot
     from odomkit.windows import parse_window
@@ -285,6 +285,15 @@ def fit_noise_files(
         first = prepared[0]
         raise InputError(first.reason or "no windows", source=first.name)
     notes = []
+    missing = defaults_left_out(robot, file_models) if "white" in kinds else {}
+    if missing:
+        # A user study: the shipped OptiOdom robot file names k_left, k_right, so its fit had no
+        # slip terms, unlike the published defaults, and nothing said so.
+        given = ", ".join(sorted({type(m).__name__ for m in file_models if m.kind == "white"}))
+        fields = ", ".join(f"{f} = 0" for fs in missing.values() for f in fs)
+        notes.append(f"{robot_path}: its [noise] names its white models ({given}), so those alone are "
+                     f"fitted; fit-noise's default set for a {robot.type_name} also has "
+                     f"{', '.join(missing)}: to fit them too, add {fields} to its [noise]")
     left_out = [p for p in prepared if p.basis is None]
     if left_out:
         shown = "; ".join(f"{p.name}: {p.reason}" for p in left_out[:3])
