@@ -232,6 +232,17 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
 
 # --- motion ------------------------------------------------------------------------------
 
+#: What turning one way only confounds, by robot type: two parameters that bend a one-way
+#: turn alike (a constant curvature added, or the curvature scaled).
+_MIMIC = {
+    "diff": "a wheel-size ratio and a wheel-base error",
+    "tricycle": "a steering offset and a wheel-to-axle (L) error",
+    "car": "a steering offset and a wheel-base error",
+    "unicycle": "a yaw-rate bias and a yaw-rate scale error",
+    "gyro": "a gyro bias and a gyro scale error",
+    "compass": "a compass offset and the heading's own errors",
+}
+
 def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
     """Distance driven and turning each way (from the odometry)."""
     from odomkit.kinematics import body_steps
@@ -259,11 +270,11 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
                              "drive turns both ways, at least a half turn each (e.g. a square each way)"))
     elif min(ccw, cw) < 0.5 * math.pi:
         way = "clockwise" if cw < ccw else "counter-clockwise"
+        pair = _MIMIC.get(robot.type_name, "two calibration parameters")
         found.append(Finding("turning", "warn", f"{turns}: almost all one way",
-                             f"also drive at least a half turn {way}: turning one way lets a wheel-size "
-                             "ratio and a wheel-base error mimic each other at the run's end, so an endpoint "
-                             "fit (UMBmark, --from endpoints) needs both ways; a fit to the whole trajectory "
-                             "copes if 'identifiable' says so"))
+                             f"also drive at least a half turn {way}: turning one way lets {pair} mimic each "
+                             "other at the run's end, so an endpoint fit (UMBmark, --from endpoints) needs "
+                             "both ways; a fit to the whole trajectory copes if 'identifiable' says so"))
     else:
         found.append(Finding("turning", "ok", turns))
     return found

@@ -291,7 +291,7 @@ def fit_noise_files(
         # slip terms, unlike the published defaults, and nothing said so.
         given = ", ".join(sorted({type(m).__name__ for m in file_models if m.kind == "white"}))
         fields = ", ".join(f"{f} = 0" for fs in missing.values() for f in fs)
-        notes.append(f"{robot_path}: its [noise] names its white models ({given}), so those alone are "
+        notes.append(f"the robot file's [noise] names its white models ({given}), so those alone are "
                      f"fitted; fit-noise's default set for a {robot.type_name} also has "
                      f"{', '.join(missing)}: to fit them too, add {fields} to its [noise]")
     left_out = [p for p in prepared if p.basis is None]
