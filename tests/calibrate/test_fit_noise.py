@@ -177,6 +177,9 @@ def test_a_log_that_disagrees_with_the_others_is_named():
     disagree = [w for w in fit.warnings if "disagree" in w]
     assert disagree and "run0.csv" in disagree[0] and "run1.csv" not in disagree[0]
     assert fit.per_log[0]["p_value"] < 1e-4
+    # and which way: log 0's errors are 3x the noise, so larger than the fit says
+    assert "run0.csv (eᵀΣ⁻¹e/dof = " in disagree[0]
+    assert disagree[0].split("run0.csv")[1].split(")")[0].endswith("errors larger than the fit says")
 
 
 def test_too_few_windows_are_warned_about():

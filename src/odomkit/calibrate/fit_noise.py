@@ -690,11 +690,15 @@ def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter
     p = np.array([_two_sided(float(q), int(n)) for q, n in zip(quad, lik.nobs, strict=True)])
     bad = np.flatnonzero(p < 0.01 / max(len(p), 1))
     if len(p) > 1 and bad.size:
-        shown = ", ".join(f"{names[i]} (eᵀΣ⁻¹e/dof = {quad[i] / lik.nobs[i]:.3g})"
+        # Which way each one errs: above 1 its errors are larger than the fit says (the fit is
+        # optimistic for it), below 1 smaller (pessimistic); a user study read "disagree" as
+        # "worse" where three of four named logs were too good.
+        shown = ", ".join(f"{names[i]} (eᵀΣ⁻¹e/dof = {quad[i] / lik.nobs[i]:.3g}: errors "
+                          f"{'larger' if quad[i] > lik.nobs[i] else 'smaller'} than the fit says)"
                           for i in bad[np.argsort(p[bad])][:5])
         more = f" and {bad.size - 5} more" if bad.size > 5 else ""
         out.append(f"{bad.size} of {len(p)} logs disagree with the fit (per-log χ² test at 1 %, "
-                   f"Bonferroni): {shown}{more}")
+                   f"Bonferroni; eᵀΣ⁻¹e/dof is 1 for a log the fit describes): {shown}{more}")
 
 
 #: The truth's fitted floor is warned about above this share of the predicted position
