@@ -72,9 +72,9 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     keys = {"rows_evaluated", "rows_skipped", "final_position_error", "max_position_error", "ate_rmse", "rpe",
             "drift_percent", "windows", "nees_position_mean", "nees_position_median", "nees_bounds",
             "coverage", "inside_95_fraction"}
-    assert set(got) == keys | {"per_log", "warnings"}
+    assert set(got) == keys | {"window", "per_log", "warnings"} and got["window"] == "10 s"
     assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
-    assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends"}] * 2
+    assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends", "warnings"}] * 2
     assert [len(p["window_ends"]) for p in got["per_log"]] == [p["windows"] for p in got["per_log"]]
     assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees"}
     assert got["windows"] == sum(p["windows"] for p in got["per_log"])

@@ -297,7 +297,7 @@ def test_logs_grouped_by_robot_share_one_bias_draw(run_cli, tmp_path):
     assert not any("bias variances rest on" in w for w in plain["warnings"])
     assert [p["log"] for p in one["per_log"]] == ["robot"]
     code, _, err = run_cli("fit-noise", "--robot", ROBOT, *args, "--group", "a", "--out", tmp_path / "x.toml")
-    assert code == 2 and "one --group per --log" in err
+    assert code == 2 and "one --group per log" in err
 
 
 def test_a_log_given_twice_with_groups_is_fitted(run_cli, tmp_path):
@@ -475,17 +475,17 @@ def test_a_speed_in_mph_read_as_m_per_s_is_named_by_fit_noise(run_cli, tmp_path)
     absurd whatever it does, and fit-noise says why in odomkit check's words (the travel
     2.24 × the truth's, a speed in mph); the 20 % short speed above is a calibration error,
     not a unit, and gets no such warning."""
-    robot, args = _uncalibrated_car(tmp_path, scale_error=0.44704 - 1)  # the car moves 0.447 m per unit
-    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white",
-                                   "--out", tmp_path / "a.toml", "--json")
+    robot, args = _uncalibrated_car(tmp_path, scale_error=0.44704 - 1)  # moves 0.447 m per unit
+    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds",
+                                   "white", "--out", tmp_path / "a.toml", "--json")
     assert code == 0, stderr
     [said] = [w for w in json.loads(stdout)["warnings"] if "does not move as the truth does" in w]
     assert "mph read as m/s" in said and "speed_mph" in said
     folder = tmp_path / "short"
     folder.mkdir()
     robot, args = _uncalibrated_car(folder)
-    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds", "white",
-                                   "--out", folder / "a.toml", "--json")
+    code, stdout, stderr = run_cli("fit-noise", "--robot", robot, *args, "--window", "10s", "--kinds",
+                                   "white", "--out", folder / "a.toml", "--json")
     assert not any("does not move as the truth does" in w for w in json.loads(stdout)["warnings"])
 
 

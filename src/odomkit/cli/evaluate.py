@@ -3,7 +3,7 @@
 ::
 
     odomkit evaluate TRACK.csv [TRACK.csv ...] [--truth GT ...] [--align none|start|se2] [--json]
-    odomkit evaluate LOG [LOG ...] --robot ROBOT.toml [--truth GT ...] [--window 30s|5m] [--json]
+    odomkit evaluate LOG [LOG ...] --robot ROBOT.toml [--truth GT ...] [--window 30s|5m ...] [--json]
 """
 
 from __future__ import annotations
@@ -52,9 +52,10 @@ def evaluate_command(
         help="Track CSVs (odomkit track --out), or logs with --robot.")],
     robot: Annotated[Path | None, typer.Option(
         "--robot", help="Robot file (TOML) with [noise]: FILES are logs, re-run from truth.")] = None,
-    window: Annotated[str | None, typer.Option(
-        "--window", help="Honesty-test windows: 30s (time) or 5m (odometry travel); default one "
-                         "window per log.")] = None,
+    window: Annotated[list[str] | None, typer.Option(
+        "--window", help="Honesty-test windows: 30s (time) or 5m (odometry travel); repeat it to score "
+                         "each length on its own (--window 10s --window 30s); default one window per "
+                         "log.")] = None,
     min_travel: Annotated[float, typer.Option(
         "--min-travel", help="Windows travelling less [m] are left out and counted.")] = 0.05,
     align: Annotated[str, typer.Option("--align", help="none | start | se2 (Umeyama, no scale).")] = "none",
@@ -83,24 +84,25 @@ def evaluate_command(
     per_file = truth_options_per_log(base, list(truth or []), len(files))
     options = log_opts
     if robot is None:
-        if window is not None:
+        if window:
             raise InputError("--window re-runs dead reckoning, so it needs --robot (and FILES that are logs)")
         if options.given():
             raise InputError(f"{', '.join(options.given())} reads logs, so it needs --robot (and FILES "
                              "that are logs)")
-    with reported_warnings() as warned, progress_bar(json_out) as progress:
+    noun = "logs" if robot is not None else "tracks"
+    with reported_warnings(noun) as warned, progress_bar(json_out) as progress:
         if robot is None:
             out = evaluate_tracks(files, per_file, align=align, rpe_distances=distances,
                                   min_travel=min_travel, progress=progress, plot=plot, overwrite=force)
         else:
-            out = evaluate_logs(files, robot, per_file, log_options=options, window=window,
+            out = evaluate_logs(files, robot, per_file, log_options=options, window=window or None,
                                 min_travel=min_travel, align=align, rpe_distances=distances, method=method,
                                 progress=progress, plot=plot, overwrite=force)
-    out = with_warnings(out, warned)
+    out = with_warnings(out, warned, noun)
     if json_out:
         print_json(out)
         return
-    print_report(out, windowed=robot is not None, whole_runs=window is None)
+    print_report(out, windowed=robot is not None, whole_runs=not window)
     for kind, path in out.get("outputs", {}).items():
         print(f"wrote {kind}: {path}")
 
@@ -109,9 +111,24 @@ def _fmt(value: float | None, spec: str = ".4f") -> str:
     return "n/a" if value is None else format(value, spec)
 
 
+def _nees_texts(mean: float, lo: float, hi: float) -> tuple[str, str, str]:
+    """``mean`` and its bounds ``lo``, ``hi`` as printed: 3 significant digits, or as many
+    more as it takes for the printed numbers to stand in the order of the true ones (a mean
+    just below its lower bound must not print equal to it beside the verdict "below")."""
+    def side(a: float, b: float) -> int:
+        return (a > b) - (a < b)
+
+    for digits in range(3, 18):
+        m, a, b = (format(v, f".{digits}g") for v in (mean, lo, hi))
+        if side(float(m), float(a)) == side(mean, lo) and side(float(m), float(b)) == side(mean, hi):
+            return m, a, b
+    return repr(mean), repr(lo), repr(hi)  # 17 digits tell any two floats apart; not reached
+
+
 def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) -> None:
     """The short text report of ``odomkit evaluate``: ``windowed`` for logs dead-reckoned
-    from the truth, in ``--window`` windows or (``whole_runs``) one window per log."""
+    from the truth, in ``--window`` windows or (``whole_runs``) one window per log; with
+    several window lengths (``by_window``) a block for each, after the whole runs' errors."""
     from odomkit.workflows.evaluate import CONTAINMENT_NOTE, WHOLE_RUN_NOTE, WINDOWED_NOTE
 
     print(f"{out['rows_evaluated']} rows evaluated, {out['rows_skipped']} skipped (no truth there, or "
@@ -122,9 +139,26 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
           f"{_fmt(out['drift_percent'], '.2f')} %")
     print("RPE RMSE: " + ", ".join(("n/a" if v is None else f"{v:.4f} m") + f" over {k} m"
                                    for k, v in out["rpe"].items()))
+    for block in out.get("by_window", {}).values() or [out]:
+        _print_honesty(block, windowed, whole_runs)
+    if out["nees_position_mean"] is None and whole_runs:
+        return  # a robot file without [noise]: errors alone, no covariance to judge
+    note = (CONTAINMENT_NOTE if not windowed else WHOLE_RUN_NOTE if whole_runs else WINDOWED_NOTE)
+    print(f"note: {note}")
+
+
+def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> None:
+    """The NEES and coverage lines of one window length (or of the track rows), headed by
+    the length scored, and with several logs each log's."""
     cov = out["coverage"]
     what = f"{out['windows']} window ends" if windowed else "track rows"
     if out["nees_position_mean"] is not None:
+        if windowed:
+            length = out.get("window")
+            travel = " (of odometry travel)" if length and length.endswith(" m") else ""
+            print(f"honesty test: {length} windows{travel}, each restarted from the truth and scored at its "
+                  "end" if length else
+                  "honesty test: one window per log (no --window), from the truth at its start to its end")
         lo, hi = out["nees_bounds"]
         mean = out["nees_position_mean"]
         # A verdict only where the ends are independent samples (windows), as the bounds assume.
@@ -132,8 +166,9 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
                    ": above its bounds, the covariance is too small (optimistic)" if mean > hi else
                    ": below its bounds, the covariance is too large (pessimistic)" if mean < lo else
                    ": inside its bounds")
-        print(f"position NEES over {what}: mean {mean:.3g} (95 % bounds "
-              f"{lo:.3g}..{hi:.3g} if independent), median {out['nees_position_median']:.3g}{verdict}")
+        shown, low, high = _nees_texts(mean, lo, hi)
+        print(f"position NEES over {what}: mean {shown} (95 % bounds {low}..{high} if independent), "
+              f"median {out['nees_position_median']:.3g}{verdict}")
         print("inside the predicted 50/90/95/99 % ellipses: "
               + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")))
     if windowed and not whole_runs and len(out["per_log"]) > 1:
@@ -142,9 +177,6 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
             if one.get("nees_position_mean") is None:
                 continue
             c = one["coverage"]
+            bounds = one.get("nees_bounds") or (one["nees_position_mean"],) * 2
             print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
-                  f"{_fmt(c['0.5'], '.2f')}, NEES mean {one['nees_position_mean']:.3g}")
-    if out["nees_position_mean"] is None and whole_runs:
-        return  # a robot file without [noise]: errors alone, no covariance to judge
-    note = (CONTAINMENT_NOTE if not windowed else WHOLE_RUN_NOTE if whole_runs else WINDOWED_NOTE)
-    print(f"note: {note}")
+                  f"{_fmt(c['0.5'], '.2f')}, NEES mean {_nees_texts(one['nees_position_mean'], *bounds)[0]}")

@@ -2,6 +2,7 @@
 
 ::
 
+    odomkit fit-noise --robot ROBOT.toml LOG [LOG ...] [--truth GT ...]
     odomkit fit-noise --robot ROBOT.toml --log LOG [--truth GT] [--log LOG --truth GT ...]
         [--window 30s|5m ...] [--kinds white,bias] [--fix NAME,...] [--group ROBOT ...] --out FITTED.toml
         [--trim 0.999] [--cross-validate] [--truth-sigma S] [--truth-heading-sigma S] [--truth-time-sigma S]
@@ -43,8 +44,12 @@ __all__ = ["fit_noise_command", "print_fit"]
 @with_truth_options
 def fit_noise_command(
     robot: Annotated[Path, typer.Option("--robot", help="Robot file (TOML); its [noise] names the models.")],
-    log: Annotated[list[Path], typer.Option("--log", help="A log with ground truth; repeat it.")],
     out: Annotated[Path, typer.Option("--out", help="Write the robot file with the fitted [noise] here.")],
+    logs: Annotated[list[Path] | None, typer.Argument(
+        help="Logs with ground truth (as calibrate and evaluate take them), or give each with --log, "
+             "not both: the i-th --truth and --group belong to the i-th log.", show_default=False)] = None,
+    log: Annotated[list[Path] | None, typer.Option(
+        "--log", help="A log with ground truth; repeat it (or give the logs as arguments).")] = None,
     window: Annotated[list[str] | None, typer.Option(
         "--window", help="Windows that restart from truth: 30s (time) or 5m (odometry travel); "
                          "repeat it to fit one model to several lengths (--window 10s --window "
@@ -69,7 +74,7 @@ def fit_noise_command(
         "--scheduler", help="Dask scheduler address, e.g. tcp://host:8786.")] = None,
     truth: TruthListOption = None,
     group: Annotated[list[str] | None, typer.Option(
-        "--group", help="The robot the i-th --log comes from (repeat it, one per --log): logs of one "
+        "--group", help="The robot the i-th log comes from (repeat it, one per log): logs of one "
                         "robot share one draw of its bias, so the bias variances rest on the robots, "
                         "not the logs.")] = None,
     plot: Annotated[Path | None, typer.Option(
@@ -94,12 +99,13 @@ def fit_noise_command(
         raise InputError(f"--trim must be a probability in (0.5, 1], got {trim}")
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
+    paths = _logs(logs, log)
     options = log_opts
     base = truth_base
-    per_log = truth_options_per_log(base, list(truth or []), len(log))
+    per_log = truth_options_per_log(base, list(truth or []), len(paths))
     fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
     with reported_warnings() as warned, progress_bar(json_out) as progress:
-        result = fit_noise_files(robot, log, per_log, out, window=window, kinds=parse_kinds(kinds),
+        result = fit_noise_files(robot, paths, per_log, out, window=window, kinds=parse_kinds(kinds),
                                  fixed=fixed, log_options=options, min_travel=min_travel,
                                  method=method, level=level, cross_validate=cross_validate,
                                  trim=None if trim >= 1 else trim,
@@ -112,10 +118,29 @@ def fit_noise_command(
     print_fit(result, already_said=warned)
 
 
+def _logs(given: list[Path] | None, flagged: list[Path] | None) -> list[Path]:
+    """The logs, given as arguments or each with ``--log``. Not both: the order in which
+    they were typed is lost between the two (click parses options and arguments apart), and
+    the i-th ``--truth`` and ``--group`` belong to the i-th log."""
+    from odomkit.errors import InputError
+
+    if given and flagged:
+        raise InputError("give the logs either as arguments (fit-noise --robot R A.csv B.csv ...) or each "
+                         "with --log (fit-noise --robot R --log A.csv --log B.csv ...), not both: the i-th "
+                         "--truth and --group belong to the i-th log, and the order of the two forms "
+                         "together is unknown")
+    if not given and not flagged:
+        raise InputError("no log: give the logs with ground truth as arguments (fit-noise --robot R "
+                         "A.csv B.csv ...) or each with --log (fit-noise --robot R --log A.csv --log "
+                         "B.csv ...)")
+    return list(given or flagged or [])
+
+
 def print_fit(out: dict[str, Any], already_said: Sequence[str] = ()) -> None:
     """The short text report of ``odomkit fit-noise``; its warnings go to stderr as
     ``odomkit: warning: ...``, as every command's do (those in ``already_said`` were
-    printed there when raised)."""
+    printed there when raised, grouped as :func:`odomkit.cli.log_options.reported_warnings`
+    prints them)."""
     key = next(k for k in out if k.startswith("interval"))
     trimmed = (f" ({out['windows_trimmed']} more left out: outside the {100 * out['trim']:g} % "
                "ellipse)" if out.get("windows_trimmed") else "")
@@ -137,8 +162,11 @@ def print_fit(out: dict[str, Any], already_said: Sequence[str] = ()) -> None:
         cv = out["cross_validation"]["coverage"]
         print("leave-one-log-out coverage: "
               + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
+    from odomkit.workflows.results import grouped_warnings
+
+    said = set(already_said) | set(grouped_warnings(already_said))
     for w in out["warnings"]:
-        if w not in already_said:
+        if w not in said:
             print(f"odomkit: warning: {w}", file=sys.stderr)
     for kind, path in out["outputs"].items():
         print(f"wrote {kind}: {path}")

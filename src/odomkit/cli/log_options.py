@@ -98,24 +98,31 @@ with_log_options = with_flags(LOG_FLAGS, "log_opts", lambda values: log_options(
 
 
 @contextmanager
-def reported_warnings() -> Iterator[list[str]]:
+def reported_warnings(noun: str = "logs") -> Iterator[list[str]]:
     """Collect the warnings raised inside the block, and print each on stderr as one line
     ``odomkit: warning: ...`` when it ends (also when it ends in an error, which a warning
-    may explain). The yielded list holds their texts, for the JSON ``warnings`` key."""
-    from odomkit.workflows.results import collected_warnings
+    may explain); those that say the same of several files (``PATH: text``) are one line,
+    ``3 logs (a.csv, b.csv, c.csv): text`` (``noun`` names the files;
+    :func:`odomkit.workflows.results.grouped_warnings`). The yielded list holds their texts
+    as raised, for the JSON ``warnings`` key (:func:`with_warnings` groups them alike)."""
+    from odomkit.workflows.results import collected_warnings, grouped_warnings
 
     messages: list[str] = []
     try:
         with collected_warnings() as messages:
             yield messages
     finally:
-        for text in messages:
+        for text in grouped_warnings(messages, noun):
             print(f"odomkit: warning: {text}", file=sys.stderr)
 
 
-def with_warnings(out: dict[str, Any], messages: list[str]) -> dict[str, Any]:
-    """``out`` with ``messages`` added to its ``warnings`` list (made if there are any)."""
-    if messages:
+def with_warnings(out: dict[str, Any], messages: list[str], noun: str = "logs") -> dict[str, Any]:
+    """``out`` with ``messages`` added to its ``warnings`` list (made if there are any), once
+    each, and those that say the same of several files grouped into one line as on stderr
+    (:func:`reported_warnings`)."""
+    if messages or "warnings" in out:
+        from odomkit.workflows.results import grouped_warnings
+
         known = list(out.get("warnings", []))
-        out["warnings"] = known + [m for m in messages if m not in known]
+        out["warnings"] = grouped_warnings(known + [m for m in messages if m not in known], noun)
     return out

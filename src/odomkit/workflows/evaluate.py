@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from odomkit.noise import NoiseModel
     from odomkit.propagate.plan import NoiseArg
     from odomkit.robot import Robot
-    from odomkit.truth import Truth
+    from odomkit.truth import Truth, TruthSamples
     from odomkit.windows import WindowSpec
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
@@ -77,6 +77,12 @@ class Scored:
     rows: TrackRows | None = None
     # Why a log asked for windows has none (None: it has some, or none were asked for)
     no_windows: str | None = None
+    # Those of ``warnings`` about its windows (the others are about the whole run, alike for
+    # every window length)
+    window_notes: tuple[str, ...] = ()
+    # Windows left out and why, (what, count): its warning reads "{label}: {count} {what}",
+    # and several logs' are pooled into one line (:func:`_pooled_notes`)
+    left_out: tuple[tuple[str, int], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -247,18 +253,51 @@ def _window_ends(s: Scored) -> dict[str, Any]:
                              "nees": float(n)} for a, b, e, n in rows]}
 
 
-def _report(scored: list[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
-    """The pooled figures, ``per_log``, and ``warnings`` (each also raised as a UserWarning,
-    which the CLI prints on stderr)."""
-    out = summarise(scored, rpe_distances)
-    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances), **_window_ends(s)} for s in scored]
-    out["warnings"] = list(dict.fromkeys(w for s in scored for w in s.warnings))
+def _report(scored: list[Scored], rpe_distances: Sequence[float], window: str | None = None,
+            noun: str = "logs") -> dict[str, Any]:
+    """The pooled figures, ``window`` (the length scored: ``"30 s"``, None for none or one
+    window per log), ``per_log`` (each with its own ``warnings``), and ``warnings``: every
+    log's, those that say the same of several logs in one line (:func:`_pooled_notes`)."""
+    out: dict[str, Any] = {"window": window, **summarise(scored, rpe_distances)}
+    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances), **_window_ends(s),
+                       "warnings": list(s.warnings)} for s in scored]
+    out["warnings"] = _pooled_notes(scored, noun)
     few = _few_ends_note(out["windows"])
     if few:
         out["warnings"].append(few)
-    for text in out["warnings"]:
-        warnings.warn(text, stacklevel=3)
     return out
+
+
+def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:
+    """The logs' warnings once each, where several logs left windows out for one reason (with
+    their own counts) are one line with the total, and those that say the same of several
+    logs are one line naming three (:func:`odomkit.workflows.results.grouped_warnings`)."""
+    from odomkit.workflows.results import grouped_warnings, listed, short_names
+
+    notes = list(dict.fromkeys(w for s in scored for w in s.warnings))
+    counts: dict[str, list[tuple[str, int]]] = {}
+    for s in scored:
+        for what, n in s.left_out:
+            counts.setdefault(what, []).append((s.label, n))
+    for what, per_log in counts.items():
+        if len(per_log) < 2:
+            continue
+        own = {f"{label}: {n} {what}" for label, n in per_log}
+        at = min(notes.index(t) for t in own)
+        labels = [label for label, _ in per_log]
+        names = dict(zip(labels, short_names(labels, [s.label for s in scored]), strict=True))
+        most = sorted(per_log, key=lambda item: -item[1])  # stable: the logs' order among equals
+        each = listed([f"{names[label]}: {n}" for label, n in most])
+        pooled = (f"{sum(n for _, n in per_log)} window(s) of {len(per_log)} {noun} "
+                  f"{what.removeprefix('window(s) ')} ({each})")
+        notes = [pooled if i == at else t for i, t in enumerate(notes) if i == at or t not in own]
+    return grouped_warnings(notes, noun, [s.label for s in scored])
+
+
+def _issue(notes: Sequence[str]) -> None:
+    """Raise each of ``notes`` as a UserWarning, which the CLI prints on stderr."""
+    for text in notes:
+        warnings.warn(text, stacklevel=3)
 
 
 #: Fewer window ends than this make a coverage figure too coarse to judge a model by.
@@ -314,7 +353,8 @@ def evaluate_tracks(
         for path, opts in zip(tracks, truth, strict=True):
             scored.append(_score_track(Path(path), opts, align, rpe_distances, min_travel))
             progress.advance()
-    out = _report(scored, rpe_distances)
+    out = _report(scored, rpe_distances, noun="tracks")
+    _issue(out["warnings"])
     if plot is not None:
         out["outputs"] = {"plot": str(_honesty_plot(plot, scored, {"track rows": out["coverage"]}, None))}
     return out
@@ -368,7 +408,7 @@ def evaluate_logs(
     truth: Sequence[TruthOptions],
     *,
     log_options: LogOptions | None = None,
-    window: str | None = None,
+    window: str | Sequence[str] | None = None,
     min_travel: float = 0.05,
     align: str = "none",
     rpe_distances: Sequence[float] = (1.0,),
@@ -379,7 +419,9 @@ def evaluate_logs(
 ) -> dict[str, Any]:
     """The honesty test: dead reckoning restarted from truth in each window, scored at its end.
 
-    :func:`score_logs` pooled by :func:`summarise`, with each log's own figures.
+    :func:`score_logs` pooled by :func:`summarise`, with each log's own figures; each window
+    length on its own (windows of different lengths overlap, so their ends are not
+    independent samples of one test, and the χ² bounds would not hold for them pooled).
 
     Parameters
     ----------
@@ -388,7 +430,8 @@ def evaluate_logs(
         alone, and ``--window`` is refused)
     truth : one :class:`~odomkit.workflows.truth.TruthOptions` per log
     log_options : how to read the logs
-    window : ``"30s"`` or ``"5m"``; None for one window per log from its first row
+    window : ``"30s"`` or ``"5m"``, or several such lengths, each scored on its own; None for
+        one window per log from its first row
     min_travel : windows whose odometry travels less [m] are left out and counted
     align : alignment of the whole-run track for ATE (see :func:`evaluate_tracks`)
     rpe_distances : true travel of each RPE [m]
@@ -397,17 +440,31 @@ def evaluate_logs(
     plot, overwrite : draw the whole runs against truth, the coverage diagram of the window
         ends (the robot file's noise and, when it has bias models, its white models alone)
         and their NEES into this .png, .svg or .pdf file
-        (:func:`odomkit.workflows.figures.honesty_figure`); adds ``outputs``
+        (:func:`odomkit.workflows.figures.honesty_figure`; of the first window length); adds
+        ``outputs``
 
     Returns
     -------
-    dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
+    dict with the keys of DESIGN.md, ``window`` (the length scored, ``"30 s"`` or ``"5 m"``;
+    None without one), ``per_log`` and ``warnings``. With several lengths the keys are the
+    first length's (as a caller that asks for one reads them, and ``window`` names it), and
+    ``by_window`` {length: the keys of that length alone}; ``warnings`` then has the whole
+    runs' once and each length's own with the length before it (``"10 s windows: ..."``).
     """
     _check_plot(plot, overwrite, [*logs, robot_path, *(t.path for t in truth if t.path is not None)])
-    scored = score_logs(logs, robot_path, truth, log_options=log_options, window=window,
-                        min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
-                        progress=progress, errors_only=True)
-    out = _report(scored, rpe_distances)
+    specs = _window_specs(window)
+    by_spec = _score_by_window(logs, robot_path, truth, specs, log_options=log_options,
+                               min_travel=min_travel, align=align, rpe_distances=rpe_distances,
+                               method=method, progress=progress, errors_only=True)
+    reports = [_report(scored, rpe_distances, None if spec is None else str(spec))
+               for spec, scored in zip(specs, by_spec, strict=True)]
+    out = dict(reports[0])
+    if len(reports) > 1:
+        out["warnings"] = _several_lengths_notes(by_spec, reports)
+        out["by_window"] = {r["window"]: r for r in reports}
+    _issue(out["warnings"])
+    scored = by_spec[0]
+    window = None if specs[0] is None else str(specs[0])
     if plot is not None:
         from odomkit.evaluate import coverage
         from odomkit.io.robotfile import read_robot
@@ -421,12 +478,41 @@ def evaluate_logs(
             from odomkit.workflows.truth import resolved_truth
 
             white = [m for m in noise if m.kind == "white"]
-            alone = _white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, window,
+            alone = _white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, specs[0],
                                 min_travel, method)
             covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
                                                           np.concatenate([a.honesty_cov for a in alone]))
-        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"]))}
+        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"], window))}
     return out
+
+
+def _window_specs(window: str | Sequence[str] | None) -> list[WindowSpec | None]:
+    """The window lengths asked for, in order (``[None]``: one window per log); one length
+    given twice, as ``10s`` and ``10 s``, is an error."""
+    from odomkit.windows import parse_window
+
+    texts = [window] if isinstance(window, str) else list(window or [])
+    if not texts:
+        return [None]
+    specs = [parse_window(text) for text in texts]
+    for i, spec in enumerate(specs):
+        if spec in specs[:i]:
+            raise InputError(f"--window {texts[i]} is the same length as --window {texts[specs.index(spec)]} "
+                             f"({spec}): give each length once")
+    return list(specs)
+
+
+def _several_lengths_notes(by_spec: Sequence[Sequence[Scored]],
+                           reports: Sequence[dict[str, Any]]) -> list[str]:
+    """The ``warnings`` of several window lengths: the whole runs' once (alike for every
+    length), then each length's own, after its length (``"10 s windows: ..."``)."""
+    from odomkit.workflows.results import grouped_warnings
+
+    whole = grouped_warnings(list(dict.fromkeys(w for s in by_spec[0] for w in s.warnings
+                                                if w not in s.window_notes)),
+                             among=[s.label for s in by_spec[0]])
+    own = [f"{r['window']} windows: {w}" for r in reports for w in r["warnings"] if w not in whole]
+    return whole + own
 
 
 def _check_plot(plot: str | Path | None, overwrite: bool, inputs: Sequence[str | Path]) -> None:
@@ -439,27 +525,27 @@ def _check_plot(plot: str | Path | None, overwrite: bool, inputs: Sequence[str |
 
 
 def _white_only(logs: Sequence[str | Path], robot: Robot, white: Sequence[NoiseModel],
-                truth: Sequence[TruthOptions], log_options: LogOptions | None, window: str | None,
+                truth: Sequence[TruthOptions], log_options: LogOptions | None, spec: WindowSpec | None,
                 min_travel: float, method: str) -> list[Scored]:
     """The window ends scored with the white noise models alone (for ``--plot``)."""
-    from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions, load_log
 
     if not white:
         return []
-    spec = parse_window(window) if window else None
     out = []
     for path, opts in zip(logs, truth, strict=True):
         log = load_log(path, robot, log_options or LogOptions())
-        out.append(_score_log(log, robot, list(white) if len(white) > 1 else white[0], _load(opts, log), opts,
-                              spec, min_travel=min_travel, align="none", rpe_distances=(), method=method))
+        noise = list(white) if len(white) > 1 else white[0]
+        out.append(_score_log(log, robot, noise, _load(opts, log), opts, [spec], min_travel=min_travel,
+                              align="none", rpe_distances=(), method=method)[0])
     return out
 
 
 def _honesty_plot(plot: str | Path, scored: Sequence[Scored], coverages: dict[str, dict[str, float | None]],
-                  windows: int | None) -> Path:
+                  windows: int | None, length: str | None = None) -> Path:
     """``evaluate --plot``: each run against truth, the coverage and the NEES of the scored
-    samples (window ends when ``windows`` is given, else track rows)."""
+    samples (window ends when ``windows`` is given, else track rows; ``length`` the window
+    length, named in the figure's note)."""
     from odomkit.evaluate import nees
     from odomkit.workflows.figures import honesty_figure
 
@@ -469,7 +555,8 @@ def _honesty_plot(plot: str | Path, scored: Sequence[Scored], coverages: dict[st
               for s in scored]
     if windows is not None:
         times = [s.honesty_t for s in scored]
-        note = "window ends restart from truth: independent samples"
+        note = ("window ends restart from truth: independent samples" if length is None else
+                f"{length} window ends restart from truth: independent samples")
     else:
         times = [s.rows.t if s.rows is not None and s.rows.t.size == v.size
                  else np.arange(v.size, dtype=float) for s, v in zip(scored, values, strict=True)]
@@ -497,65 +584,95 @@ def score_logs(
     progress: Progress = NO_PROGRESS,
     errors_only: bool = False,
 ) -> list[Scored]:
-    """Each log's raw figures of :func:`evaluate_logs` (same parameters), before pooling:
-    its position errors, and its window-end errors, covariances and times (for figures).
-    Its notes are in each :class:`Scored`'s ``warnings``, not yet issued.
+    """Each log's raw figures of :func:`evaluate_logs` (same parameters, one window length),
+    before pooling: its position errors, and its window-end errors, covariances and times
+    (for figures). Its notes are in each :class:`Scored`'s ``warnings``, not yet issued.
 
     ``errors_only``: a robot file without ``[noise]`` gives the whole runs' errors alone
     (no window ends, NEES or coverage; a windowed test is still refused) instead of an error.
     """
+    return _score_by_window(logs, robot_path, truth, _window_specs(window), log_options=log_options,
+                            min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
+                            progress=progress, errors_only=errors_only)[0]
+
+
+def _score_by_window(
+    logs: Sequence[str | Path],
+    robot_path: str | Path,
+    truth: Sequence[TruthOptions],
+    specs: Sequence[WindowSpec | None],
+    *,
+    log_options: LogOptions | None,
+    min_travel: float,
+    align: str,
+    rpe_distances: Sequence[float],
+    method: str,
+    progress: Progress,
+    errors_only: bool,
+) -> list[list[Scored]]:
+    """:func:`score_logs` for each window length of ``specs``: each log is read and its whole
+    run dead-reckoned once, then cut into the windows of each length."""
     from odomkit.io.robotfile import read_robot
-    from odomkit.windows import parse_window
     from odomkit.workflows.logs import LogOptions, load_log
     from odomkit.workflows.truth import resolved_truth
 
     robot, noise = read_robot(robot_path)
-    if not noise and (window is not None or not errors_only):
+    if not noise and (specs != [None] or not errors_only):
         raise InputError("the robot file has no [noise] table: the windowed test scores a predicted "
                          "covariance (add one: fit-noise writes it); without --window evaluate gives the "
                          "errors alone", source=str(robot_path))
     truth = resolved_truth(robot_path, truth)
     noise_arg = None if not noise else noise if len(noise) > 1 else noise[0]
-    spec = parse_window(window) if window else None
-    scored = []
+    per_log = []
     with stage(progress, len(logs), "logs"):
         for path, opts in zip(logs, truth, strict=True):
             log = load_log(path, robot, log_options or LogOptions())
             found = _load(opts, log)
-            scored.append(_score_log(log, robot, noise_arg, found, opts, spec, min_travel=min_travel,
-                                     align=align, rpe_distances=rpe_distances, method=method))
+            per_log.append(_score_log(log, robot, noise_arg, found, opts, specs, min_travel=min_travel,
+                                      align=align, rpe_distances=rpe_distances, method=method))
             progress.advance()
+    by_spec = [[one[i] for one in per_log] for i in range(len(specs))]
     if noise_arg is None:
         note = (f"{robot_path}: the robot file has no [noise] table: the errors alone, no NEES or coverage "
                 "(fit-noise writes one)")
-        return [replace(scored[0], warnings=[note, *scored[0].warnings]), *scored[1:]]
-    return _windowless_left_out(scored)
+        return [[replace(scored[0], warnings=[note, *scored[0].warnings]), *scored[1:]] for scored in by_spec]
+    return [_windowless_left_out(scored) for scored in by_spec]
 
 
 def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
     """The logs with windows, each without one named in a warning; an error when none has
     one (the first log's reason)."""
+    from odomkit.workflows.results import short_names
+
     empty = [s for s in scored if s.no_windows is not None]
     if not empty:
         return scored
     if len(empty) == len(scored):
         raise InputError(empty[0].no_windows or "no windows", source=empty[0].label)
     first = scored[0]
-    named = "; ".join(f"{s.label}: {s.no_windows}" for s in empty[:3]) + ("; ..." if len(empty) > 3 else "")
-    note = f"{len(empty)} of {len(scored)} logs left out of the windowed test: {named}"
-    return [replace(first, warnings=[*first.warnings, note]), *scored[1:]]
+    names = short_names([s.label for s in empty], [s.label for s in scored])
+    named = "; ".join(f"{name}: {s.no_windows}" for name, s in zip(names[:3], empty, strict=False))
+    more = f"; and {len(empty) - 3} more" if len(empty) > 3 else ""
+    note = f"{len(empty)} of {len(scored)} logs left out of the windowed test: {named}{more}"
+    return [replace(first, warnings=[*first.warnings, note], window_notes=(*first.window_notes, note)),
+            *scored[1:]]
+
+
+#: Why windows are left out, after their count in a log's warning (:func:`_pooled_notes`).
+_STILL = "window(s) travelled less than {:g} m (standing still or turning on the spot) and were left out"
+_HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
 
 
 def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, opts: TruthOptions,
-               spec: WindowSpec | None, *, min_travel: float, align: str, rpe_distances: Sequence[float],
-               method: str) -> Scored:
-    """Whole-run figures from truth at the first row, and the window ends of one log."""
+               specs: Sequence[WindowSpec | None], *, min_travel: float, align: str,
+               rpe_distances: Sequence[float], method: str) -> list[Scored]:
+    """Whole-run figures from truth at the first row, and the window ends of one log, for
+    each window length of ``specs`` (the whole run once)."""
     from odomkit.integrate import dead_reckon
     from odomkit.kinematics import body_steps
     from odomkit.track import dead_reckon_log
     from odomkit.truth import no_overlap, truth_at
-    from odomkit.window_errors import window_errors
-    from odomkit.windows import cumulative_travel, late_start_note, run_start, split_windows, why_no_windows
+    from odomkit.windows import cumulative_travel, run_start
 
     samples = truth_at(truth, log.t, opts.max_gap)
     rows = np.flatnonzero(samples.valid)
@@ -572,38 +689,51 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
     whole = _score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
                          align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
                          min_travel=0.0, honesty_from_rows=False, t=track.t)
-    notes = list(whole.warnings)
+    whole = replace(whole, rows_skipped=whole.rows_skipped + first)
     if noise is None:  # the errors alone (score_logs' errors_only)
-        return replace(whole, rows_skipped=whole.rows_skipped + first, warnings=notes)
-    # The honesty test: one window per span of the log, restarted from truth; the whole-log
-    # window (no spec) starts with the whole run (as fit-noise's: odomkit.window_errors.log_window_basis).
+        return [whole for _ in specs]
+    return [_score_windows(log, robot, noise, truth, samples, whole, spec, first=first,
+                           first_valid=int(rows[0]), travel=travel, min_travel=min_travel, method=method)
+            for spec in specs]
+
+
+def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, samples: TruthSamples,
+                   whole: Scored, spec: WindowSpec | None, *, first: int, first_valid: int,
+                   travel: NDArray[np.float64], min_travel: float, method: str) -> Scored:
+    """``whole`` (one log's whole-run figures) with the window ends of one length: the
+    honesty test, one window per span of the log, restarted from truth; the whole-log
+    window (no ``spec``) starts with the whole run (as fit-noise's:
+    :func:`odomkit.window_errors.log_window_basis`)."""
+    from odomkit.calibrate.fit_noise import first_order_note
+    from odomkit.window_errors import window_errors
+    from odomkit.windows import late_start_note, split_windows, why_no_windows
+
+    notes = list(whole.warnings)
     valid = samples.valid
     if spec is None:
         valid = valid.copy()
         valid[:first] = False
-    if first != rows[0]:
+    if first != first_valid:
         what = "the whole-run track" + (" (and its window)" if spec is None else "")
-        notes.append(late_start_note(log.source, what, log.t, first, int(rows[0])))
+        notes.append(late_start_note(log.source, what, log.t, first, first_valid))
     windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=valid)
     if not windows:
         reason = why_no_windows(log.t, travel, valid, spec, min_travel, skipped)
-        return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=np.empty((0, 2)),
-                       honesty_cov=np.empty((0, 2, 2)), windows=0, warnings=notes, no_windows=reason)
+        return replace(whole, honesty_errors=np.empty((0, 2)), honesty_cov=np.empty((0, 2, 2)), windows=0,
+                       warnings=notes, no_windows=reason)
+    own: list[str] = []
+    left_out: list[tuple[str, int]] = []
     if skipped:
-        notes.append(f"{log.source}: {skipped} window(s) travelled less than {min_travel:g} m (standing "
-                     "still or turning on the spot) and were left out")
+        left_out.append((_STILL.format(min_travel), skipped))
     found = window_errors(log, robot, noise, samples.poses, valid, windows, truth=truth, method=method)
     if found.dropped:
-        notes.append(f"{log.source}: {found.dropped} window(s) left out: no start heading could be "
-                               "fitted to the position-only truth")
-    from odomkit.calibrate.fit_noise import first_order_note
-
+        left_out.append((_HEADLESS, found.dropped))
+    own += [f"{log.source}: {n} {what}" for what, n in left_out]
     note = first_order_note(found.cov[:, 2, 2])
     if note:
-        notes.append(f"{log.source}: {note}")
+        own.append(f"{log.source}: {note}")
     # found.cov holds the truth's noise at both window ends already (odomkit.window_errors).
-    return replace(whole, rows_skipped=whole.rows_skipped + first, honesty_errors=found.error[:, :2],
-                   honesty_cov=found.cov[:, :2, :2], windows=len(found.windows), warnings=notes,
-                   honesty_t=log.t[found.end_rows],
+    return replace(whole, honesty_errors=found.error[:, :2], honesty_cov=found.cov[:, :2, :2],
+                   windows=len(found.windows), warnings=notes + own, window_notes=tuple(own),
+                   left_out=tuple(left_out), honesty_t=log.t[found.end_rows],
                    honesty_t0=log.t[np.array([w.start for w in found.windows], dtype=np.int64)])
-

@@ -253,9 +253,9 @@ def fit_noise_files(
     if not logs:
         raise InputError("fit-noise needs at least one --log")
     if groups is not None and len(groups) != len(logs):
-        raise InputError(f"give one --group per --log: {len(logs)} log(s), {len(groups)} group(s)")
+        raise InputError(f"give one --group per log: {len(logs)} log(s), {len(groups)} group(s)")
     if len(truths) != len(logs):
-        raise InputError(f"give one --truth per --log: {len(logs)} log(s), {len(truths)} truth(s)")
+        raise InputError(f"give one --truth per log: {len(logs)} log(s), {len(truths)} truth(s)")
     texts = [window] if isinstance(window, str) or window is None else list(window)
     specs = tuple(None if w is None else parse_window(w) for w in texts) or (None,)
     if trim is not None and not 0.5 < trim < 1:

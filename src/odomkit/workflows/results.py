@@ -12,8 +12,9 @@ the first number that is not finite.
 
 from __future__ import annotations
 
+import re
 import warnings
-from collections.abc import Iterator, Mapping
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 
 import numpy as np
@@ -21,7 +22,8 @@ from numpy.typing import ArrayLike
 
 from odomkit.errors import ModelError
 
-__all__ = ["check_result", "collected_warnings", "numeric_guard", "RESULT_RTOL"]
+__all__ = ["check_result", "collected_warnings", "grouped_warnings", "listed", "numeric_guard", "RESULT_RTOL",
+           "short_names"]
 
 #: Asymmetry and negative eigenvalue a computed covariance may show, relative to its largest
 #: entry: rounding of long recursions and prefix sums (~1e-13), far below any real defect.
@@ -149,3 +151,70 @@ def collected_warnings() -> Iterator[list[str]]:
     finally:
         for item in others:  # outside catch_warnings: Python's own display
             warnings.showwarning(item.message, item.category, item.filename, item.lineno)
+
+
+def short_names(paths: Sequence[str], among: Sequence[str] = ()) -> list[str]:
+    """How a warning names each of ``paths``: its file name where no two of ``paths`` and
+    ``among`` (the other files of the command) share one, else the paths as given
+    (``run1/odom.csv`` and ``run2/odom.csv``)."""
+    def name(path: str) -> str:
+        return re.split(r"[\\/]", path.rstrip("/\\"))[-1] or path
+
+    every = set(paths) | set(among)
+    unique = len({name(p) for p in every}) == len(every)
+    return [name(p) for p in paths] if unique else list(paths)
+
+
+def listed(items: Sequence[str], limit: int = 3) -> str:
+    """At most ``limit`` of ``items`` and how many more: ``a, b, c and 21 more``."""
+    shown = ", ".join(items[:limit])
+    return shown + (f" and {len(items) - limit} more" if len(items) > limit else "")
+
+
+#: An already grouped warning's head, ``6 logs (a.csv, b.csv, c.csv and 3 more)``.
+_GROUPED = re.compile(r"\d+ \S+ \(.*\)")
+
+
+def _about_one_file(head: str) -> bool:
+    """Whether ``head``, the text before a warning's first ``": "``, is a file's path (a
+    folder in it, or a file extension) and not a group of them."""
+    path_like = "/" in head or "\\" in head or re.search(r"\.[A-Za-z][A-Za-z0-9]*$", head) is not None
+    return bool(head) and path_like and not head.startswith("-") and _GROUPED.fullmatch(head) is None
+
+
+def grouped_warnings(texts: Sequence[str], noun: str = "logs", among: Sequence[str] = ()) -> list[str]:
+    """``texts`` once each, where those that say the same of different files (``PATH: text``)
+    are one line, ``3 logs (a.csv, b.csv, c.csv): text`` (at most three named, then ``and N
+    more``; :func:`short_names`, file names where neither ``among``, the command's files,
+    nor the files the texts name share one), in the place of the first of them.
+
+    A command that reads many logs (evaluate on 86 short runs) would otherwise repeat one
+    warning per log and push its results off the screen.
+
+    Examples
+    --------
+    >>> grouped_warnings(["a/x.csv: no RPE over 1 m", "b/y.csv: no RPE over 1 m", "only 3 windows"])
+    ['2 logs (x.csv, y.csv): no RPE over 1 m', 'only 3 windows']
+    """
+    order: list[tuple[bool, str]] = []  # (a group?, its text after the path, or the whole text)
+    paths: dict[str, list[str]] = {}
+    for text in dict.fromkeys(texts):
+        head, sep, rest = text.partition(": ")
+        if not (sep and _about_one_file(head)):
+            order.append((False, text))
+            continue
+        if rest not in paths:
+            paths[rest] = []
+            order.append((True, rest))
+        paths[rest].append(head)
+    files = [*among, *(p for named in paths.values() for p in named)]
+    out = []
+    for group, text in order:
+        named = paths[text] if group else []
+        if len(named) == 1:
+            out.append(f"{named[0]}: {text}")
+        elif group:
+            out.append(f"{len(named)} {noun} ({listed(short_names(named, files))}): {text}")
+        else:
+            out.append(text)
+    return out
