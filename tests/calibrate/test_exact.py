@@ -270,3 +270,20 @@ def test_body_steps_of_the_model_match_the_library():
     ref = body_steps(robot, log)
     np.testing.assert_allclose(dd, ref.dd, rtol=1e-13)
     np.testing.assert_allclose(dth, ref.dtheta, rtol=1e-13)
+
+
+def test_with_heading_weight_zero_the_residual_variance_counts_only_positions():
+    """With the heading left out (weight 0) every third residual is zero; the residual
+    variance must be the positions' own: truth positions with white noise of σ = 1 cm per
+    axis around an exactly known square give σ̂ = 1 cm within its sampling error
+    (relative 1/√(2(n − p)) for n position residuals), not 1 cm·√(2/3) as when the zeros
+    were counted."""
+    errors = SystematicErrors(E_d=0.995, E_b=1.02, E_s=1.01)
+    [log] = square_logs(errors, NOMINAL, 4.0, 1, directions=("cw",))
+    rng = np.random.default_rng(5)
+    gt = log.ground_truth.copy()
+    gt[:, :2] += rng.normal(0.0, 0.01, gt[:, :2].shape)
+    noisy = replace(log, ground_truth=gt)
+    cal = calibrate_exact([noisy], NOMINAL, "trajectory", heading_weight=0.0)
+    n = 2 * (cal.n_residuals // 3)
+    assert np.sqrt(cal.residual_variance) == pytest.approx(0.01, rel=4 / np.sqrt(2 * (n - 3)))

@@ -75,11 +75,15 @@ def expand(argv: list[str]) -> list[str]:
 
 
 def scrub(obj: object) -> object:
-    """The JSON object without its wall-clock keys."""
+    """The JSON object without its wall-clock keys, and with the input folders' paths (a
+    run's name in ``calibrate``'s ``per_run``) as ``{data}`` and ``{inputs}``, so that the
+    golden files hold no checkout's location."""
     if isinstance(obj, dict):
         return {k: scrub(v) for k, v in obj.items() if k not in VOLATILE}
     if isinstance(obj, list):
         return [scrub(v) for v in obj]
+    if isinstance(obj, str):
+        return obj.replace(str(DATA), "{data}").replace(str(INPUTS), "{inputs}")
     return obj
 
 

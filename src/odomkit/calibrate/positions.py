@@ -39,7 +39,6 @@ car) and the integration with sensitivities its
 
 from __future__ import annotations
 
-import warnings
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
@@ -48,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from odomkit import validate
-from odomkit.calibrate.exact import ExactCalibration
+from odomkit.calibrate.exact import ExactCalibration, warn_if_drifting
 from odomkit.calibrate.residuals import (
     CALIBRATED_ROBOTS,
     CalibratedRobot,
@@ -61,7 +60,7 @@ from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
 from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
-from odomkit.truth import Truth, scatter_sigma
+from odomkit.truth import Truth
 
 __all__ = ["MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions", "compared_fixes", "runs_disagree"]
 
@@ -277,29 +276,6 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
     return horizon
 
 
-def _warn_if_drifting(var_res: float, n_res: int, truths: Sequence[Truth]) -> None:
-    """Warn when the residuals are more than the truth's own noise: σ̂²(JᵀJ)⁻¹ treats them
-    as independent from fix to fix, which the odometry's own drift (a random walk along
-    each run) is not. On a simulated car with residuals 1.28× the GPS's σ, the clock
-    offset's scatter over seeds was about 5× its standard error. The noise is the stated
-    σ, else the fixes' own scatter about a smooth path (:func:`odomkit.truth.scatter_sigma`),
-    so that a user who states nothing is warned too."""
-    stated = max((t.sigma for t in truths), default=0.0)
-    what = "stated σ"
-    if stated <= 0:
-        found = [x for x in (scatter_sigma(t) for t in truths) if x is not None]
-        stated = float(np.sqrt(np.mean(np.square(found)))) if found else 0.0
-        what = "scatter about a smooth path"
-    if stated <= 0:
-        return
-    ratio = float(np.sqrt(var_res)) / stated
-    # An honest residual RMS is σ within about 1/√n_res (relative): allow five of those.
-    if ratio > 1.0 + 5.0 / np.sqrt(n_res):
-        warnings.warn(f"the calibration's residuals (RMS {np.sqrt(var_res):.3g} m) are {ratio:.2f}x the "
-                      f"truth's {what} ({stated:.3g} m): the odometry's own drift is in them, correlated "
-                      "along each run, so the standard errors are optimistic", UserWarning, stacklevel=3)
-
-
 def calibrate_positions(
     runs: Sequence[OdometryLog],
     truths: Sequence[Truth],
@@ -407,7 +383,7 @@ def calibrate_positions(
         raise InputError(f"{res.size} position residuals cannot determine {q.size} parameters "
                          "(the robot's and each run's start pose): give longer runs or more truth")
     var_res = float(res @ res) / dof
-    _warn_if_drifting(var_res, res.size, truths)
+    warn_if_drifting(var_res, res.size, truths)
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
     p, delta, starts = problem.split(q)
     cov = np.zeros((len(model.names), len(model.names)))

@@ -115,10 +115,14 @@ def calibrate_command(
 def _print_text(out: dict[str, Any]) -> None:
     if out["method"] == "exact":
         print(f"exact calibration from {out['source']} of {out['n_runs']} run(s)")
+        between = out.get("std_errors_between_runs", {})
         for name, value in out["parameters"].items():
             # The standard error to two significant digits: a fixed six decimals shows
             # "± 0.000000" for a steering offset pinned to 1e-7 rad.
-            print(f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}")
+            line = f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}"
+            if name in between:  # from the runs' spread, where the fit's own may be optimistic
+                line += f"  (between runs ± {between[name]:.2g})"
+            print(line)
         offset = out.get("truth_time_offset")
         if offset is not None:  # a fix stamped t is the pose at log time t - offset
             how = f"± {offset['std_error']:.2g}" if offset.get("fitted") else "(given)"

@@ -9,7 +9,7 @@ Nothing existing is overwritten unless ``overwrite=True`` (CLI ``--force``).
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -192,7 +192,9 @@ def calibrate_files(
                               stacklevel=2)
             summary = cal.to_dict()
             if len(runs) > 1:
-                summary["per_run"] = _each_run_alone(cal, runs, truths, robot, given is None, steering_cubic)
+                summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_positions(
+                    [runs[i]], [truths[i]], robot, fit_time_offset=given is None,
+                    steering_cubic=steering_cubic))
             else:
                 summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None,
                                                      steering_cubic, cubic_hint)
@@ -203,10 +205,18 @@ def calibrate_files(
             truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
             truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
         else:
+            # A single trajectory's residuals are held against the truth's stated noise.
+            stated = own_truth.sigma if own_truth is not None else None
             cal = calibrate_exact(runs, robot, source or "endpoints",  # type: ignore[arg-type]
-                                  steering_cubic=steering_cubic, **exact_kwargs)
+                                  steering_cubic=steering_cubic, truth_sigma=stated, **exact_kwargs)
             summary = cal.to_dict()
             new_robot = cal.robot
+            if len(runs) > 1 and source == "trajectory":
+                # Endpoints have no run alone to compare (one end pose: 2 numbers for 3
+                # parameters); their between-run standard errors need none.
+                summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_exact(
+                    [runs[i]], robot, "trajectory", steering_cubic=steering_cubic,  # type: ignore[arg-type]
+                    truth_sigma=stated, **exact_kwargs))
             if side is not None and isinstance(robot, DiffDrive):
                 summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
@@ -292,22 +302,27 @@ def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot,
     return "".join(f"; odomkit check finds {s}" for s in dict.fromkeys(said))
 
 
-def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog], truths: list[Truth], robot: Any,
-                    fit_time_offset: bool, steering_cubic: bool = False) -> list[dict[str, Any]]:
-    """Each run calibrated from its truth positions alone (JSON ``per_run``: ``log``,
-    ``parameters``, ``std_errors``, or ``error`` where it cannot be fitted alone), and a
-    warning where the joint fit is no compromise of them (:func:`runs_disagree`)."""
+def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog],
+                    fit_alone: Callable[[int], ExactCalibration]) -> list[dict[str, Any]]:
+    """Each run calibrated alone (``fit_alone(i)``: from its truth positions, or its own
+    trajectory; JSON ``per_run``: ``log``, ``parameters``, ``std_errors``, or ``error`` where
+    it cannot be fitted alone), and a warning where the joint fit is no compromise of them
+    (:func:`runs_disagree`). N more fits, each of one run: together about as long as the
+    joint fit (each run is integrated once per iteration either way)."""
     alone: list[ExactCalibration | None] = []
     rows: list[dict[str, Any]] = []
-    for log, found in zip(runs, truths, strict=True):
+    for i, log in enumerate(runs):
         try:
             with warnings.catch_warnings():  # the joint fit has said what they would say
                 warnings.simplefilter("ignore")
-                one = calibrate_positions([log], [found], robot, fit_time_offset=fit_time_offset,
-                                          steering_cubic=steering_cubic)
+                one = fit_alone(i)
         except (InputError, ModelError) as exc:
             alone.append(None)
             rows.append({"log": log.source, "error": str(exc)})
+            continue
+        if not one.determined:  # its values lie anywhere along a ridge: nothing to compare
+            alone.append(None)
+            rows.append({"log": log.source, "error": "the run alone does not determine every parameter"})
             continue
         alone.append(one)
         summary = one.to_dict()
