@@ -24,9 +24,9 @@ from odomkit.errors import InputError
 from odomkit.log import OdometryLog
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
-           "HEADING_SIGMA_SOUGHT", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
+           "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma", "start_heading", "start_pose", "Truth",
-           "truth_at", "truth_from_log", "TruthSamples"]
+           "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
 #: the fixes do not support it (the robot barely moved, or the fixes are too noisy).
@@ -175,8 +175,7 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
     on_fix = np.isin(t, truth.t)
     gap = np.zeros(t.size, dtype=bool)
     if max_gap is not None and len(truth) > 1:
-        longest = max(max_gap, 2.0 * float(np.median(np.diff(truth.t))))
-        gap = inside & ~on_fix & (truth.t[i + 1] - truth.t[i] > longest)
+        gap = inside & ~on_fix & (truth.t[i + 1] - truth.t[i] > longest_gap(truth, max_gap))
     valid = inside & ~gap
     poses = np.full((t.size, 3), np.nan)
     if valid.any():
@@ -186,6 +185,21 @@ def truth_at(truth: Truth, times: ArrayLike, max_gap: float | None = 0.5) -> Tru
         if truth.theta is not None:
             poses[valid, 2] = np.interp(tv, truth.t, truth.theta)
     return TruthSamples(poses, valid, int(np.count_nonzero(~inside)), int(np.count_nonzero(gap)))
+
+
+def longest_gap(truth: Truth, max_gap: float | None) -> float:
+    """The longest gap between fixes [s] that :func:`truth_at` interpolates across:
+    ``max_gap`` (None: no limit), but never under twice the truth's median fix spacing."""
+    if max_gap is None:
+        return math.inf
+    spacing = float(np.median(np.diff(truth.t))) if len(truth) > 1 else 0.0
+    return max(max_gap, 2.0 * spacing)
+
+
+def truth_noise(truth: Truth) -> float:
+    """The truth's position noise [m per axis] a check should allow for: its stated σ, or
+    its fixes' own scatter about a smooth path (:func:`scatter_sigma`) where that is larger."""
+    return max(truth.sigma, scatter_sigma(truth) or 0.0)
 
 
 def no_overlap(truth: Truth, times: ArrayLike) -> str:

@@ -260,3 +260,25 @@ def test_a_car_wheel_base_bent_by_a_steering_gain_is_named(run_cli, tmp_path, ga
     assert fitted == pytest.approx(2.7 * gain, rel=0.03)
     said = [line for line in err.splitlines() if "stands in for every gain on the steering" in line]
     assert bool(said) == warned, err
+
+
+def test_a_gap_after_the_last_stretch_does_not_drop_it():
+    """Stretches of 1 s over fixes every 0.1 s from 0 to 3 s, then one more fix at 10 s:
+    the 7 s gap lies after the last stretch's end, so all three stretches are kept (the
+    widest gap of each is its own fixes' 0.1 s)."""
+    from odomkit.calibrate.check_ratios import _stretch_ends
+
+    t = np.r_[np.round(np.arange(0.0, 3.05, 0.1), 10), 10.0]
+    first, last = _stretch_ends(t, 0.0, 3.0, 1.0, 0.5)
+    assert t[first].tolist() == [0.0, 1.0, 2.0] and t[last].tolist() == [1.0, 2.0, 3.0]
+
+
+def test_the_gap_rule_is_truth_ats():
+    """longest_gap is what truth_at bridges: a 1 Hz truth's 2 s, a dense one's max_gap."""
+    from odomkit.truth import longest_gap, truth_at
+
+    sparse = Truth(np.arange(0.0, 10.0, 1.0), np.zeros((10, 2)))
+    assert longest_gap(sparse, 0.5) == 2.0 and longest_gap(sparse, None) == math.inf
+    gappy = Truth(np.r_[np.arange(0.0, 5.0, 1.0), 7.5, 8.5], np.zeros((7, 2)))
+    assert longest_gap(gappy, 0.5) == 2.0
+    assert truth_at(gappy, [5.0, 6.0], 0.5).valid.tolist() == [False, False]  # inside the 3.5 s gap

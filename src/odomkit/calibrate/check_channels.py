@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from odomkit.calibrate.check_finding import Finding
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive, Robot, Tricycle
-from odomkit.truth import Truth, scatter_sigma, truth_at
+from odomkit.truth import Truth, truth_at, truth_noise
 
 __all__ = ["check_channels"]
 
@@ -356,8 +356,8 @@ def _channels_against_positions(log: OdometryLog, robot: Robot, truth: Truth,
         at_fixes.append(np.column_stack([np.interp(truth.t, log.t, track.poses[:, k]) for k in range(3)]))
         travel = float(np.sum(np.abs(track.steps.dd)))
         forward.append(float(np.sum(track.steps.dd)) / travel if travel > 0 else 0.0)
-    # The fixes' own noise (odomkit.truth.scatter_sigma), no less than the stated σ.
-    noise = max(truth.sigma, scatter_sigma(truth) or 0.0)
+    # The fixes' own noise, no less than the stated σ (odomkit.truth.truth_noise).
+    noise = truth_noise(truth)
     stretches, length = _stretches(truth, runs, noise, at_fixes[0][:, 2])
     fixes = [truth.xy[s] for s in stretches]
     spread = sum(_spread(x) for x in fixes)

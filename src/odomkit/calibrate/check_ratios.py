@@ -35,9 +35,10 @@ from numpy.typing import NDArray
 from odomkit.calibrate.check_finding import Finding, Status
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, DiffDrive, Robot, Tricycle
-from odomkit.truth import Truth, heading_span, scatter_sigma
+from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
-__all__ = ["check_truth_motion", "MotionRatios", "motion_ratios", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN"]
+__all__ = ["check_truth_motion", "motion_problems", "MotionRatios", "motion_ratios", "RATIO_FAIL",
+           "TRAVEL_WARN", "TURN_WARN"]
 
 #: A stretch's truth chord counts where it exceeds this many times the chord's own noise
 #: (σ√2 for two fixes of σ per axis): a 7 % error on one stretch's ratio at worst, and a
@@ -159,13 +160,15 @@ def _stretch_ends(truth_t: NDArray[np.float64], start: float, stop: float, span:
     if idx.size < 2:
         return np.empty(0, np.intp), np.empty(0, np.intp)
     first, last = idx[:-1], idx[1:]
-    gaps = np.diff(truth_t)
-    widest = np.maximum.reduceat(gaps, first) if gaps.size else np.zeros(first.size)
+    # Each stretch's widest gap: the gaps first..last-1 (the stretches are consecutive, so
+    # cutting the gaps at the last stretch's end keeps later gaps out of it).
+    widest = np.maximum.reduceat(np.diff(truth_t)[: last[-1]], first)
     keep = (widest <= max_gap) & (truth_t[last] - truth_t[first] <= 1.5 * span)
     return first[keep], last[keep]
 
 
-def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5) -> MotionRatios:
+def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5,
+                  noise: float | None = None) -> MotionRatios:
     """The odometry's travel and turning against the truth's over stretches of a few seconds.
 
     Parameters
@@ -176,12 +179,15 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
         fixes' own scatter (:func:`odomkit.truth.scatter_sigma`)
     max_gap : a stretch holding a gap between fixes longer than this [s] is left out; a
         sparse truth (a 1 Hz GPS) is allowed twice its median spacing
+        (:func:`odomkit.truth.longest_gap`, :func:`odomkit.truth.truth_at`'s rule)
+    noise : the truth's noise [m per axis] where the caller has it (default
+        :func:`odomkit.truth.truth_noise`)
 
     Returns
     -------
     MotionRatios
     """
-    from odomkit.track import dead_reckon_log
+    from odomkit.kinematics import body_steps
 
     t = np.asarray(log.t, dtype=float)
     inside = (truth.t >= t[0]) & (truth.t <= t[-1])
@@ -189,22 +195,22 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
     nothing = MotionRatios(math.nan, math.nan, 0, math.nan, math.nan, 0, math.nan, 0.0, 0.0)
     if tt.size < 3:
         return nothing
-    track = dead_reckon_log(log, robot, pose0=np.zeros(3))
-    odo_heading = np.unwrap(track.poses[:, 2])
-    odo = np.column_stack([np.interp(tt, t, track.poses[:, 0]), np.interp(tt, t, track.poses[:, 1]),
-                           np.interp(tt, t, odo_heading)])
+    steps = body_steps(robot, log)
+    # The odometry's own heading from the origin (a measured heading may wrap: unwrapped).
+    turned = np.concatenate(([0.0], np.cumsum(steps.dtheta)))
+    odo_heading = np.unwrap(turned) if robot.measures_heading else turned
+    heading_at = np.interp(tt, t, odo_heading)
     # Signed (backwards is negative), and the distance rolled either way.
-    travelled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(track.steps.dd))))
-    rolled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(np.abs(track.steps.dd)))))
+    travelled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(steps.dd))))
+    rolled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(np.abs(steps.dd)))))
     # ∫ θ over the distance rolled: its mean over a stretch is the direction of the stretch's
     # chord to first order, as the truth's chord direction is (the same smoothing on both
     # sides: the heading at the stretch's middle turns 2 % more on a car's random bends).
     mid_heading = 0.5 * (odo_heading[:-1] + odo_heading[1:])
-    heading_sum = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(mid_heading * np.abs(track.steps.dd)))))
+    heading_sum = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(mid_heading * np.abs(steps.dd)))))
     heading = None if truth.theta is None else np.unwrap(truth.theta[inside])
-    noise = max(truth.sigma, scatter_sigma(truth) or 0.0)
-    spacing = float(np.median(np.diff(tt)))
-    gap = max(max_gap if max_gap is not None else math.inf, 2.0 * spacing)
+    noise = truth_noise(truth) if noise is None else noise
+    gap = longest_gap(truth, max_gap)
     least_chord = max(MIN_CHORD, CHORD_SIGMAS * math.sqrt(2.0) * noise)
 
     def straight(first: NDArray[np.intp], last: NDArray[np.intp]) -> NDArray[np.bool_]:
@@ -222,7 +228,7 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
         chord = np.linalg.norm(step, axis=1)
         middle = (first + last) // 2
         off = xy[middle] - xy[first]
-        odo_turn = np.abs(odo[last, 2] - odo[first, 2])
+        odo_turn = np.abs(heading_at[last] - heading_at[first])
         odo_rolled = rolled[last] - rolled[first]
         with np.errstate(invalid="ignore", divide="ignore"):
             sagitta = np.abs(step[:, 0] * off[:, 1] - step[:, 1] * off[:, 0]) / chord
@@ -254,7 +260,7 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
 
     if heading is not None:
         truth_turn = heading[last] - heading[first]
-        odo_turn = odo[last, 2] - odo[first, 2]
+        odo_turn = heading_at[last] - heading_at[first]
         turn_noise = np.full(truth_turn.shape, math.sqrt(2.0) * truth.heading_sigma)
     else:
         # Consecutive stretches (sharing a fix), both with chords beyond the noise and driven
@@ -348,14 +354,15 @@ def _turn_finding(r: MotionRatios, robot: Robot) -> Finding:
 
 
 def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
-                       max_gap: float | None = 0.5) -> list[Finding]:
-    """The ``travel_ratio`` and ``turn_ratio`` findings (none without truth)."""
+                       max_gap: float | None = 0.5, noise: float | None = None) -> list[Finding]:
+    """The ``travel_ratio`` and ``turn_ratio`` findings (none without truth); ``max_gap`` and
+    ``noise`` as in :func:`motion_ratios`."""
     if truth is None:
         return []
     # A fuzzed or broken file (positions of 1e200 m) overflows here: that is no finding of
     # this check's, which then compares nothing (the ratios come out NaN).
     with np.errstate(all="ignore"):
-        r = motion_ratios(log, robot, truth, max_gap)
+        r = motion_ratios(log, robot, truth, max_gap, noise)
     found = []
     if math.isfinite(r.travel):
         found.append(_travel_finding(r, robot, "speed" in log.channels))
@@ -369,3 +376,13 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
         found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
                              "odometry's turning not compared with the truth's"))
     return found
+
+
+def motion_problems(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5, *,
+                    warnings: bool = False, noise: float | None = None) -> list[str]:
+    """The failures of :func:`check_truth_motion` (and its warnings, with ``warnings``) as
+    ``"LOG: message; advice"`` lines, for a command that fits (``calibrate``, ``fit-noise``):
+    a unit read wrong or a steering ratio left out bends a fit without saying why."""
+    bad = ("fail", "warn") if warnings else ("fail",)
+    return [f"{log.source or 'the log'}: {f.message}" + (f"; {f.advice}" if f.advice else "")
+            for f in check_truth_motion(log, robot, truth, max_gap, noise) if f.status in bad]

@@ -180,14 +180,15 @@ def calibrate_files(
             # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
             # truths above are already on the log's clock).
             given = truth[0].time_offset
+            gaps = [o.max_gap for o in truth]
             try:
                 cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None,
                                           steering_cubic=steering_cubic)
             except ModelError as exc:
-                raise ModelError(str(exc) + _why_off(runs, truths, robot)) from exc
+                raise ModelError(str(exc) + _why_off(runs, truths, robot, gaps)) from exc
             # A unit read wrong can also land in a local minimum inside the range (mph read as
             # m/s on a simulated car: c_scale 0.71, wheel base 1.65 m, 65 m residuals).
-            if off := _why_off(runs, truths, robot, only_failures=True):
+            if off := _why_off(runs, truths, robot, gaps, only_failures=True):
                 warnings.warn("the calibration may be bent by a unit or robot-file error" + off, UserWarning,
                               stacklevel=2)
             summary = cal.to_dict()
@@ -287,18 +288,16 @@ def _warn_bent_length(robot: Robot, new_robot: Robot) -> None:
                       UserWarning, stacklevel=3)
 
 
-def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot, only_failures: bool = False
-             ) -> str:
+def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot,
+             max_gaps: Sequence[float | None], only_failures: bool = False) -> str:
     """What ``odomkit check`` finds wrong with the odometry's travel or turning against the
     truth (its warnings and failures, or only its failures: off by more than 2×), for a
     calibration: a unit read wrong or a steering ratio left out runs a fit to the edge of
     its range or into a local minimum, and the check names it where the fit cannot."""
-    from odomkit.calibrate.check_ratios import check_truth_motion
+    from odomkit.calibrate.check_ratios import motion_problems
 
-    said = [f"{log.source or 'the log'}: {f.message}" + (f"; {f.advice}" if f.advice else "")
-            for log, found in zip(runs, truths, strict=True)
-            for f in check_truth_motion(log, robot, found)
-            if f.status == "fail" or (f.status == "warn" and not only_failures)]
+    said = [line for log, found, gap in zip(runs, truths, max_gaps, strict=True)
+            for line in motion_problems(log, robot, found, gap, warnings=not only_failures)]
     return "".join(f"; odomkit check finds {s}" for s in dict.fromkeys(said))
 
 

@@ -103,12 +103,12 @@ def prepare_log(task: LogTask) -> PreparedLog:
     if basis is not None:
         # A unit read wrong (mph as m/s) or a steering ratio left out makes a noise fit absurd
         # with nothing else to say why: odomkit check's comparison with the truth does.
-        from odomkit.calibrate.check_ratios import check_truth_motion
+        from odomkit.calibrate.check_ratios import motion_problems
 
-        found = check_truth_motion(log, task.robot, truth, task.truth.max_gap)
-        off = tuple(f"{name}: {f.message}" + (f"; {f.advice}" if f.advice else "")
-                    for f in found if f.status == "fail")
-        return PreparedLog(name, basis, len(log), skipped, None, scatter_sigma(truth), off)
+        scatter = scatter_sigma(truth)
+        noise = max(truth.sigma, scatter or 0.0)  # odomkit.truth.truth_noise, from the scatter at hand
+        off = motion_problems(log, task.robot, truth, task.truth.max_gap, noise=noise)
+        return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off))
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
