@@ -15,6 +15,7 @@ and predicted covariance, is :mod:`odomkit.window_errors`'s
 from __future__ import annotations
 
 import re
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Literal
 
@@ -35,6 +36,7 @@ __all__ = [
     "cumulative_travel",
     "late_start_note",
     "parse_window",
+    "parse_windows",
     "run_start",
     "split_windows",
     "truth_stretches",
@@ -80,6 +82,28 @@ def parse_window(text: str) -> WindowSpec:
     if value <= 0:
         raise InputError(f"--window must be longer than zero, got {text!r}")
     return WindowSpec(value, unit)  # type: ignore[arg-type]
+
+
+def parse_windows(texts: str | Sequence[str] | None) -> tuple[WindowSpec | None, ...]:
+    """Every ``--window`` given, in order (``(None,)``: none given, one window per log).
+
+    One length given twice (``10s`` and ``10 s``, or ``60s`` and ``1min``) is an error: a
+    fit would count its windows twice, an evaluation would score them twice.
+
+    Examples
+    --------
+    >>> parse_windows(["10s", "30s"])
+    (WindowSpec(length=10.0, unit='s'), WindowSpec(length=30.0, unit='s'))
+    >>> parse_windows(None)
+    (None,)
+    """
+    given = [texts] if isinstance(texts, str) else list(texts or [])
+    specs = [parse_window(text) for text in given]
+    for i, spec in enumerate(specs):
+        if spec in specs[:i]:
+            raise InputError(f"--window {given[i]} is the same length as --window {given[specs.index(spec)]} "
+                             f"({spec}): give each length once")
+    return tuple(specs) or (None,)
 
 
 @dataclass(frozen=True)

@@ -507,3 +507,13 @@ def test_a_robot_file_naming_its_white_models_is_told_which_defaults_it_leaves_o
     second = json.loads(stdout)
     assert "alpha_ss" in second["parameters"] and "alpha_lateral" in second["parameters"]
     assert not any("names its white models" in w for w in second["warnings"])
+
+
+def test_one_window_length_given_twice_is_refused(run_cli, tmp_path):
+    """``--window 60s --window 1min`` would count every window twice in the likelihood (each
+    end's error twice as strong evidence): refused in one line, exit 2, as evaluate does."""
+    code, stdout, stderr = run_cli("fit-noise", "--robot", ROBOT, *_logs(RUNS[:2]), "--window", "60s",
+                                   "--window", "1min", "--out", tmp_path / "f.toml")
+    assert code == 2 and stdout == ""
+    assert stderr.strip().splitlines() == [
+        "odomkit: error: --window 1min is the same length as --window 60s (60 s): give each length once"]

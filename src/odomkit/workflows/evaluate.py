@@ -487,19 +487,11 @@ def evaluate_logs(
 
 
 def _window_specs(window: str | Sequence[str] | None) -> list[WindowSpec | None]:
-    """The window lengths asked for, in order (``[None]``: one window per log); one length
-    given twice, as ``10s`` and ``10 s``, is an error."""
-    from odomkit.windows import parse_window
+    """The window lengths asked for, in order (``[None]``: one window per log;
+    :func:`odomkit.windows.parse_windows`)."""
+    from odomkit.windows import parse_windows
 
-    texts = [window] if isinstance(window, str) else list(window or [])
-    if not texts:
-        return [None]
-    specs = [parse_window(text) for text in texts]
-    for i, spec in enumerate(specs):
-        if spec in specs[:i]:
-            raise InputError(f"--window {texts[i]} is the same length as --window {texts[specs.index(spec)]} "
-                             f"({spec}): give each length once")
-    return list(specs)
+    return list(parse_windows(window))
 
 
 def _several_lengths_notes(by_spec: Sequence[Sequence[Scored]],

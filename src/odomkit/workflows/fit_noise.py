@@ -244,7 +244,7 @@ def fit_noise_files(
     from odomkit.calibrate.fit_noise import defaults_left_out, fit_noise, models_to_fit
     from odomkit.io.files import check_outputs
     from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_robot_name, write_robot
-    from odomkit.windows import parse_window
+    from odomkit.windows import parse_windows
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.results import check_result, numeric_guard
     from odomkit.workflows.truth import clock_from_robot
@@ -256,8 +256,7 @@ def fit_noise_files(
         raise InputError(f"give one --group per log: {len(logs)} log(s), {len(groups)} group(s)")
     if len(truths) != len(logs):
         raise InputError(f"give one --truth per log: {len(logs)} log(s), {len(truths)} truth(s)")
-    texts = [window] if isinstance(window, str) or window is None else list(window)
-    specs = tuple(None if w is None else parse_window(w) for w in texts) or (None,)
+    specs = parse_windows(window)
     if trim is not None and not 0.5 < trim < 1:
         raise InputError(f"--trim must be a probability in (0.5, 1) (or none), got {trim}")
     # Checked against the inputs too: ``--out ROBOT --force`` must not replace the robot file.
