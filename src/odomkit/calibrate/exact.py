@@ -322,9 +322,16 @@ def _between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequenc
     (std_errors (P,), None), or (None, i) where without run i the others leave a direction
     of q undetermined (a share is 1), or (None, None) where the joint fit does.
     """
+    # In units of each parameter's own column norm (the estimate does not depend on the
+    # parameters' units; the joint fit's determinacy, which the caller has checked, is judged
+    # in these units too): only a direction no residual moves at all is refused here.
+    norms = np.linalg.norm(J, axis=0)
+    if not norms.size or np.any(norms <= 0):
+        return None, None
+    J = J / norms
     A = J.T @ J
     eig, vec = np.linalg.eigh(A)
-    if not eig.size or eig[0] <= 1e-12 * max(float(eig[-1]), 0.0) or eig[-1] <= 0:
+    if eig[0] <= 0:
         return None, None  # the joint fit itself leaves a direction undetermined
     half = (vec / np.sqrt(eig)) @ vec.T  # A^(−1/2)
     scores = []
@@ -338,7 +345,8 @@ def _between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequenc
             return None, i
         adjusted = ri + U @ ((1.0 / np.sqrt(1.0 - share) - 1.0) * (U.T @ ri))
         scores.append(Ji.T @ adjusted)
-    moved = np.linalg.solve(A, np.asarray(scores).T).T @ T.T  # (N, P): each run's pull on p̂
+    # Each run's pull on q̂ (back in q's units), then on p̂ = offset + T q̂: (N, P).
+    moved = (np.linalg.solve(A, np.asarray(scores).T).T / norms) @ T.T
     return np.sqrt(np.sum(moved**2, axis=0)), None
 
 
