@@ -15,36 +15,19 @@ import numpy as np
 import pytest
 
 from odomkit.calibrate.stability import calibrate_halves, halves_disagree, track_fitted_to_fixes
-from odomkit.log import OdometryLog
 from odomkit.robot import Car
-from odomkit.truth import Truth
 
 L = 2.7
 
 
-def drive(offsets, seed=3, minutes=10.0, dt=0.05):
+@pytest.fixture()
+def drive(car_gps_drive):
     """(log, fixes, true poses): steering measured ``offsets[0]`` rad off (``offsets[1]``
-    in the second half) from the road wheel's angle."""
-    rng = np.random.default_rng(seed)
-    n = int(minutes * 60 / dt)
-    t = np.arange(n) * dt
-    v = 8 + 2 * np.sin(t / 29)
-    steer = np.zeros(n)
-    for j in range(1, n):
-        steer[j] = 0.995 * steer[j - 1] + rng.normal(0, 0.004)
-    steer = np.clip(steer, -0.4, 0.4)
-    heading = np.concatenate([[0.0], np.cumsum(v[:-1] * np.tan(steer[:-1]) / L) * dt])
-    x = np.concatenate([[0.0], np.cumsum(v[:-1] * np.cos(heading[:-1])) * dt])
-    y = np.concatenate([[0.0], np.cumsum(v[:-1] * np.sin(heading[:-1])) * dt])
-    offset = np.where(t < t[-1] / 2, offsets[0], offsets[1])
-    log = OdometryLog(t, {"speed": v, "steer": steer - offset})
-    fix_t = np.arange(0.5, t[-1], 1.0)
-    xy = np.column_stack([np.interp(fix_t, t, x), np.interp(fix_t, t, y)])
-    xy += rng.normal(0, 1.0, (fix_t.size, 2))
-    return log, Truth(fix_t, xy, sigma=1.0), np.column_stack((x, y, heading))
+    in the second half) from the road wheel's angle (tests/conftest.py)."""
+    return car_gps_drive
 
 
-def test_a_track_fitted_to_its_own_exact_fixes_recovers_the_start_pose():
+def test_a_track_fitted_to_its_own_exact_fixes_recovers_the_start_pose(drive):
     """Noise-free fixes of the odometry's own track from the origin, turned and shifted by a
     known start pose: the SE(2) fit finds that pose, and the errors vanish."""
     from odomkit.track import dead_reckon_log
@@ -61,7 +44,7 @@ def test_a_track_fitted_to_its_own_exact_fixes_recovers_the_start_pose():
     assert np.max(np.abs(error)) < 1e-6
 
 
-def test_a_steady_car_holds_along_its_drive():
+def test_a_steady_car_holds_along_its_drive(drive):
     log, fixes, _ = drive((0.005, 0.005))
     halves = calibrate_halves(log, fixes, Car(L))
     assert halves is not None
@@ -71,7 +54,7 @@ def test_a_steady_car_holds_along_its_drive():
     assert halves_disagree(halves) is None
 
 
-def test_an_offset_that_changes_mid_drive_is_named_with_each_halfs_value():
+def test_an_offset_that_changes_mid_drive_is_named_with_each_halfs_value(drive):
     log, fixes, _ = drive((0.002, 0.008))
     halves = calibrate_halves(log, fixes, Car(L))
     assert halves is not None
@@ -83,7 +66,7 @@ def test_an_offset_that_changes_mid_drive_is_named_with_each_halfs_value():
     assert said is not None and "does not hold along this drive" in said and "steering_offset" in said
 
 
-def test_calibrate_says_so_and_reports_the_halves(run_cli, tmp_path):
+def test_calibrate_says_so_and_reports_the_halves(run_cli, tmp_path, drive):
     log, fixes, _ = drive((0.002, 0.008))
     np.savetxt(tmp_path / "car.csv", np.column_stack((log.t, log.channels["speed"], log.channels["steer"])),
                delimiter=",", header="t,speed,steer", comments="")

@@ -23,28 +23,15 @@ L = 2.7
 FILE_TRUTH_SIGMA = 0.7
 
 
-def drive(folder: Path, minutes: float = 10.0, dt: float = 0.05, seed: int = 3) -> tuple[Path, Path]:
-    """``car.csv`` (t, speed, steer) and ``gps.csv`` (t, x, y): the steering measured 0.002 rad
-    off the road wheel's angle in the first half, 0.008 rad in the second."""
-    rng = np.random.default_rng(seed)
-    n = int(minutes * 60 / dt)
-    t = np.arange(n) * dt
-    v = 8 + 2 * np.sin(t / 29)
-    steer = np.zeros(n)
-    for j in range(1, n):
-        steer[j] = 0.995 * steer[j - 1] + rng.normal(0, 0.004)
-    steer = np.clip(steer, -0.4, 0.4)
-    heading = np.concatenate([[0.0], np.cumsum(v[:-1] * np.tan(steer[:-1]) / L) * dt])
-    x = np.concatenate([[0.0], np.cumsum(v[:-1] * np.cos(heading[:-1])) * dt])
-    y = np.concatenate([[0.0], np.cumsum(v[:-1] * np.sin(heading[:-1])) * dt])
-    offset = np.where(t < t[-1] / 2, 0.002, 0.008)
+def drive(folder: Path, simulate) -> tuple[Path, Path]:
+    """``car.csv`` (t, speed, steer) and ``gps.csv`` (t, x, y) of the shared simulated car
+    (tests/conftest.py): the steering measured 0.002 rad off the road wheel's angle in the
+    first half, 0.008 rad in the second."""
+    found, fixes, _ = simulate((0.002, 0.008))
     log, gps = folder / "car.csv", folder / "gps.csv"
-    np.savetxt(log, np.column_stack((t, v, steer - offset)), delimiter=",", header="t,speed,steer",
-               comments="")
-    fix_t = np.arange(0.5, t[-1], 1.0)
-    xy = np.column_stack([np.interp(fix_t, t, x), np.interp(fix_t, t, y)])
-    xy += rng.normal(0, 1.0, (fix_t.size, 2))
-    np.savetxt(gps, np.column_stack((fix_t, xy)), delimiter=",", header="t,x,y", comments="")
+    np.savetxt(log, np.column_stack((found.t, found.channels["speed"], found.channels["steer"])),
+               delimiter=",", header="t,speed,steer", comments="")
+    np.savetxt(gps, np.column_stack((fixes.t, fixes.xy)), delimiter=",", header="t,x,y", comments="")
     return log, gps
 
 
@@ -71,9 +58,9 @@ class Cells(HTMLParser):
 
 
 @pytest.fixture(scope="module")
-def car(tmp_path_factory):
+def car(tmp_path_factory, car_gps_drive):
     folder = tmp_path_factory.mktemp("car")
-    return folder, *drive(folder)
+    return folder, *drive(folder, car_gps_drive)
 
 
 def _report(run_cli, folder: Path, log: Path, gps: Path, robot_path: Path, name: str):
