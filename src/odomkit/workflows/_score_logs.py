@@ -1,0 +1,241 @@
+"""The log form of ``odomkit evaluate`` scored: each log dead-reckoned once from the truth
+at its first row (the whole-run figures), then cut into windows of each length asked for,
+each restarted from the truth and scored at its end (the honesty test).
+
+Internal to :mod:`odomkit.workflows` (:func:`score_logs` is re-exported by
+:mod:`odomkit.workflows.evaluate`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.errors import InputError
+from odomkit.progress import NO_PROGRESS, Progress, stage
+from odomkit.workflows._scoring import Scored, require_truth, score_rows
+
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+    from odomkit.noise import NoiseModel
+    from odomkit.propagate.plan import NoiseArg
+    from odomkit.robot import Robot
+    from odomkit.truth import Truth, TruthSamples
+    from odomkit.windows import WindowSpec
+    from odomkit.workflows.logs import LogOptions
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["score_by_window", "score_logs", "several_lengths_notes", "white_only", "window_specs"]
+
+
+def score_logs(
+    logs: Sequence[str | Path],
+    robot_path: str | Path,
+    truth: Sequence[TruthOptions],
+    *,
+    log_options: LogOptions | None = None,
+    window: str | None = None,
+    min_travel: float = 0.05,
+    align: str = "none",
+    rpe_distances: Sequence[float] = (1.0,),
+    method: str = "exact",
+    progress: Progress = NO_PROGRESS,
+    errors_only: bool = False,
+) -> list[Scored]:
+    """Each log's raw figures of :func:`~odomkit.workflows.evaluate.evaluate_logs` (same
+    parameters, one window length), before pooling: its position errors, and its window-end
+    errors, covariances and times (for figures). Its notes are in each :class:`Scored`'s
+    ``warnings``, not yet issued.
+
+    ``errors_only``: a robot file without ``[noise]`` gives the whole runs' errors alone
+    (no window ends, NEES or coverage; a windowed test is still refused) instead of an error.
+    """
+    return score_by_window(logs, robot_path, truth, window_specs(window), log_options=log_options,
+                           min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
+                           progress=progress, errors_only=errors_only)[0]
+
+
+def score_by_window(
+    logs: Sequence[str | Path],
+    robot_path: str | Path,
+    truth: Sequence[TruthOptions],
+    specs: Sequence[WindowSpec | None],
+    *,
+    log_options: LogOptions | None,
+    min_travel: float,
+    align: str,
+    rpe_distances: Sequence[float],
+    method: str,
+    progress: Progress,
+    errors_only: bool,
+) -> list[list[Scored]]:
+    """:func:`score_logs` for each window length of ``specs``: each log is read and its whole
+    run dead-reckoned once, then cut into the windows of each length."""
+    from odomkit.io.robotfile import read_robot
+    from odomkit.workflows.logs import LogOptions, load_log
+    from odomkit.workflows.truth import resolved_truth
+
+    robot, noise = read_robot(robot_path)
+    if not noise and (specs != [None] or not errors_only):
+        raise InputError("the robot file has no [noise] table: the windowed test scores a predicted "
+                         "covariance (add one: fit-noise writes it); without --window evaluate gives the "
+                         "errors alone", source=str(robot_path))
+    truth = resolved_truth(robot_path, truth)
+    noise_arg = None if not noise else noise if len(noise) > 1 else noise[0]
+    per_log = []
+    with stage(progress, len(logs), "logs"):
+        for path, opts in zip(logs, truth, strict=True):
+            log = load_log(path, robot, log_options or LogOptions())
+            found = require_truth(opts, log)
+            per_log.append(_score_log(log, robot, noise_arg, found, opts, specs, min_travel=min_travel,
+                                      align=align, rpe_distances=rpe_distances, method=method))
+            progress.advance()
+    by_spec = [[one[i] for one in per_log] for i in range(len(specs))]
+    if noise_arg is None:
+        note = (f"{robot_path}: the robot file has no [noise] table: the errors alone, no NEES or coverage "
+                "(fit-noise writes one)")
+        return [[replace(scored[0], warnings=[note, *scored[0].warnings]), *scored[1:]] for scored in by_spec]
+    return [_windowless_left_out(scored) for scored in by_spec]
+
+
+def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
+    """The logs with windows, each without one named in a warning; an error when none has
+    one (the first log's reason)."""
+    from odomkit.workflows.results import short_names
+
+    empty = [s for s in scored if s.no_windows is not None]
+    if not empty:
+        return scored
+    if len(empty) == len(scored):
+        raise InputError(empty[0].no_windows or "no windows", source=empty[0].label)
+    first = scored[0]
+    names = short_names([s.label for s in empty], [s.label for s in scored])
+    named = "; ".join(f"{name}: {s.no_windows}" for name, s in zip(names[:3], empty, strict=False))
+    more = f"; and {len(empty) - 3} more" if len(empty) > 3 else ""
+    note = f"{len(empty)} of {len(scored)} logs left out of the windowed test: {named}{more}"
+    return [replace(first, warnings=[*first.warnings, note], window_notes=(*first.window_notes, note)),
+            *scored[1:]]
+
+
+#: Why windows are left out, after their count in a log's warning (``_scoring._pooled_notes``).
+_STILL = "window(s) travelled less than {:g} m (standing still or turning on the spot) and were left out"
+_HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
+
+
+def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, opts: TruthOptions,
+               specs: Sequence[WindowSpec | None], *, min_travel: float, align: str,
+               rpe_distances: Sequence[float], method: str) -> list[Scored]:
+    """Whole-run figures from truth at the first row, and the window ends of one log, for
+    each window length of ``specs`` (the whole run once)."""
+    from odomkit.integrate import dead_reckon
+    from odomkit.kinematics import body_steps
+    from odomkit.track import dead_reckon_log
+    from odomkit.truth import no_overlap, truth_at
+    from odomkit.windows import cumulative_travel, run_start
+
+    samples = truth_at(truth, log.t, opts.max_gap)
+    rows = np.flatnonzero(samples.valid)
+    if rows.size < 2:
+        raise InputError(no_overlap(truth, log.t), source=log.source)
+    steps = body_steps(robot, log)
+    travel = cumulative_travel(steps)  # odometry travel at each row [m], reversing counted
+    # Without truth heading the start heading aligns the odometry's own path to the fixes.
+    odometry = (None if truth.has_heading
+                else dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method))  # type: ignore[arg-type]
+    first, pose0, cov0 = run_start(log.t, truth, samples.valid, odometry, opts.max_gap)
+    # The whole run, dead-reckoned from the truth at its first usable row.
+    track = dead_reckon_log(log.from_row(first), robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
+    whole = score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
+                        align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
+                        min_travel=0.0, honesty_from_rows=False, t=track.t)
+    whole = replace(whole, rows_skipped=whole.rows_skipped + first)
+    if noise is None:  # the errors alone (score_logs' errors_only)
+        return [whole for _ in specs]
+    return [_score_windows(log, robot, noise, truth, samples, whole, spec, first=first,
+                           first_valid=int(rows[0]), travel=travel, min_travel=min_travel, method=method)
+            for spec in specs]
+
+
+def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, samples: TruthSamples,
+                   whole: Scored, spec: WindowSpec | None, *, first: int, first_valid: int,
+                   travel: NDArray[np.float64], min_travel: float, method: str) -> Scored:
+    """``whole`` (one log's whole-run figures) with the window ends of one length: the
+    honesty test, one window per span of the log, restarted from truth; the whole-log
+    window (no ``spec``) starts with the whole run (as fit-noise's:
+    :func:`odomkit.window_errors.log_window_basis`)."""
+    from odomkit.calibrate.fit_noise import first_order_note
+    from odomkit.window_errors import window_errors
+    from odomkit.windows import late_start_note, split_windows, why_no_windows
+
+    notes = list(whole.warnings)
+    valid = samples.valid
+    if spec is None:
+        valid = valid.copy()
+        valid[:first] = False
+    if first != first_valid:
+        what = "the whole-run track" + (" (and its window)" if spec is None else "")
+        notes.append(late_start_note(log.source, what, log.t, first, first_valid))
+    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=valid)
+    if not windows:
+        reason = why_no_windows(log.t, travel, valid, spec, min_travel, skipped)
+        return replace(whole, honesty_errors=np.empty((0, 2)), honesty_cov=np.empty((0, 2, 2)), windows=0,
+                       warnings=notes, no_windows=reason)
+    own: list[str] = []
+    left_out: list[tuple[str, int]] = []
+    if skipped:
+        left_out.append((_STILL.format(min_travel), skipped))
+    found = window_errors(log, robot, noise, samples.poses, valid, windows, truth=truth, method=method)
+    if found.dropped:
+        left_out.append((_HEADLESS, found.dropped))
+    own += [f"{log.source}: {n} {what}" for what, n in left_out]
+    note = first_order_note(found.cov[:, 2, 2])
+    if note:
+        own.append(f"{log.source}: {note}")
+    # found.cov holds the truth's noise at both window ends already (odomkit.window_errors).
+    return replace(whole, honesty_errors=found.error[:, :2], honesty_cov=found.cov[:, :2, :2],
+                   windows=len(found.windows), warnings=notes + own, window_notes=tuple(own),
+                   left_out=tuple(left_out), honesty_t=log.t[found.end_rows],
+                   honesty_t0=log.t[np.array([w.start for w in found.windows], dtype=np.int64)])
+
+
+def window_specs(window: str | Sequence[str] | None) -> list[WindowSpec | None]:
+    """The window lengths asked for, in order (``[None]``: one window per log;
+    :func:`odomkit.windows.parse_windows`)."""
+    from odomkit.windows import parse_windows
+
+    return list(parse_windows(window))
+
+
+def several_lengths_notes(by_spec: Sequence[Sequence[Scored]],
+                          reports: Sequence[dict[str, Any]]) -> list[str]:
+    """The ``warnings`` of several window lengths: the whole runs' once (alike for every
+    length), then each length's own, after its length (``"10 s windows: ..."``)."""
+    from odomkit.workflows.results import grouped_warnings
+
+    whole = grouped_warnings(list(dict.fromkeys(w for s in by_spec[0] for w in s.warnings
+                                                if w not in s.window_notes)),
+                             among=[s.label for s in by_spec[0]])
+    own = [f"{r['window']} windows: {w}" for r in reports for w in r["warnings"] if w not in whole]
+    return whole + own
+
+
+def white_only(logs: Sequence[str | Path], robot: Robot, white: Sequence[NoiseModel],
+               truth: Sequence[TruthOptions], log_options: LogOptions | None, spec: WindowSpec | None,
+               min_travel: float, method: str) -> list[Scored]:
+    """The window ends scored with the white noise models alone (for ``--plot``)."""
+    from odomkit.workflows.logs import LogOptions, load_log
+
+    if not white:
+        return []
+    out = []
+    for path, opts in zip(logs, truth, strict=True):
+        log = load_log(path, robot, log_options or LogOptions())
+        noise = list(white) if len(white) > 1 else white[0]
+        out.append(_score_log(log, robot, noise, require_truth(opts, log), opts, [spec],
+                              min_travel=min_travel, align="none", rpe_distances=(), method=method)[0])
+    return out

@@ -1,0 +1,302 @@
+"""What both forms of ``odomkit evaluate`` share: one track's or log's raw figures
+(:class:`Scored`), the scoring of its rows against truth, their pooling
+(:func:`summarise`) and the report and warnings made of them.
+
+Internal to :mod:`odomkit.workflows` (the public names are re-exported by
+:mod:`odomkit.workflows.evaluate`).
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from odomkit.errors import InputError
+
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+    from odomkit.truth import Truth
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["FEW_WINDOW_ENDS", "issue_notes", "NEAR_SINGULAR", "NO_ERROR", "pooled_report", "require_truth",
+           "score_rows", "Scored", "summarise", "TrackRows"]
+
+
+@dataclass(frozen=True)
+class Scored:
+    """One track's or log's raw figures, kept for pooling over several."""
+
+    label: str
+    rows_evaluated: int
+    rows_skipped: int
+    position_errors: NDArray[np.float64]  # (n,) [m] at the evaluated rows, in time order
+    path_length: float  # true travel over the evaluated rows [m]
+    rpe: dict[str, NDArray[np.float64] | None]  # distance key -> pair error norms [m]
+    honesty_errors: NDArray[np.float64]  # (m, 2) position errors scored against a covariance
+    honesty_cov: NDArray[np.float64]  # (m, 2, 2)
+    windows: int = 0
+    warnings: list[str] = field(default_factory=list)
+    # (m,) log time of each window end [s], for figures over time; empty when the honesty
+    # samples are track rows
+    honesty_t: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    # (m,) log time of each window's start [s] (empty as honesty_t)
+    honesty_t0: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    # The evaluated rows themselves (the whole run of a log), for figures
+    rows: TrackRows | None = None
+    # Why a log asked for windows has none (None: it has some, or none were asked for)
+    no_windows: str | None = None
+    # Those of ``warnings`` about its windows (the others are about the whole run, alike for
+    # every window length)
+    window_notes: tuple[str, ...] = ()
+    # Windows left out and why, (what, count): its warning reads "{label}: {count} {what}",
+    # and several logs' are pooled into one line (:func:`_pooled_notes`)
+    left_out: tuple[tuple[str, int], ...] = ()
+
+
+@dataclass(frozen=True)
+class TrackRows:
+    """The evaluated rows of a track: time ``t`` (n,) [s], the estimate after alignment and
+    the truth (n, 3) [m, m, rad; truth θ NaN if unknown], the estimate's covariance
+    (n, 3, 3) or None."""
+
+    t: NDArray[np.float64]
+    poses: NDArray[np.float64]
+    truth: NDArray[np.float64]
+    cov: NDArray[np.float64] | None
+
+
+def _rpe_key(distance: float) -> str:
+    return f"{distance:g}"
+
+
+def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] | None,
+               truth: NDArray[np.float64], valid: NDArray[np.bool_], *, align: str,
+               truth_sigma: float, rpe_distances: Sequence[float], min_travel: float,
+               honesty_from_rows: bool, t: NDArray[np.float64] | None = None) -> Scored:
+    """Score the rows of one track where ``valid``; ``truth`` (N, 3), θ NaN if unknown;
+    ``t`` (N,) the rows' times, kept with them (:class:`TrackRows`) when given."""
+    from odomkit.evaluate import align_track, relative_pose_errors
+
+    notes: list[str] = []
+    n = poses.shape[0]
+    rows = np.flatnonzero(valid)
+    if rows.size == 0:
+        raise InputError("no row of the track has truth (its gt_* columns are empty)", source=label)
+    est, ref = poses[rows], truth[rows]
+    P = None if cov is None else cov[rows]
+    path = float(np.sum(np.hypot(*np.diff(ref[:, :2], axis=0).T)))
+    if path < min_travel:
+        raise InputError(f"the truth moves {path:.4g} m over the evaluated rows, less than --min-travel "
+                         f"{min_travel:g} m: a robot standing still says nothing about odometry",
+                         source=label)
+    if align == "start" and not np.isfinite(ref[0, 2]):
+        notes.append(f"{label}: the truth has no heading, so --align start only translates the track")
+    if align == "se2" and P is not None and honesty_from_rows:
+        notes.append(f"{label}: --align se2 fits the track to the truth, so its NEES and coverage do not "
+                     "test the covariance; use --align none or start")
+    est, P = align_track(est, ref, align, P)
+    err = np.hypot(*(est[:, :2] - ref[:, :2]).T)
+    rpe: dict[str, NDArray[np.float64] | None] = {}
+    for d in rpe_distances:
+        if not np.all(np.isfinite(ref[:, 2])):
+            rpe[_rpe_key(d)] = None
+            continue
+        e = relative_pose_errors(est, ref, d, pairs="consecutive")
+        rpe[_rpe_key(d)] = np.hypot(e[:, 0], e[:, 1]) if e.shape[0] else None
+    if any(v is None for v in rpe.values()):
+        why = ("the truth has no heading" if not np.all(np.isfinite(ref[:, 2]))
+               else "the truth travels less than the distance")
+        notes.append(f"{label}: no RPE over {', '.join(k for k, v in rpe.items() if v is None)} m ({why})")
+    if honesty_from_rows and P is not None:
+        he, hc = est[:, :2] - ref[:, :2], P[:, :2, :2] + truth_sigma**2 * np.eye(2)
+        note = _singular_note(he, hc)
+        if note:
+            notes.append(f"{label}: {note}")
+    else:
+        he, hc = np.empty((0, 2)), np.empty((0, 2, 2))
+        if honesty_from_rows:
+            notes.append(f"{label}: the track has no covariance, so there is no NEES or coverage")
+    kept = None if t is None else TrackRows(np.asarray(t, dtype=float)[rows], est, ref, P)
+    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept)
+
+
+#: A scored covariance whose smallest eigenvalue is below this fraction of its largest
+#: (standard deviations 1000× apart) is nearly singular (:func:`_singular_note`).
+NEAR_SINGULAR = 1e-6
+#: A position error [m] below this counts as none (a track started at the truth pose it is
+#: compared with), so a singular covariance there loses nothing.
+NO_ERROR = 1e-9
+
+
+def _singular_note(errors: NDArray[np.float64], cov: NDArray[np.float64]) -> str | None:
+    """One line on scored rows whose covariance (n, 2, 2) is singular or nearly so, where
+    they matter, else None.
+
+    A singular covariance has no NEES (:func:`odomkit.evaluate.nees` leaves the row out of
+    the NEES and coverage): none is lost where the error is zero too (below
+    :data:`NO_ERROR`: a track compared with the truth pose it started from), but a nonzero
+    error's NEES would be infinite, and those rows are counted. A nearly singular one
+    (:data:`NEAR_SINGULAR`) is kept: its NEES is well defined and true, but where the
+    covariance comes from a pose known exactly (a track started at a truth pose with zero
+    covariance) the error is mostly the truth's own noise, which the covariance lacks, and
+    a few such rows make the whole mean; they are counted where they make more than half
+    of the NEES summed over the rows.
+    """
+    from odomkit.evaluate import nees
+
+    if cov.shape[0] == 0:
+        return None
+    values = nees(errors, cov)
+    singular = ~np.isfinite(values)
+    lam = np.linalg.eigvalsh(cov)  # ascending, per row
+    near = ~singular & (lam[:, 0] < NEAR_SINGULAR * lam[:, 1])
+    off = singular & (np.hypot(errors[:, 0], errors[:, 1]) > NO_ERROR)
+    total = float(np.sum(values[~singular]))
+    share = float(np.sum(values[near])) / total if total > 0 else 0.0
+    parts = []
+    if off.any():
+        parts.append(f"{int(off.sum())} of {values.size} rows have a singular covariance but an error (an "
+                     "infinite NEES) and are left out of the NEES and coverage")
+    if share > 0.5:
+        parts.append(f"{100 * share:.4g} % of the summed NEES comes from {int(near.sum())} of {values.size} "
+                     "rows whose covariance is nearly singular (standard deviations over 1000x apart)")
+    if not parts:
+        return None
+    return ("; ".join(parts) + ", as at the start of a track started from a truth pose with zero "
+            "covariance: the truth's own noise alone falls far outside their ellipse, so their NEES "
+            "judges the truth, not the covariance; give the truth's noise with --truth-sigma, or start "
+            "the track with --initial-cov")
+
+
+def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
+    """The output keys of DESIGN.md pooled over ``scored`` (without ``per_log``).
+
+    Pooled: ``ate_rmse`` and each ``rpe`` are the RMS over every sample of every log,
+    ``max_position_error`` the largest, ``final_position_error`` the mean of the logs'
+    final errors, ``drift_percent`` 100 × Σ final errors / Σ true travel, and the NEES
+    and coverage figures use every scored pose (window ends, or track rows).
+    """
+    from odomkit.evaluate import coverage, nees_summary
+
+    err = np.concatenate([s.position_errors for s in scored])
+    finals = np.array([s.position_errors[-1] for s in scored])
+    travel = sum(s.path_length for s in scored)
+    rpe: dict[str, float | None] = {}
+    for d in rpe_distances:
+        parts = [s.rpe[_rpe_key(d)] for s in scored]
+        got = [p for p in parts if p is not None]
+        rpe[_rpe_key(d)] = float(np.sqrt(np.mean(np.concatenate(got) ** 2))) if got else None
+    he = np.concatenate([s.honesty_errors for s in scored])
+    hc = np.concatenate([s.honesty_cov for s in scored])
+    nees = nees_summary(he, hc) if he.shape[0] else {"mean": None, "median": None, "bounds": None}
+    cover = coverage(he, hc) if he.shape[0] else {"0.5": None, "0.9": None, "0.95": None, "0.99": None}
+    return {
+        "rows_evaluated": int(sum(s.rows_evaluated for s in scored)),
+        "rows_skipped": int(sum(s.rows_skipped for s in scored)),
+        "final_position_error": float(finals.mean()),
+        "max_position_error": float(err.max()),
+        "ate_rmse": float(np.sqrt(np.mean(err**2))),
+        "rpe": rpe,
+        "drift_percent": float(100.0 * finals.sum() / travel) if travel > 0 else None,
+        "windows": int(sum(s.windows for s in scored)),
+        "nees_position_mean": nees["mean"],
+        "nees_position_median": nees["median"],
+        "nees_bounds": nees["bounds"],
+        "coverage": cover,
+        "inside_95_fraction": cover["0.95"],
+    }
+
+
+def _window_ends(s: Scored) -> dict[str, Any]:
+    """``window_ends`` of a log scored in windows: each window's ``start`` and ``end`` [s, log
+    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, so that
+    an outlier can be found and looked at; nothing for a whole-track score."""
+    if not s.honesty_t0.size:
+        return {}
+    from odomkit.evaluate import nees
+
+    q = nees(s.honesty_errors, s.honesty_cov)
+    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, strict=True)
+    return {"window_ends": [{"start": float(a), "end": float(b), "error": [float(e[0]), float(e[1])],
+                             "nees": float(n)} for a, b, e, n in rows]}
+
+
+def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: str | None = None,
+                  noun: str = "logs") -> dict[str, Any]:
+    """The pooled figures, ``window`` (the length scored: ``"30 s"``, None for none or one
+    window per log), ``per_log`` (each with its own ``warnings``), and ``warnings``: every
+    log's, those that say the same of several logs in one line (:func:`_pooled_notes`)."""
+    out: dict[str, Any] = {"window": window, **summarise(scored, rpe_distances)}
+    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances), **_window_ends(s),
+                       "warnings": list(s.warnings)} for s in scored]
+    out["warnings"] = _pooled_notes(scored, noun)
+    few = _few_ends_note(out["windows"])
+    if few:
+        out["warnings"].append(few)
+    return out
+
+
+def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:
+    """The logs' warnings once each, where several logs left windows out for one reason (with
+    their own counts) are one line with the total, and those that say the same of several
+    logs are one line naming three (:func:`odomkit.workflows.results.grouped_warnings`)."""
+    from odomkit.workflows.results import grouped_warnings, listed, short_names
+
+    notes = list(dict.fromkeys(w for s in scored for w in s.warnings))
+    counts: dict[str, list[tuple[str, int]]] = {}
+    for s in scored:
+        for what, n in s.left_out:
+            counts.setdefault(what, []).append((s.label, n))
+    for what, per_log in counts.items():
+        if len(per_log) < 2:
+            continue
+        own = {f"{label}: {n} {what}" for label, n in per_log}
+        at = min(notes.index(t) for t in own)
+        labels = [label for label, _ in per_log]
+        names = dict(zip(labels, short_names(labels, [s.label for s in scored]), strict=True))
+        most = sorted(per_log, key=lambda item: -item[1])  # stable: the logs' order among equals
+        each = listed([f"{names[label]}: {n}" for label, n in most])
+        pooled = (f"{sum(n for _, n in per_log)} window(s) of {len(per_log)} {noun} "
+                  f"{what.removeprefix('window(s) ')} ({each})")
+        notes = [pooled if i == at else t for i, t in enumerate(notes) if i == at or t not in own]
+    return grouped_warnings(notes, noun, [s.label for s in scored])
+
+
+def issue_notes(notes: Sequence[str]) -> None:
+    """Raise each of ``notes`` as a UserWarning, which the CLI prints on stderr."""
+    for text in notes:
+        warnings.warn(text, stacklevel=3)
+
+
+#: Fewer window ends than this make a coverage figure too coarse to judge a model by.
+FEW_WINDOW_ENDS = 20
+
+
+def _few_ends_note(ends: int) -> str | None:
+    """The warning for a windowed test of fewer than :data:`FEW_WINDOW_ENDS` ends: how far
+    an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points)."""
+    if not 0 < ends < FEW_WINDOW_ENDS:
+        return None
+    from scipy.stats import binom
+
+    low, high = (float(binom.ppf(q, ends, 0.95)) / ends for q in (0.025, 0.975))
+    return (f"only {ends} window end(s): coverage moves in steps of 1/{ends}, and an honest model's "
+            f"95 % figure falls anywhere in {low:.2f}..{high:.2f} in 95 % of such tests; score more "
+            "windows (more or longer logs, shorter windows) before judging the model")
+
+
+def require_truth(opts: TruthOptions, log: OdometryLog | None) -> Truth:
+    """The truth ``opts`` names (or ``log``'s own ``gt_*`` columns); an error when there is none."""
+    from odomkit.workflows.truth import load_truth
+
+    found = load_truth(opts, log)
+    if found is None:
+        source = getattr(log, "source", None)
+        raise InputError("no truth: give --truth, or a log with ground truth (gt_* columns, OptiOdom, "
+                         "Snowhite)", source=source)
+    return found
