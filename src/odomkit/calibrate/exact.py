@@ -31,7 +31,7 @@ whitened by a noise model (``noise=``); for unweighted endpoints it is approxima
 (x, y and θ errors of one run are correlated); for trajectories it is optimistic,
 because the errors along one track are a random walk, strongly correlated from row to
 row. So a fit of several runs also gives standard errors from the runs' spread
-(``std_errors_between_runs``: the runs as independent clusters, see :func:`_between_runs`;
+(``std_errors_between_runs``: the runs as independent clusters, see :func:`between_runs`;
 :func:`jackknife_runs` refits without each run instead) and warns
 where they exceed the fit's by more than :data:`BETWEEN_RUNS_FACTOR`; a single trajectory
 is warned about where its residuals exceed the truth's own noise
@@ -68,8 +68,8 @@ from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive
 from odomkit.truth import Truth, scatter_sigma, truth_from_log
 
-__all__ = ["BETWEEN_RUNS_FACTOR", "SCALE_OBSERVABLE_BELOW", "calibrate_exact", "ExactCalibration",
-           "jackknife_runs", "Source", "warn_if_drifting"]
+__all__ = ["BETWEEN_RUNS_FACTOR", "between_runs", "between_runs_warning", "SCALE_OBSERVABLE_BELOW",
+           "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source", "warn_if_drifting"]
 
 Source = Literal["endpoints", "trajectory"]
 
@@ -82,7 +82,7 @@ SCALE_OBSERVABLE_BELOW = 0.05
 #: exceeds 3 with probability P(χ²₁ > 9) = 0.27 % for 2 runs, e^−9 for 3, less for more.
 #: Measured on simulated runs of one robot with white truth noise (where the fit's own ± came
 #: out 1.1–1.5× small all the same): a warning in at most 3 % of experiments of 2 or 3 runs,
-#: none of 5 or 8 (:func:`_between_runs`). And ± that are 3× too small are no longer ±: an
+#: none of 5 or 8 (:func:`between_runs`). And ± that are 3× too small are no longer ±: an
 #: interval of ±1 of them holds the value about a quarter of the time, not two thirds.
 BETWEEN_RUNS_FACTOR = 3.0
 #: A column-scaled Jacobian conditioned worse than this is singular: JᵀJ's condition number
@@ -284,7 +284,7 @@ def warn_if_drifting(var_res: float, n_res: int, truths: Sequence[Truth]) -> Non
                       "along each run, so the standard errors are optimistic", UserWarning, stacklevel=3)
 
 
-def _between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequence[int],
+def between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequence[int],
                   T: NDArray[np.float64]) -> tuple[NDArray[np.float64] | None, int | None]:
     """Standard errors of the parameters p = offset + T q from the runs' spread: the
     cluster-robust ("sandwich") covariance with the runs as clusters, bias-reduced (CR2).
@@ -350,7 +350,7 @@ def _between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequenc
     return np.sqrt(np.sum(moved**2, axis=0)), None
 
 
-def _between_runs_warning(names: Sequence[str], values: NDArray[np.float64], own: NDArray[np.float64],
+def between_runs_warning(names: Sequence[str], values: NDArray[np.float64], own: NDArray[np.float64],
                           between: NDArray[np.float64], n_runs: int) -> str | None:
     """The warning where a parameter's between-run standard error exceeds the fit's own by
     more than :data:`BETWEEN_RUNS_FACTOR` (and round-off: 1e-9 of the value)."""
@@ -428,7 +428,7 @@ def calibrate_exact(
     -------
     ExactCalibration
         With several runs also ``std_errors_between_runs`` (from the runs' spread, the
-        runs as independent clusters: :func:`_between_runs`), and a warning naming the
+        runs as independent clusters: :func:`between_runs`), and a warning naming the
         parameters whose between-run standard error exceeds the fit's by more than
         :data:`BETWEEN_RUNS_FACTOR`.
 
@@ -534,12 +534,12 @@ def calibrate_exact(
     between = None
     if len(runs) > 1 and determined:
         # Each run's block: 3 residuals (x, y, weighted θ) per compared row.
-        between, alone = _between_runs(J, sol.fun, [3 * rows.size for rows, _ in prob.truth], prob.T)
+        between, alone = between_runs(J, sol.fun, [3 * rows.size for rows, _ in prob.truth], prob.T)
         if between is None:
             needed = (f"the other runs do not determine every parameter without {runs[alone].source}"
                       if alone is not None else "the fit does not determine every parameter")
             notes.append(f"no standard errors between runs: {needed}")
-        elif said := _between_runs_warning(model.names, p, std, between, len(runs)):
+        elif said := between_runs_warning(model.names, p, std, between, len(runs)):
             warnings.warn(said, UserWarning, stacklevel=2)
     if between is None and source == "trajectory" and whiten is None:
         # No runs to compare: the residuals against the truth's own noise, as for truth fixes.

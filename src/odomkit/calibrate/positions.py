@@ -39,6 +39,7 @@ car) and the integration with sensitivities its
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Collection, Sequence
 from dataclasses import dataclass
 
@@ -47,7 +48,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from odomkit import validate
-from odomkit.calibrate.exact import ExactCalibration, warn_if_drifting
+from odomkit.calibrate.exact import ExactCalibration, between_runs, between_runs_warning, warn_if_drifting
 from odomkit.calibrate.residuals import (
     CALIBRATED_ROBOTS,
     CalibratedRobot,
@@ -403,6 +404,14 @@ def calibrate_positions(
         left_out = f"; truth fixes left out: {' and '.join(left)}" if left else ""
         notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
                      f"{start[2]:.4g} rad){left_out}")
+    between = None
+    if len(runs) > 1:
+        between = _between_runs_of_positions(problem, res, jac, len(model.names))
+        if between is None:
+            notes.append("no standard errors between runs: a run's own start pose leaves a parameter "
+                         "undetermined without it")
+        elif scattered := between_runs_warning(model.names, p, std, between, len(runs)):
+            warnings.warn(scattered, UserWarning, stacklevel=2)
     travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(runs))]
     spread = [float(np.sqrt(np.mean(np.sum((r.xy - r.xy.mean(axis=0)) ** 2, axis=1)))) for r in with_truth]
     sensitivity = float(np.mean([s / d if d > 0 else 0.0 for s, d in zip(spread, travelled, strict=True)]))
@@ -414,7 +423,36 @@ def calibrate_positions(
         time_offset=delta if fit_time_offset else None,
         time_offset_std_error=(float(np.sqrt(max(cov_q[free.size, free.size], 0.0))) if fit_time_offset
                                else None),
+        std_errors_between_runs=between,
     )
+
+
+def _between_runs_of_positions(problem: _Problem, res: NDArray[np.float64], jac: NDArray[np.float64],
+                               n_params: int) -> NDArray[np.float64] | None:
+    """The robot parameters' standard errors between runs (:func:`odomkit.calibrate.exact.between_runs`)
+    for a fit with a start pose per run.
+
+    Each run's start pose is its own (a nuisance parameter of one cluster): by the
+    Frisch–Waugh–Lovell theorem the shared parameters' estimate is the one from the rows of
+    each run made orthogonal to that run's own start-pose columns, so the runs' spread is
+    taken there (the residuals at the solution are orthogonal to those columns already)."""
+    n_global = problem.n_global
+    blocks, sizes = [], []
+    start = 0
+    for i in range(len(problem.runs)):
+        size = 2 * int(np.count_nonzero(problem.used(i)))
+        rows = slice(start, start + size)
+        start += size
+        own = jac[rows, n_global + 3 * i:n_global + 3 * i + 3]
+        shared = jac[rows, :n_global]
+        coef, *_ = np.linalg.lstsq(own, shared, rcond=None)
+        blocks.append(shared - own @ coef)
+        sizes.append(size)
+    # Map the shared q (free robot parameters, then the clock offset) onto every robot parameter.
+    T = np.zeros((n_params, n_global))
+    T[problem.free, np.arange(problem.free.size)] = 1.0
+    between, _ = between_runs(np.concatenate(blocks), res, sizes, T)
+    return between
 
 
 def runs_disagree(joint: ExactCalibration, alone: Sequence[ExactCalibration | None],
