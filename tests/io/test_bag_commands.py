@@ -190,3 +190,14 @@ def test_bad_bags_are_one_line_exit_2(run_cli, bags, bag_writer, stamp, tmp_path
     err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--bag-out", bags["mcap"],
                          "--force")
     assert "would replace an input" in err
+
+
+def test_check_reads_a_ros2_bag_folder(run_cli, bags):
+    """A ROS 2 bag is a folder: check refused it as "no such file" before (it tested for a
+    file itself); it reads it as every command does, its mocap topic the truth."""
+    code, out, err = run_cli("check", bags["mcap"], "--robot", bags["dir"] / "rad.toml", "--topic",
+                             "/joint_states", "--joints", "wheel_left_joint,wheel_right_joint",
+                             "--truth-topic", "/mocap", "--json")
+    assert code in (0, 1), err
+    report = json.loads(out)
+    assert any(f["check"] == "travel_ratio" for f in report["findings"])

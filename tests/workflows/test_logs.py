@@ -88,3 +88,22 @@ def test_importing_the_options_loads_no_reader():
             "print(sorted(m for m in sys.modules if m.startswith(('numpy', 'odomkit.io'))))")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert done.stdout.strip() == "[]"
+
+
+def test_a_folder_or_an_optiodom_metadata_file_is_refused_with_what_to_give(tmp_path):
+    """A user study: an OptiOdom experiment folder was "no such file", and its metadata CSV,
+    picked up by ``*.csv``, "a text log needs --columns". Each now says what to give."""
+    folder = tmp_path / "140120211430"
+    folder.mkdir()
+    for name in ("140120211430_metadata.csv", "140120211430_run-01.csv", "140120211430_run-02.csv"):
+        (folder / name).write_text("x\n")
+    with pytest.raises(InputError, match=r"is a folder, not a log: give the logs in it \("
+                       r"140120211430_run-01.csv, 140120211430_run-02.csv: e\.g\. .*/\*_run-\*\.csv\)"):
+        load_log(folder, DiffDrive(0.2))
+    with pytest.raises(InputError, match=r"is an OptiOdom experiment's metadata, not a run: give its runs "
+                       r"\(140120211430_run-\*\.csv\)"):
+        load_log(folder / "140120211430_metadata.csv", DiffDrive(0.2))
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    with pytest.raises(InputError, match="is a folder, not a log: it holds no log files"):
+        load_log(empty, DiffDrive(0.2))

@@ -50,15 +50,14 @@ def check_file(
     from odomkit.calibrate.check import check_log, next_steps
     from odomkit.calibrate.check_finding import Finding
     from odomkit.io.robotfile import read_robot
-    from odomkit.workflows.logs import LogOptions, load_log
+    from odomkit.workflows.logs import LogOptions, load_log, require_log_file
     from odomkit.workflows.results import numeric_guard
     from odomkit.workflows.truth import clock_from_robot, load_truth
 
     if spin is not None and spin not in ("ccw", "cw"):
         raise InputError(f"--spin must be ccw or cw, got {spin!r}")
     path = Path(log_path)
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
+    require_log_file(path)
     robot, _ = read_robot(robot_path)
     findings: list[Finding] = []
     with warnings.catch_warnings(record=True) as caught:

@@ -22,7 +22,8 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.robot import Robot
 
-__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log", "parse_span"]
+__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log", "parse_span",
+           "require_log_file"]
 
 LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom", "bag")
 
@@ -52,6 +53,28 @@ _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--
           "period": "--period", "time_unit": "--time-unit", "topic": "--topic", "joints": "--joints",
           "bag_time": "--bag-time", "truth_topic": "--truth-topic"}
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")  # odomkit.io.bag.is_bag, without importing it
+
+
+def require_log_file(path: Path) -> None:
+    """Refuse, in one line that says what to give instead, a path that is no log file: a
+    missing file; a folder (an OptiOdom experiment's, say), naming the logs in it; an
+    OptiOdom experiment's ``*_metadata.csv`` (a shell glob ``*.csv`` picks it up with the
+    runs). A user study met both, and was told "no such file" and "a text log needs
+    --columns". A ROS 2 bag, a folder with its ``metadata.yaml``, is a log (its reader checks it)."""
+    if detect_format(path) == "bag":
+        return
+    if path.is_dir():
+        runs = sorted(p.name for p in path.iterdir() if p.is_file() and detect_format(p) != "csv")
+        logs = runs or sorted(p.name for p in path.iterdir() if p.suffix.lower() in (".csv", ".txt", ".gz"))
+        shown = ", ".join(logs[:3]) + (f" and {len(logs) - 3} more" if len(logs) > 3 else "")
+        hint = (f"give the logs in it ({shown}: e.g. {path}/*_run-*.csv)" if runs else
+                f"give the logs in it ({shown})" if logs else "it holds no log files")
+        raise InputError(f"is a folder, not a log: {hint}", source=str(path))
+    if not path.is_file():
+        raise InputError("no such file", source=str(path))
+    if re.search(r"_metadata\.csv(\.gz)?$", path.name.lower()):
+        raise InputError("is an OptiOdom experiment's metadata, not a run: give its runs "
+                         f"({path.name.lower().split('_metadata')[0]}_run-*.csv)", source=str(path))
 
 
 def detect_format(path: Path) -> str:
@@ -248,8 +271,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
                        progress=progress)
         return _in_span(log, options)
-    if not path.is_file():
-        raise InputError("no such file", source=str(path))
+    require_log_file(path)
     options.check_format(fmt, str(path))
     with stage(progress, None, f"reading {path.name}"):
         if fmt == "khepera":
