@@ -196,10 +196,11 @@ def longest_gap(truth: Truth, max_gap: float | None) -> float:
     return max(max_gap, 2.0 * spacing)
 
 
-def truth_noise(truth: Truth) -> float:
+def truth_noise(truth: Truth, scatter: float | None = None) -> float:
     """The truth's position noise [m per axis] a check should allow for: its stated σ, or
-    its fixes' own scatter about a smooth path (:func:`scatter_sigma`) where that is larger."""
-    return max(truth.sigma, scatter_sigma(truth) or 0.0)
+    its fixes' own scatter about a smooth path (:func:`scatter_sigma`, or ``scatter`` where
+    the caller has computed it) where that is larger."""
+    return max(truth.sigma, (scatter_sigma(truth) if scatter is None else scatter) or 0.0)
 
 
 def no_overlap(truth: Truth, times: ArrayLike) -> str:

@@ -213,7 +213,7 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSig
     if isinstance(sigma, AssumedSigma):
         assumed = sigma
     else:
-        assumed = AssumedSigma(float(sigma), "given") if sigma else AssumedSigma(_DEFAULT_SIGMA, "default")
+        assumed = AssumedSigma(float(sigma), "given") if sigma else identifiability_sigma(None)
     A, params, unused = _design(log, robot)
     if A.shape[0] < 6:
         return [Finding("identifiable", "fail", "the log is shorter than a few seconds",

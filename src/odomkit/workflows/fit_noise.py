@@ -84,7 +84,7 @@ class PreparedLog:
 def prepare_log(task: LogTask) -> PreparedLog:
     """Read one log and its truth, cut its windows and compute their covariance bases."""
     from odomkit.kinematics import body_steps
-    from odomkit.truth import no_overlap, scatter_sigma, truth_at
+    from odomkit.truth import no_overlap, scatter_sigma, truth_at, truth_noise
     from odomkit.window_errors import log_window_basis
     from odomkit.windows import cumulative_travel, why_no_windows
     from odomkit.workflows.logs import load_log
@@ -106,8 +106,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
         from odomkit.calibrate.check_ratios import motion_problems
 
         scatter = scatter_sigma(truth)
-        noise = max(truth.sigma, scatter or 0.0)  # odomkit.truth.truth_noise, from the scatter at hand
-        off = motion_problems(log, task.robot, truth, task.truth.max_gap, noise=noise)
+        off = motion_problems(log, task.robot, truth, task.truth.max_gap, noise=truth_noise(truth, scatter))
         return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off))
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
