@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from odomkit import units
 from odomkit.calibrate.check_finding import Finding, Status
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, DiffDrive, Robot, Tricycle
@@ -80,13 +81,13 @@ RATIO_FAIL = 2.0
 
 # (factor, what it is, what to do): odometry over truth near a unit factor (within 4 %).
 _TRAVEL_UNITS = (
-    (1 / 0.44704, "a speed in mph read as m/s", "name the column speed_mph in --columns"),
-    (3.6, "a speed in km/h read as m/s", "name the column speed_kmh in --columns"),
-    (0.44704, "a speed in m/s read as mph", "name the column speed (m/s), not speed_mph"),
-    (1 / 3.6, "a speed in m/s read as km/h", "name the column speed (m/s), not speed_kmh"),
-    (0.44704 * 3.6, "a speed in km/h read as mph", "name the column speed_kmh, not speed_mph"),
-    (1 / (0.44704 * 3.6), "a speed in mph read as km/h", "name the column speed_mph, not speed_kmh"),
-    (1 / 0.3048, "feet read as metres", "convert feet to metres (m_per_tick, or the speed's unit)"),
+    (1 / units.MPH, "a speed in mph read as m/s", "name the column speed_mph in --columns"),
+    (1 / units.KMH, "a speed in km/h read as m/s", "name the column speed_kmh in --columns"),
+    (units.MPH, "a speed in m/s read as mph", "name the column speed (m/s), not speed_mph"),
+    (units.KMH, "a speed in m/s read as km/h", "name the column speed (m/s), not speed_kmh"),
+    (units.MPH / units.KMH, "a speed in km/h read as mph", "name the column speed_kmh, not speed_mph"),
+    (units.KMH / units.MPH, "a speed in mph read as km/h", "name the column speed_mph, not speed_kmh"),
+    (1 / units.FOOT, "feet read as metres", "convert feet to metres (m_per_tick, or the speed's unit)"),
     (1000.0, "millimetres read as metres", "check the distance channels' unit or m_per_tick (1000x too big)"),
     (100.0, "centimetres read as metres", "check the distance channels' unit or m_per_tick (100x too big)"),
     (0.001, "metres read as millimetres",
@@ -94,9 +95,9 @@ _TRAVEL_UNITS = (
     (0.01, "metres read as centimetres", "check the distance channels' unit or m_per_tick (100x too small)"),
 )
 _TURN_UNITS = (
-    (180 / math.pi, "degrees read as radians",
+    (1 / units.DEGREE, "degrees read as radians",
      "name a column in degrees with its _deg name (steer_deg, yaw_rate_deg, heading_deg)"),
-    (math.pi / 180, "radians read as degrees", "name a column in radians without _deg"),
+    (units.DEGREE, "radians read as degrees", "name a column in radians without _deg"),
 )
 _UNIT_TOLERANCE = 0.04
 

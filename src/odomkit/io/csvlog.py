@@ -10,13 +10,13 @@ never decrease; the time column may be in s, ms, µs or ns (``--time-unit``).
 
 from __future__ import annotations
 
-import math
 import warnings
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
 
+from odomkit import units
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.io._headers import no_such_column, time_like, time_text_error
@@ -44,14 +44,14 @@ GROUND_TRUTH_FIELDS = ("gt_x", "gt_y", "gt_theta")
 SKIP_COLUMN = "_"
 """The name that skips a column in ``--columns`` given in order."""
 UNIT_COLUMNS: dict[str, tuple[str, float]] = {
-    "steer_deg": ("steer", math.pi / 180), "yaw_rate_deg": ("yaw_rate", math.pi / 180),
-    "heading_deg": ("heading", math.pi / 180),
-    "speed_kmh": ("speed", 1 / 3.6), "speed_mph": ("speed", 0.44704),
+    "steer_deg": ("steer", units.DEGREE), "yaw_rate_deg": ("yaw_rate", units.DEGREE),
+    "heading_deg": ("heading", units.DEGREE),
+    "speed_kmh": ("speed", units.KMH), "speed_mph": ("speed", units.MPH),
 }
 """Column names that read a channel in another unit: name -> (channel, SI units per unit).
 odomkit's channels are radians and metres per second (DESIGN.md), but a CAN steering angle
 or a gyro is often logged in degrees (°/s for the yaw rate, as the truth's ``theta_deg``)
-and a car's speed in km/h or mph (an international mile is 1609.344 m exactly)."""
+and a car's speed in km/h or mph (the factors: :mod:`odomkit.units`)."""
 #: A bicycle or tricycle steering angle beyond ±90° (and a little more: OptiOdom's tricycle
 #: logs exactly ±π/2 when it turns in place) is no radians a vehicle steers by.
 STEER_LIMIT = np.pi / 2 + 0.01
