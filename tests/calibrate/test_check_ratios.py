@@ -282,3 +282,30 @@ def test_the_gap_rule_is_truth_ats():
     gappy = Truth(np.r_[np.arange(0.0, 5.0, 1.0), 7.5, 8.5], np.zeros((7, 2)))
     assert longest_gap(gappy, 0.5) == 2.0
     assert truth_at(gappy, [5.0, 6.0], 0.5).valid.tolist() == [False, False]  # inside the 3.5 s gap
+
+
+@pytest.mark.parametrize(("told", "warned"), [(0.35, True), (0.5, False)])
+def test_a_calibrated_wheel_base_far_from_the_files_is_named(run_cli, tmp_path, told, warned):
+    """A diff robot with wheels 0.5 m apart whose robot file says 0.35 m, calibrated from
+    position-only fixes: whatever the fit finds (the right 0.5 m or a local minimum), a
+    wheel base or wheel scale more than 15 % from the file's is no calibration error and is
+    named with the check that finds the entry; the right file is not warned about."""
+    true = DiffDrive(0.5)
+    rng = np.random.default_rng(8)
+    t = 0.05 * np.arange(6000)
+    v = 0.3 + 0.1 * np.sin(t / 7)
+    w = np.interp(t, np.arange(31) * 10.0, rng.uniform(-0.6, 0.6, 31))
+    half = 0.5 * true.wheel_base * w * 0.05
+    d_left, d_right = np.r_[0.0, (v * 0.05 - half)[1:]], np.r_[0.0, (v * 0.05 + half)[1:]]
+    log = OdometryLog(t, {"dist_left": d_left, "dist_right": d_right})
+    poses = dead_reckon_log(log, true, pose0=np.zeros(3)).poses
+    log_path, truth_path, robot_path = tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "diff.toml"
+    np.savetxt(log_path, np.column_stack((t, d_left, d_right)), delimiter=",",
+               header="t,dist_left,dist_right", comments="")
+    np.savetxt(truth_path, np.column_stack((t, poses[:, :2] + rng.normal(0, 0.003, (t.size, 2)))),
+               delimiter=",", header="t,x,y", comments="")
+    robot_path.write_text(f"[robot]\ntype = \"diff\"\nwheel_base = {told}\nm_per_tick = 1.0\n")
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot_path, "--truth", truth_path)
+    assert code == 0, err
+    said = [line for line in err.splitlines() if "from the robot file's" in line and "odomkit check" in line]
+    assert bool(said) == warned, err

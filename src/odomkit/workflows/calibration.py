@@ -221,7 +221,7 @@ def calibrate_files(
             if side is not None and isinstance(robot, DiffDrive):
                 summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
-    _warn_bent_length(robot, new_robot)
+    _warn_far_from_file(robot, new_robot)
     robot_fields = robot_to_dict(new_robot)["robot"]
     check_result("the calibration", {
         "the parameters": [v for v in robot_fields.values() if not isinstance(v, str)],
@@ -265,20 +265,48 @@ def calibrate_files(
 
 #: A steered vehicle's calibrated length this far (relative) from the robot file's is named.
 BENT_LENGTH = 0.1
+#: A calibrated scale (a wheel's, a speed's, a gyro's) or a differential drive's wheel base
+#: this far (relative) from the robot file's is no calibration error: tyres, loads and
+#: temperature move a wheel's size by a few per cent, as check's travel ratio allows (15 %).
+FAR_FROM_FILE = 0.15
+_SCALES = {"diff": ("c_left", "c_right"), "tricycle": ("c_scale",), "car": ("c_scale",),
+           "unicycle": ("c_scale", "yaw_rate_scale"), "gyro": ("m_per_tick", "gyro_scale")}
 
 
-def _warn_bent_length(robot: Robot, new_robot: Robot) -> None:
-    """A car's wheel base (a tricycle's wheel-to-axle distance) calibrated more than
-    :data:`BENT_LENGTH` from the robot file's: the turning per metre is tan α / L, so the
-    fitted L stands in for every gain on the steering (its ratio, the road wheels' own,
-    understeer), not only for the length. On the real BMW drive the halves gave 2.39 to
-    3.28 m for a 2.69 m car with nothing said."""
+def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
+    """A calibrated parameter far from the robot file's: a scale or a differential drive's
+    wheel base more than :data:`FAR_FROM_FILE` off, a steered vehicle's length more than
+    :data:`BENT_LENGTH`. Either a unit or a robot-file entry is wrong, or the fit started so
+    far off that it found a local minimum (a real diff robot whose file halved its wheel
+    base: c_right 1.32, wheel base +25 %, and the held-out half worse than uncalibrated, with
+    nothing said); check names which."""
+    advice = ("odomkit check LOG --robot R --truth T compares the odometry's travel and turning "
+              "with the truth's and names the entry")
+    for name in _SCALES.get(robot.type_name, ()):
+        before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
+        if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:
+            warnings.warn(f"the calibrated {name} {after:.4g} is {100 * off:+.0f} % from the "
+                          f"robot file's {before:.4g}: no wheel or gyro is that far off its own; a unit or a "
+                          "robot-file entry is wrong, or the fit started too far off and found a local "
+                          f"minimum; {advice}", UserWarning, stacklevel=3)
+    if isinstance(robot, DiffDrive) and isinstance(new_robot, DiffDrive):
+        before, after = robot.effective_wheel_base, new_robot.effective_wheel_base
+        if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:
+            warnings.warn(f"the calibrated wheel base {after:.4g} m is {100 * off:+.0f} % from "
+                          f"the robot file's {before:.4g} m: wheels slip in turns by a few per cent, not so "
+                          "much; the file's wheel_base is wrong, or the fit started too far off and found a "
+                          f"local minimum (start from a closer wheel_base); {advice}", UserWarning,
+                          stacklevel=3)
+        return
     if isinstance(robot, Car):
         name, law, gains = "wheel_base", "tan(steer)", "steering_ratio, the road wheels' gain, understeer"
     elif isinstance(robot, Tricycle):
         name, law, gains = "wheel_to_axle", "sin(steer)", "the steering angle's gain"
     else:
         return
+    # The turning per metre is tan α / L, so the fitted L stands in for every gain on the
+    # steering, not only for the length: on the real BMW drive the halves gave 2.39 to 3.28 m
+    # for a 2.69 m car with nothing said.
     before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
     if before > 0 and abs(after / before - 1) > BENT_LENGTH:
         warnings.warn(f"the calibrated {name} {after:.4g} m is {100 * (after / before - 1):+.0f} % from the "
