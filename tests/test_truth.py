@@ -111,6 +111,46 @@ def test_no_heading_from_too_few_fixes_or_a_standing_robot():
     assert heading_from_positions(noisy, 1.0) is not None
 
 
+def _standing_then_driving(stand=40.0, heading=np.pi):
+    """A robot standing ``stand`` seconds at (0.0065, −12.4876) m under a reference that repeats
+    its fix exactly (a SLAM or motion-capture truth with no stated noise, 5 Hz), then
+    driving at 0.4 m/s along ``heading``: the start of a real indoor log."""
+    t = np.round(np.arange(0.0, stand + 20.0, 0.2), 10)
+    s = 0.4 * np.clip(t - stand, 0.0, None)
+    xy = np.array([0.0064879678948016, -12.487573751699]) + np.outer(s, [np.cos(heading), np.sin(heading)])
+    return Truth(t, xy)
+
+
+@pytest.mark.parametrize("heading", [np.pi, 0.3, -2.0])
+def test_fixes_repeated_exactly_while_standing_give_no_heading_of_rounding(heading):
+    """Over identical fixes the quadratic's velocity is rounding (1e-17 m/s), and so was its
+    residual: their ratio gave a heading with σ 0.3 rad that was accepted, 90° off on a real
+    log. Wherever a heading is given now it is the driving direction within 3σ; none is
+    given where every fix in reach stands."""
+    truth = _standing_then_driving(heading=heading)
+    for time in np.arange(0.0, 45.0, 0.1):
+        fit = heading_from_positions(truth, float(time))
+        if time < 40.0 - 5.0:  # the widest span (9.6 s here) reaches no moving fix
+            assert fit is None, time
+        if fit is not None:
+            off = np.angle(np.exp(1j * (fit[0] - heading)))
+            assert abs(off) <= 3 * np.sqrt(fit[1]) + 1e-9, (time, fit)
+
+
+def test_a_log_standing_at_its_start_starts_its_track_with_the_driving_heading():
+    """``run_start`` on a unicycle log standing 40 s, then driving along π: the first row it
+    starts from has the heading of the drive (it was −π/2 from fixes of rounding)."""
+    from odomkit.windows import run_start
+
+    truth = _standing_then_driving()
+    t = np.round(np.arange(0.0, 60.0, 0.1), 10)
+    odometry = np.column_stack((0.4 * np.clip(t - 40.0, 0.0, None), 0 * t, 0 * t))
+    valid = np.ones(t.size, dtype=bool)
+    row, pose, cov = run_start(t, truth, valid, odometry)
+    assert abs(np.angle(np.exp(1j * (pose[2] - np.pi)))) <= 3 * np.sqrt(cov[2, 2]) + 1e-9
+    assert abs(np.angle(np.exp(1j * (pose[2] - np.pi)))) < 0.01
+
+
 def test_start_pose_from_truth_with_and_without_heading():
     truth = _line_truth(np.arange(0.0, 3.0, 0.05))
     pose, cov = start_pose(truth, 1.0)
