@@ -105,6 +105,12 @@ def test_a_differential_drive_from_position_only_truth():
     cal = calibrate_positions([log], [truth], DiffDrive(0.3))
     z = (cal.values - [0.995, 1.004, 0.31 / 0.3]) / cal.std_errors
     assert np.all(np.abs(z) < 3), z
+    assert not any("heading is not compared" in note for note in cal.notes)
+    # A truth that measures heading gives the same fit, and says its heading was left out.
+    theta = np.interp(tg, t, poses[:, 2])
+    with_heading = calibrate_positions([log], [Truth(tg, truth.xy, theta, 0.01)], DiffDrive(0.3))
+    np.testing.assert_allclose(with_heading.values, cal.values, rtol=1e-12)
+    assert any("heading is not compared" in note for note in with_heading.notes)
 
 
 @pytest.mark.slow

@@ -404,6 +404,11 @@ def calibrate_positions(
         left_out = f"; truth fixes left out: {' and '.join(left)}" if left else ""
         notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
                      f"{start[2]:.4g} rad){left_out}")
+    if any(truth.theta is not None for truth in truths):
+        # The fit is on positions so that any truth, GPS included, enters it alike; a truth
+        # that measures heading still pins the start heading better than positions alone.
+        notes.append("the truth's heading is not compared (every fix is compared as a position); "
+                     "it is used where the track starts from the truth (evaluate, track)")
     between = None
     if len(runs) > 1:
         between = _between_runs_of_positions(problem, res, jac, len(model.names))
