@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from odomkit.angles import sinc_half, sinc_half_derivative, unwrap_angle
 from odomkit.errors import InputError, ModelError
-from odomkit.log import OdometryLog
+from odomkit.log import OdometryLog, wheel_channels
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
 __all__ = [
@@ -318,9 +318,9 @@ class BodySteps:
         Step duration [s] (zero for repeated timestamps).
     inputs : mapping of str to ndarray, shape (M,)
         The raw per-step inputs the covariance engines need, in SI units:
-        diff ``d_left``, ``d_right`` [m]; tricycle and car ``travel`` (of the measuring
-        wheel) [m], ``steer`` [rad]; gyro and unicycle ``yaw_rate`` [rad/s]; compass
-        ``heading`` (shape (M+1,)) [rad].
+        diff ``d_left``, ``d_right`` [m] (from ticks, metres or wheel speeds); tricycle
+        and car ``travel`` (of the measuring wheel) [m], ``steer`` [rad]; gyro and
+        unicycle ``yaw_rate`` [rad/s]; compass ``heading`` (shape (M+1,)) [rad].
     robot : Robot
         The robot that produced these steps.
 
@@ -343,7 +343,14 @@ class BodySteps:
 
 def _travel(log: OdometryLog, m_per_tick: float, correction: float = 1.0,
             prefix: str = "") -> NDArray[np.float64]:
-    """Per-step distance [m] from ``ticks``/``dist`` increments or a ``speed`` rate.
+    """Per-step distance [m] from ``ticks``/``dist`` increments or a ``speed`` rate, shape (N − 1,);
+    ``prefix`` ``"left"``/``"right"``: that wheel's ``ticks_*``, ``dist_*`` or ``speed_*``.
+
+    Increments count the step that ends at their row (row k+1 for step k). A speed [m/s]
+    is held from its row over the step after it (zero-order hold: ``speed[:-1]·Δt``), as
+    :mod:`odomkit.log` says of every rate: a speed sampled at row k is the best knowledge
+    of the step after it, and a command logged when it changes holds exactly so. Wheel
+    speeds follow the same rule as a body ``speed``, so both read alike.
 
     Only tick counts are converted by ``m_per_tick`` [m/tick]; ``dist`` [m] and ``speed``
     [m/s] are metres already, whatever encoder the robot describes (issue 10: a metre log
@@ -356,9 +363,9 @@ def _travel(log: OdometryLog, m_per_tick: float, correction: float = 1.0,
         return log.channels[f"ticks{suffix}"][1:] * (correction * m_per_tick)
     if f"dist{suffix}" in log.channels:
         return log.channels[f"dist{suffix}"][1:] * correction
-    if not prefix and "speed" in log.channels:
-        return log.channels["speed"][:-1] * np.diff(log.t) * correction
-    wanted = f"ticks{suffix} or dist{suffix}" + ("" if prefix else " or speed")
+    if f"speed{suffix}" in log.channels:
+        return log.channels[f"speed{suffix}"][:-1] * np.diff(log.t) * correction
+    wanted = f"ticks{suffix} or dist{suffix} or speed{suffix}"
     raise InputError(f"log has no {wanted} channel (it has {sorted(log.channels)})",
                      source=log.source)
 
@@ -374,6 +381,7 @@ def _steer_per_step(log: OdometryLog) -> NDArray[np.float64]:
 
 
 def _diff_steps(robot: DiffDrive, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
+    wheel_channels(log.channels, log.source)  # one form for both wheels, or a clear error
     d_left = _travel(log, robot.m_per_tick_left, robot.c_left, "left")
     d_right = _travel(log, robot.m_per_tick_right, robot.c_right, "right")
     dd, dtheta = diff_body_steps(d_left, d_right, robot.effective_wheel_base)

@@ -6,14 +6,21 @@ Channel conventions (SI units; readers convert at the edge):
   ``dist_right``, ``dist`` [m]: what was counted *since the previous row*. Row 0's value is
   motion before the log starts and is ignored. Cumulative counters are differenced by the
   readers (after unwrapping, if asked), so inside odomkit increments are the only form.
-* rate channels ``speed`` [m/s], ``yaw_rate`` [rad/s]: the value at a row holds until the
-  next row (zero-order hold), so step k (row k -> k+1) uses the rate of row k.
+* rate channels ``speed``, ``speed_left``, ``speed_right`` [m/s], ``yaw_rate`` [rad/s]: the
+  value at a row holds until the next row (zero-order hold), so step k (row k -> k+1) uses
+  the rate of row k: a rate sampled at row k is the best knowledge of the step after it
+  (the step before it is past when it is logged), and a command logged when it changes
+  holds exactly so. ``speed_left``/``speed_right`` are a differential drive's wheel speeds
+  (a ``JointState`` velocity times the wheel radius, or a dataset's wheel speeds).
 * absolute channels ``steer`` [rad], ``heading`` [rad]: the value at a row.
+
+A differential drive's wheels are read in one form, both sides alike (:data:`WHEEL_PAIRS`,
+:func:`wheel_channels`): ``ticks_*``, ``dist_*`` or ``speed_*``.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -23,12 +30,53 @@ from numpy.typing import NDArray
 from odomkit import validate
 from odomkit.errors import InputError
 
-__all__ = ["ABSOLUTE_CHANNELS", "INCREMENT_CHANNELS", "KNOWN_CHANNELS", "RATE_CHANNELS", "OdometryLog"]
+__all__ = ["ABSOLUTE_CHANNELS", "INCREMENT_CHANNELS", "KNOWN_CHANNELS", "OdometryLog", "RATE_CHANNELS",
+           "SPEED_CHANNELS", "WHEEL_PAIRS", "wheel_channels"]
 
 INCREMENT_CHANNELS = frozenset({"ticks_left", "ticks_right", "ticks", "dist_left", "dist_right", "dist"})
-RATE_CHANNELS = frozenset({"speed", "yaw_rate"})
+RATE_CHANNELS = frozenset({"speed", "speed_left", "speed_right", "yaw_rate"})
 ABSOLUTE_CHANNELS = frozenset({"steer", "heading"})
 KNOWN_CHANNELS = INCREMENT_CHANNELS | RATE_CHANNELS | ABSOLUTE_CHANNELS
+#: The rate channels that measure travel [m/s] (held from each row over the step after it).
+SPEED_CHANNELS = frozenset({"speed", "speed_left", "speed_right"})
+#: The forms a differential drive's wheels are logged in, each a (left, right) pair: tick
+#: increments, metre increments, wheel speeds [m/s].
+WHEEL_PAIRS = (("ticks_left", "ticks_right"), ("dist_left", "dist_right"), ("speed_left", "speed_right"))
+
+
+def wheel_channels(names: Iterable[str], source: str | None = None) -> tuple[str, str] | None:
+    """The (left, right) wheel channels among ``names``, one pair of :data:`WHEEL_PAIRS`;
+    None where there is none.
+
+    A wheel read in one form and the other wheel in another (``ticks_left`` with
+    ``speed_right``), two forms at once, or one wheel alone is an :class:`InputError`
+    naming the channels: read so, one wheel would be off by a unit (or a row's timing)
+    from the other, and the track would turn wrongly without a word.
+
+    Examples
+    --------
+    >>> wheel_channels(["speed_right", "speed_left", "t"])
+    ('speed_left', 'speed_right')
+    >>> wheel_channels(["speed", "yaw_rate"]) is None
+    True
+    """
+    given = set(names)
+    found = [(pair, [c for c in pair if c in given]) for pair in WHEEL_PAIRS]
+    present = [(pair, have) for pair, have in found if have]
+    if not present:
+        return None
+    names_given = ", ".join(c for _, have in present for c in have)
+    *first, last = (f"{left}/{right}" for left, right in WHEEL_PAIRS)
+    forms = f"{', '.join(first)} or {last}"
+    if len(present) > 1:
+        raise InputError(f"the wheels are given in two forms ({names_given}): a differential drive "
+                         f"reads both wheels in one: {forms}", source=source)
+    pair, have = present[0]
+    if len(have) == 1:
+        missing = pair[1 - pair.index(have[0])]
+        raise InputError(f"{have[0]} is given without {missing}: a differential drive reads both "
+                         f"wheels in one form: {forms}", source=source)
+    return pair
 
 
 @dataclass(frozen=True)

@@ -9,7 +9,8 @@ Log channels each robot consumes (see :mod:`odomkit.log`):
 robot                      channels
 =========================  ======================================================
 :class:`DiffDrive`         ``ticks_left``, ``ticks_right`` (increments), or
-                           ``dist_left``, ``dist_right`` (m increments)
+                           ``dist_left``, ``dist_right`` (m increments), or
+                           ``speed_left``, ``speed_right`` (wheel speeds, m/s)
 :class:`Tricycle`          ``ticks``/``dist`` (traction-wheel increments) or ``speed`` (m/s),
                            plus ``steer`` (rad, positive = left/CCW)
 :class:`GyroOdometry`      ``ticks``/``dist``/``speed`` plus ``yaw_rate`` (rad/s)
@@ -20,7 +21,7 @@ robot                      channels
                            the front (bicycle) angle, positive = left/CCW)
 =========================  ======================================================
 
-Only ``ticks*`` channels are converted by ``m_per_tick*``; ``dist*`` [m] and ``speed``
+Only ``ticks*`` channels are converted by ``m_per_tick*``; ``dist*`` [m] and ``speed*``
 [m/s] are metres already. The calibration factors (``c_*``) apply to all three.
 """
 
@@ -73,11 +74,12 @@ class DiffDrive:
         Nominal distance b between the wheel contact points [m].
     m_per_tick_left, m_per_tick_right : float
         Nominal distance per encoder tick of each wheel [m], Borenstein–Feng eq. (2.1).
-        It converts ``ticks_*`` channels only: ``dist_*`` channels are metres already.
+        It converts ``ticks_*`` channels only: ``dist_*`` [m] and ``speed_*`` [m/s]
+        channels are metres already.
     c_left, c_right : float
         Dimensionless wheel-scale corrections (Borenstein–Feng eq. 4.30–4.31): the
         distance a wheel travelled is ``c · m_per_tick · ticks`` (``c · dist`` for a
-        channel in metres).
+        channel in metres, ``c · speed · Δt`` for a wheel speed).
     c_wheel_base : float
         Dimensionless wheel-base correction: the effective wheel base is
         ``c_wheel_base · wheel_base`` (Borenstein–Feng eq. 4.32, b_new = E_b·b_nominal).

@@ -50,9 +50,9 @@ from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_identifiable import check_identifiable, identifiability_sigma
 from odomkit.calibrate.check_ratios import check_truth_motion
 from odomkit.calibrate.check_truth import check_truth_heading
-from odomkit.log import INCREMENT_CHANNELS, OdometryLog
+from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog
 from odomkit.robot import Robot
-from odomkit.truth import Truth, truth_at
+from odomkit.truth import Truth, truth_at, truth_noise
 
 __all__ = [
     "check_counters", "check_log", "check_motion", "check_stuck", "check_time", "check_values", "GAP_FACTOR",
@@ -63,6 +63,15 @@ __all__ = [
 GAP_FACTOR = 5.0
 # A wheel (distance channel) silent this long while the robot moves is stuck [s].
 _STUCK_SECONDS = 1.0
+# The truth's clock may be this far from the log's before a whole silent stretch is no
+# longer its lead or lag [s] (calibrate fits offsets up to 2 s: positions.MAX_TIME_OFFSET).
+_CLOCK_SECONDS = 2.0
+# A truth that moves slower than this share of the odometry's speed around a silent stretch
+# creeps (its own drift, or a robot that crawls): a stuck encoder leaves it at that speed.
+_CREEP_SHARE = 0.1
+# Speeds at a silent stretch's edges below this share of the log's typical speed are a crawl:
+# a speed sensor that reads 0 below some speed jumps to and from 0 there.
+_CRAWL_SHARE = 0.25
 
 
 def _rows(index: NDArray[np.intp], limit: int = 5) -> str:
@@ -157,7 +166,7 @@ def check_counters(log: OdometryLog) -> list[Finding]:
 
 
 def _distance_channels(log: OdometryLog) -> list[str]:
-    return sorted(c for c in log.channels if c in INCREMENT_CHANNELS or c == "speed")
+    return sorted(c for c in log.channels if c in INCREMENT_CHANNELS or c in SPEED_CHANNELS)
 
 
 def _streaks(mask: NDArray[np.bool_]) -> list[tuple[int, int]]:
@@ -184,7 +193,7 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
         if values[c].size and not np.any(values[c]):
             found.append(Finding("stuck", "fail", f"{c} is zero in every row",
                                  "check the channel mapping (--columns) and the encoder"))
-    pairs = [("ticks_left", "ticks_right"), ("dist_left", "dist_right")]
+    pairs = WHEEL_PAIRS
     truth_turn = odo_turn = None
     if truth is not None and truth.has_heading:
         from odomkit.kinematics import body_steps
@@ -216,18 +225,162 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
                                          "give --truth to tell a pivot from a stuck encoder"))
                 break
     if truth is not None and channels:
-        s = truth_at(truth, t, max_gap)
-        silent = np.all([values[c] == 0 for c in channels], axis=0) & s.valid[:-1] & s.valid[1:]
-        for i, j in _streaks(silent):
-            # The net displacement, not the summed steps: those add up the truth's own jitter.
-            moved = float(np.hypot(*(s.poses[j, :2] - s.poses[i, :2])))
-            if float(np.sum(step_t[i:j])) >= _STUCK_SECONDS and moved > max(0.05, 10 * truth.sigma):
-                found.append(Finding("stuck", "fail", f"the odometry reads no motion from t = {t[i]:.6g} s "
-                                     f"to {t[j]:.6g} s while the truth moves {moved:.3g} m: a stuck encoder, "
-                                     "or a truth whose clock lags the odometry's",
-                                     "check the encoders, and the time offset between truth and log"))
-                break
+        found += _silent_while_truth_moves(log, robot, truth, values, max_gap)
     return found or [Finding("stuck", "ok", "no channel sits at zero while the robot moves")]
+
+
+def _speed_around(rate: NDArray[np.float64], moving: NDArray[np.bool_], t: NDArray[np.float64], i: int,
+                  j: int) -> float:
+    """The odometry's mean speed [m/s] over the moving steps within 1 s before row ``i`` and
+    after row ``j`` (the larger side), NaN where neither side moves."""
+    dt = np.diff(t)
+    sides = []
+    for part in (slice(None, i), slice(j, None)):
+        near = np.zeros(rate.size, dtype=bool)
+        near[part] = True
+        near &= moving & (np.abs(t[:-1] - (t[i] if part.stop == i else t[j])) <= _STUCK_SECONDS)
+        if near.any():
+            sides.append(float(np.sum(rate[near] * dt[near]) / np.sum(dt[near])))
+    return max(sides) if sides else math.nan
+
+
+def _goes_on(truth: Truth, a: float, b: float, c: float, rest: float) -> bool:
+    """Whether the truth moves from time ``b`` to ``c`` [s] on in the direction it moved from
+    ``a`` to ``b`` (within 60°), both beyond ``rest`` [m]."""
+    p = truth_at(truth, [a, b, c], None).poses[:, :2]
+    first, second = p[1] - p[0], p[2] - p[1]
+    size = float(np.hypot(*first) * np.hypot(*second))
+    return bool(np.all(np.isfinite(p)) and min(np.hypot(*first), np.hypot(*second)) > rest
+                and float(first @ second) >= 0.5 * size)
+
+
+def _silent_while_truth_moves(log: OdometryLog, robot: Robot, truth: Truth,
+                              values: dict[str, NDArray[np.float64]], max_gap: float | None) -> list[Finding]:
+    """Stretches of at least 1 s where every distance channel reads 0 while the truth moves
+    beyond its noise, each judged by how the truth's motion lies in time:
+
+    * all of it within :data:`_CLOCK_SECONDS` of one end, the truth at rest before (or
+      after) it: the truth starts (stops) moving before (after) the odometry does, a clock
+      offset or an odometry that misses slow motion (warn, with the direction measured);
+    * at under :data:`_CREEP_SHARE` of the odometry's speed around the stretch: a creep,
+      the truth's drift or a crawl (warn: a stuck encoder leaves the truth moving at the
+      speed the odometry had);
+    * the odometry crawls at both edges (under :data:`_CRAWL_SHARE` of its typical speed)
+      and the truth moves no faster than three times that: a speed sensor that reads 0
+      below some speed (warn, named with the speed);
+    * otherwise a stuck encoder, or clocks seconds apart (fail).
+
+    The truth's noise is :func:`odomkit.truth.truth_noise` (its stated σ or its fixes'
+    scatter about a smooth path): its net motion must pass max(5 cm, 10σ).
+    """
+    from odomkit.kinematics import body_steps
+
+    t = log.t
+    dt = np.diff(t)
+    s = truth_at(truth, t, max_gap)
+    still = np.all([v == 0 for v in values.values()], axis=0)
+    silent = still & s.valid[:-1] & s.valid[1:]
+    steps = body_steps(robot, log)
+    rate = np.divide(np.abs(steps.dd), dt, out=np.zeros(dt.size), where=dt > 0)
+    # The odometry's own track from the origin (midpoint headings: enough for a chord).
+    heading = np.concatenate(([0.0], np.cumsum(steps.dtheta)))
+    mid = heading[:-1] + 0.5 * steps.dtheta
+    along = steps.dd[:, None] * np.column_stack((np.cos(mid), np.sin(mid)))
+    odo = np.vstack((np.zeros((1, 2)), np.cumsum(along, axis=0)))
+    moving = ~still & (dt > 0)
+    typical = float(np.median(rate[moving])) if moving.any() else math.nan
+    noise = truth_noise(truth)
+    floor = max(0.05, 10.0 * noise)
+    # Within this of where it stood, the truth has not moved (its noise, or a tenth of the floor).
+    rest = max(3.0 * math.sqrt(2.0) * noise, 0.1 * floor)
+    xy = s.poses[:, :2]
+    fails: list[Finding] = []
+    warns: list[Finding] = []
+    for i, j in _streaks(silent):
+        duration = float(t[j] - t[i])
+        # The net displacement, not the summed steps: those add up the truth's own jitter.
+        moved = float(np.hypot(*(xy[j] - xy[i])))
+        if duration < _STUCK_SECONDS or moved <= floor:
+            continue
+        span = (f"the odometry reads no motion from t = {t[i]:.6g} s to {t[j]:.6g} s while the truth moves "
+                f"{moved:.3g} m")
+        rows = t[i: j + 1]
+        from_start = np.hypot(*(xy[i: j + 1] - xy[i]).T)
+        to_end = np.hypot(*(xy[i: j + 1] - xy[j]).T)
+        lead = float(t[j] - rows[np.flatnonzero(from_start <= rest)[-1]])
+        lag = float(rows[np.flatnonzero(to_end <= rest)[0]] - t[i])
+        after = j < dt.size and bool(moving[j])
+        before = i > 0 and bool(moving[i - 1])
+        allowed = min(_CLOCK_SECONDS, 0.5 * duration)
+        # A clock's lead or lag moves the truth on as it moves beside the stretch; a jump of
+        # its fixes (a GNSS's multipath) goes any way.
+        leads = after and lead <= allowed and _goes_on(truth, t[j] - lead, t[j], t[j] + max(lead, 0.5), rest)
+        lags = before and lag <= allowed and _goes_on(truth, t[i] - max(lag, 0.5), t[i], t[i] + lag, rest)
+        if leads and (not lags or lead <= lag):
+            warns.append(Finding(
+                "stuck", "warn", f"{span}, all of it in the last {lead:.2g} s: the truth starts moving "
+                f"{lead:.2g} s before the odometry does, a truth whose clock leads the log's (its fixes "
+                "stamped early) or an odometry that misses the start of motion",
+                f"check the time offset between truth and log (calibrate fits it; a truth that leads by "
+                f"δ takes --truth-time-offset -δ, here up to about -{lead:.2g} s)"))
+            continue
+        if lags:
+            warns.append(Finding(
+                "stuck", "warn", f"{span}, all of it in the first {lag:.2g} s: the truth stops moving "
+                f"{lag:.2g} s after the odometry does, a truth whose clock lags the log's (its fixes "
+                "stamped late) or an odometry that misses the end of motion",
+                f"check the time offset between truth and log (calibrate fits it; a truth that lags by "
+                f"δ takes --truth-time-offset δ, here up to about {lag:.2g} s)"))
+            continue
+        speed = moved / duration
+        around = _speed_around(rate, moving, t, i, j)
+        if not math.isfinite(around):
+            around = typical
+        if math.isfinite(around) and speed < _CREEP_SHARE * around:
+            warns.append(Finding(
+                "stuck", "warn", f"{span} in {duration:.3g} s ({speed:.2g} m/s), under a tenth of the "
+                f"{around:.2g} m/s the odometry reads beside it: a creep, the truth's own drift or a robot "
+                "crawling below what the odometry reads, not a stuck encoder (which leaves the truth "
+                "moving at the odometry's speed)",
+                "nothing to do if the robot stood; else check the odometry's smallest speed"))
+            continue
+        edges = [float(rate[k]) for k, there in ((i - 1, before), (j, after)) if there]
+        if (edges and min(edges) > 0 and math.isfinite(typical) and max(edges) <= _CRAWL_SHARE * typical
+                and speed <= 3.0 * max(edges)):
+            sensor = "a speed sensor" if SPEED_CHANNELS & set(values) else "an encoder"
+            said = " and ".join(f"{v:.2g} m/s {side}" for v, side in zip(
+                edges, [side for side, there in (("just before", before), ("just after", after)) if there],
+                strict=True))
+            warns.append(Finding(
+                "stuck", "warn", f"{span} ({speed:.2g} m/s), and the odometry reads {said}, a crawl "
+                f"against its typical {typical:.2g} m/s: {sensor} that reads 0 below about "
+                f"{min(edges):.2g} m/s?",
+                "nothing to fix if the robot crawls only to stop (calibrate sees a short stop); a log that "
+                "crawls often loses that distance: log a channel that reads low speeds (wheel ticks)"))
+            continue
+        # A stuck encoder loses the distance: over the stretch and _CLOCK_SECONDS either side,
+        # the odometry's chord falls short of the truth's by about what the truth moved in it.
+        # A truth whose timing differs (a clock offset, or fixes smoothed or interpolated in
+        # time) only moves the motion the odometry reads beside the stretch into it.
+        lo = int(np.searchsorted(t, t[i] - _CLOCK_SECONDS))
+        hi = int(np.searchsorted(t, t[j] + _CLOCK_SECONDS, side="right")) - 1
+        lo = lo if s.valid[lo] else i
+        hi = hi if s.valid[hi] else j
+        lost = float(np.hypot(*(xy[hi] - xy[lo])) - np.hypot(*(odo[hi] - odo[lo])))
+        if lost < 0.5 * moved:
+            warns.append(Finding(
+                "stuck", "warn", f"{span} in {duration:.3g} s ({speed:.2g} m/s), but from "
+                f"{_CLOCK_SECONDS:g} s before to {_CLOCK_SECONDS:g} s after it the odometry's chord falls "
+                f"short of the truth's by only {lost:.2g} m: the truth moves there what the odometry reads "
+                "beside it, a truth whose timing differs (a clock offset either way, or fixes smoothed "
+                "or interpolated in time), not a stuck encoder",
+                "check the time offset between truth and log, and how the truth's fixes were made"))
+            continue
+        fails.append(Finding(
+            "stuck", "fail", f"{span} in {duration:.3g} s ({speed:.2g} m/s; the odometry reads "
+            f"{around:.2g} m/s beside it): a stuck encoder, or truth and log clocks seconds apart",
+            "check the encoders, and the time offset between truth and log"))
+    return (fails or warns)[:1]
 
 
 # --- motion ------------------------------------------------------------------------------
@@ -300,7 +453,7 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     found += check_truth_heading(log, robot, truth, max_gap)
     found += check_truth_motion(log, robot, truth, max_gap)
     found += check_motion(log, robot)
-    found += check_identifiable(log, robot, identifiability_sigma(truth))
+    found += check_identifiable(log, robot, identifiability_sigma(truth, log, robot, max_gap))
     return found
 
 

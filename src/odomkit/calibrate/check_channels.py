@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.calibrate.check_finding import Finding
-from odomkit.log import OdometryLog
+from odomkit.log import WHEEL_PAIRS, OdometryLog
 from odomkit.robot import DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, truth_at, truth_noise
 
@@ -61,8 +61,7 @@ def _hypotheses(robot: Robot, log: OdometryLog) -> list[tuple[str, dict[str, Any
 def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
     ch = dict(log.channels)
     if "swap" in change:
-        for base in ("ticks", "dist"):
-            left, right = f"{base}_left", f"{base}_right"
+        for left, right in WHEEL_PAIRS:
             if left in ch and right in ch:
                 a, b = ch[left], ch[right]
                 if change["swap"]:

@@ -385,7 +385,7 @@ def calibrate_exact(
     ----------
     runs : sequence of OdometryLog
         Logs with ``ground_truth`` (N, 3); diff robots need ``ticks_left/right`` (or
-        ``dist_*``), tricycles and cars ``ticks`` (or ``dist``/``speed``) and ``steer``,
+        ``dist_*``, ``speed_*``), tricycles and cars ``ticks`` (or ``dist``/``speed``) and ``steer``,
         unicycles ``speed`` (or ``dist``) and ``yaw_rate``, gyro robots ``ticks`` (or
         ``dist``/``speed``) and ``yaw_rate``. Each run is integrated from its first
         ground-truth pose.

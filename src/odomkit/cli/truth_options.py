@@ -1,6 +1,6 @@
 """The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
 and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
---truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap``, parsed into
+--truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap --truth-record``, parsed into
 :class:`odomkit.workflows.truth.TruthOptions`."""
 
 from __future__ import annotations
@@ -19,14 +19,16 @@ if TYPE_CHECKING:
 
 __all__ = [
     "MaxGapOption", "parse_initial_cov", "TRUTH_FLAGS", "truth_options", "TruthColumnsOption",
-    "TruthFormatOption", "TruthHeadingSigmaOption", "TruthListOption", "TruthOption", "TruthSigmaOption",
+    "TruthFormatOption", "TruthHeadingSigmaOption", "TruthListOption", "TruthOption", "TruthRecordOption",
+    "TruthSigmaOption",
     "TruthTimeOffsetOption", "TruthTimeSigmaOption", "TruthTimeUnitOption",
     "with_truth_options",
 ]
 
 _TRUTH_HELP = ("Ground-truth file: TUM (t x y z qx qy qz qw), KITTI pose rows with the time first, "
-               "or text t,x,y[,theta] or GPS t,lat,lon[,alt] (degrees; east-north metres from the "
-               "first fix); default: the log's own gt_* columns.")
+               "or text t,x,y[,theta] or GPS t,lat,lon[,alt] (degrees) or t,ecef_x,ecef_y,ecef_z "
+               "(ECEF metres), as east-north metres from the first fix; default: the log's own gt_* "
+               "columns.")
 TruthOption = Annotated[Path | None, typer.Option("--truth", help=_TRUTH_HELP)]
 TruthListOption = Annotated[list[Path] | None, typer.Option(
     "--truth", help=_TRUTH_HELP + " Repeat it: the i-th --truth belongs to the i-th log.")]
@@ -34,8 +36,8 @@ TruthFormatOption = Annotated[str, typer.Option(
     "--truth-format", help="auto | tum | kitti | csv")]
 TruthColumnsOption = Annotated[str | None, typer.Option(
     "--truth-columns", help="Text truth columns: in order (t,x,y,_,theta; _ skips one; theta_deg "
-    "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw); GPS: lat, lon, alt, "
-    "heading_deg_north (clockwise from north) for x, y, theta.")]
+    "for degrees) or a header map (t=stamp,x=px,y=py,theta=yaw); GPS: lat, lon, alt (or ecef_x, "
+    "ecef_y, ecef_z), heading_deg_north (clockwise from north) for x, y, theta.")]
 TruthTimeUnitOption = Annotated[str, typer.Option(
     "--truth-time-unit", help="Unit of the truth's time column: s | ms | us | ns.")]
 TruthSigmaOption = Annotated[float | None, typer.Option(
@@ -54,11 +56,16 @@ TruthTimeOffsetOption = Annotated[float | None, typer.Option(
 MaxGapOption = Annotated[float, typer.Option(
     "--max-gap", help="Rows inside a truth gap longer than this [s] (and than twice the "
                       "truth's median spacing) are left out and counted (0: no limit).")]
+TruthRecordOption = Annotated[str | None, typer.Option(
+    "--truth-record", help="Truth file of tagged records (each line led by a word naming its type: libRSF's "
+    "point2/angle, CARMEN's TRUEPOS): read only the lines of this type. The tag is dropped: "
+    "--truth-columns counts from the field after it.")]
 
 
 def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float | None,
                   max_gap: float, heading_sigma: float | None = None,
-                  time_sigma: float | None = None, time_offset: float | None = None) -> TruthOptions:
+                  time_sigma: float | None = None, time_offset: float | None = None,
+                  record: str | None = None) -> TruthOptions:
     """The parsed truth options (``--max-gap 0`` means no limit; a noise or offset not given is None)."""
     from odomkit.workflows.truth import TruthOptions
 
@@ -72,7 +79,7 @@ def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: 
     if time_offset is not None and not math.isfinite(time_offset):
         raise InputError(f"--truth-time-offset must be a finite number of seconds, got {time_offset!r}")
     return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma, time_sigma,
-                        time_offset)
+                        time_offset, record)
 
 
 #: The truth flags besides ``--truth`` itself (one file, or one per log, as the command
@@ -82,6 +89,7 @@ TRUTH_FLAGS: tuple[Flag, ...] = (
     ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, None),
     ("truth_heading_sigma", TruthHeadingSigmaOption, None), ("truth_time_sigma", TruthTimeSigmaOption, None),
     ("truth_time_offset", TruthTimeOffsetOption, None), ("max_gap", MaxGapOption, 0.5),
+    ("truth_record", TruthRecordOption, None),
 )
 #: Decorator: the command takes :data:`TRUTH_FLAGS` and is called with ``truth_base``, the
 #: parsed :class:`~odomkit.workflows.truth.TruthOptions` without a path
@@ -89,7 +97,7 @@ TRUTH_FLAGS: tuple[Flag, ...] = (
 with_truth_options = with_flags(TRUTH_FLAGS, "truth_base", lambda values: truth_options(
     None, values["truth_format"], values["truth_columns"], values["truth_time_unit"],
     values["truth_sigma"], values["max_gap"], values["truth_heading_sigma"], values["truth_time_sigma"],
-    values["truth_time_offset"]))
+    values["truth_time_offset"], values["truth_record"]))
 
 
 def parse_initial_cov(text: str | None) -> list[list[float]] | None:

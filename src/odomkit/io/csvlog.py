@@ -29,14 +29,17 @@ from odomkit.io.table import (
 )
 from odomkit.io.text import (
     TextLayout,
+    check_record_columns,
     content_lines,
     is_number,
     read_text,
+    record_error,
     seconds_per_unit,
+    select_record,
     sniff_layout,
     split_fields,
 )
-from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, OdometryLog
+from odomkit.log import INCREMENT_CHANNELS, KNOWN_CHANNELS, SPEED_CHANNELS, OdometryLog, wheel_channels
 
 __all__ = ["GROUND_TRUTH_FIELDS", "parse_columns", "read_csv_log", "SKIP_COLUMN", "UNIT_COLUMNS"]
 
@@ -201,6 +204,10 @@ def _check_targets(targets: Sequence[str], source: str) -> None:
     if "t" not in named:
         raise InputError("--columns needs the time column t (t=<header name>, or t in its place)",
                          source=source)
+    try:  # ticks_left beside speed_right, or a wheel alone: no robot reads that
+        wheel_channels(named)
+    except InputError as exc:
+        raise InputError(f"--columns: {exc}", source=source) from None
 
 
 def _in_order(columns: Sequence[str], layout: TextLayout, text: str,
@@ -277,13 +284,16 @@ def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -
         seen, what = float(np.percentile(finite, 99)), "has a 99th percentile of"
         limit = YAW_RATE_LIMIT if key == "yaw_rate" else SPEED_LIMIT
     if seen > limit:
-        unit, other = {"steer": ("rad", "degrees"), "yaw_rate": ("rad/s", "degrees"),
-                       "speed": ("m/s", "km/h or mph")}[key]
-        columns = f"{key}_deg" if key != "speed" else "speed_kmh or speed_mph"
+        unit, other = {"steer": ("rad", "degrees"), "yaw_rate": ("rad/s", "degrees")}.get(
+            key, ("m/s", "km/h or mph"))
+        columns = f"{key}_deg" if key not in SPEED_CHANNELS else "speed_kmh or speed_mph"
+        # Wheel speeds have no column in another unit (UNIT_COLUMNS): they are converted first.
+        fix = (f"{columns} in --columns reads {other} ({columns.split(' or ')[0]}=<header name>, or in "
+               "its place)" if key in ("steer", "yaw_rate", "speed")
+               else f"convert the wheel speeds to {unit}")
         warnings.warn(
             f"{source}: {label} ({key}) {what} {seen:.3g} {unit}, beyond {limit:.3g} {unit}: "
-            f"is it in {other}? odomkit reads {unit}; {columns} in --columns reads {other} "
-            f"({columns.split(' or ')[0]}=<header name>, or in its place)",
+            f"is it in {other}? odomkit reads {unit}; {fix}",
             UserWarning, stacklevel=3)
 
 
@@ -295,6 +305,7 @@ def read_csv_log(
     cumulative: bool = False,
     wrap_bits: int | None = None,
     example: str = "t=time,ticks_left=L,ticks_right=R",
+    record: str | None = None,
 ) -> OdometryLog:
     """Read a text log (plain or gzip): delimiter and header found by
     :func:`odomkit.io.text.sniff_layout`, columns named by ``columns``.
@@ -321,6 +332,12 @@ def read_csv_log(
     wrap_bits : unwrap cumulative counters of this width (16 or 32 typically; 64 exact)
     example : the ``--columns`` mapping a missing-columns error suggests (the robot's own
         channels: :data:`odomkit.workflows.logs.COLUMN_EXAMPLES`)
+    record : read only the lines whose first field is this word (``--record``: a file of
+        tagged records such as libRSF's ``odom2 t vx vy yaw_rate ...`` beside ``loop ...``,
+        or CARMEN's ``ODOM ...`` beside ``FLASER ...``), the tag dropped: ``columns`` then
+        name the fields after it, in order (:func:`odomkit.io.text.select_record`). None:
+        every line, and a file whose lines are records of several types is refused, naming
+        them.
 
     Raises
     ------
@@ -345,7 +362,20 @@ def read_csv_log(
         raise InputError("columns must be a mapping or a sequence of names, not a string "
                          "(parse --columns text with parse_columns)")
     text = read_text(path)
+    try:
+        return _log_of_text(path, select_record(text, source, record), columns, seconds, cumulative,
+                            wrap_bits, example, record)
+    except InputError as exc:
+        raise record_error(exc, text, record) from None
+
+
+def _log_of_text(path: Path, text: str, columns: Mapping[str, str] | Sequence[str] | None, seconds: float,
+                 cumulative: bool, wrap_bits: int | None, example: str, record: str | None) -> OdometryLog:
+    """The log in ``text``, the lines of the file that :func:`read_csv_log` reads."""
+    source = str(path)
     layout = sniff_layout(text, source)
+    if record is not None:
+        check_record_columns(columns, layout.ncols, record, source)
     given = columns
     if columns is None:
         commented = _commented_names(text, layout.ncols) if layout.header is None else None
@@ -378,7 +408,7 @@ def read_csv_log(
         channels[key] = table.column(col).copy()
         if key in INCREMENT_CHANNELS:
             warn_if_cumulative(channels[key], source, f"{labels[key]} ({key})")
-        elif key in ("steer", "yaw_rate", "speed"):
+        elif key in ("steer", "yaw_rate") or key in SPEED_CHANNELS:
             _warn_if_other_unit(channels[key], key, source, labels[key])
     truth = None
     gt_keys = [k for k in GROUND_TRUTH_FIELDS if k in index]

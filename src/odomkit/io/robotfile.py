@@ -141,7 +141,8 @@ class _WheelSizes:
             suffix = f"[_{side}]" if side else ""
             raise InputError(
                 f"[robot] needs the wheel size of the {wheel} wheel: m_per_tick{suffix}, "
-                f"wheel_diameter{suffix} or wheel_radius{suffix}", source=self.f.source)
+                f"wheel_diameter{suffix} or wheel_radius{suffix} (a log in metres or m/s, dist or speed "
+                "channels, is not scaled by it: m_per_tick = 1 will do)", source=self.f.source)
         if len(given) > 1:
             raise InputError(f"[robot] {' and '.join(given)} both give the {wheel} wheel's size; "
                              "keep one", source=self.f.source)

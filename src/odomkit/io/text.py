@@ -24,14 +24,15 @@ import itertools
 import math
 import re
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 from odomkit.errors import InputError
 
-__all__ = ["content_lines", "DELIMITERS", "GZIP_MAGIC", "is_number", "read_text", "seconds_per_unit",
-           "sniff_layout", "split_fields", "TextLayout", "TIME_UNITS"]
+__all__ = ["check_record_columns", "content_lines", "DELIMITERS", "GZIP_MAGIC", "is_number",
+           "mixed_records_at", "read_text", "record_counts", "record_error", "RECORD_FLAGS",
+           "seconds_per_unit", "select_record", "sniff_layout", "split_fields", "TextLayout", "TIME_UNITS"]
 
 GZIP_MAGIC = b"\x1f\x8b"
 """The first two bytes of a gzip file (RFC 1952, section 2.3.1)."""
@@ -303,6 +304,246 @@ def sniff_layout(text: str, source: str, *, header: bool | None = None) -> TextL
                          f"{layout.delimiter_name}-separated fields", source=source,
                          line=layout.header_line)
     return layout
+
+
+# --- tagged records: lines led by a word naming their type --------------------------------
+#
+# Robot datasets often mix record types in one file, each line led by its type: libRSF's
+# ``odom2 t vx vy yaw_rate ...`` beside ``loop t1 t2 score``, CARMEN's ``ODOM x y theta ...``
+# beside ``FLASER ...`` and ``TRUEPOS ...``. One type is read by keeping its lines only
+# (``--record``, ``--truth-record``); the other lines become comments, so that every line
+# keeps its number and every message names the file's own line. The tag is dropped: the
+# columns count from the field after it, as the datasets' documentation lists a record's
+# fields. Without the flag, a file that mixes types is refused with the types and their
+# counts, rather than read as a header and data or failing at the first line of another type.
+
+RECORD_FLAGS = {"log": "--record", "truth": "--truth-record"}
+"""The flag that keeps one record type, by the kind of file read ("log", "truth")."""
+
+# The type a message suggests first, by kind of file: the first whose name holds one of these.
+_LIKELY = {"log": ("odom",), "truth": ("point", "pos", "gt", "truth")}
+# A record's tag is a word: a letter or _ first (a date or a number is data, not a tag).
+_TAG = re.compile(r"[A-Za-z_][\w.\-]*", re.ASCII)
+_LEAD = re.compile(r"[^\s,;#]+")
+_FIELDS = re.compile(r"[\s,;]+")
+
+
+def _tag_of(content: str) -> str | None:
+    """The first field of a line's content when it is a word that can name a record type
+    (not a number such as ``nan``), else None."""
+    match = _LEAD.match(content)
+    word = None if match is None else match.group()
+    return word if word is not None and _TAG.fullmatch(word) and not is_number(word) else None
+
+
+def record_counts(text: str, after: int = 0) -> dict[str, int]:
+    """How many lines each record type leads, in the order the types first appear.
+
+    Parameters
+    ----------
+    text : the file's text (:func:`read_text`)
+    after : only lines after this 1-based line number count (a header's)
+
+    Returns
+    -------
+    dict of str to int
+        Record type (a line's first field where it is a word, :func:`select_record`) ->
+        number of lines it leads; lines led by a number are not counted.
+
+    Examples
+    --------
+    >>> record_counts("# libRSF\\nodom2 0 1\\nloop 0 0.1 0.9\\nodom2 0.1 1\\n")
+    {'odom2': 2, 'loop': 1}
+    """
+    counts: dict[str, int] = {}
+    for lineno, content in content_lines(text):
+        word = None if lineno <= after else _tag_of(content)
+        if word is not None:
+            counts[word] = counts.get(word, 0) + 1
+    return counts
+
+
+def _listed(counts: dict[str, int]) -> str:
+    return ", ".join(f"{word}: {n} line{'' if n == 1 else 's'}" for word, n in counts.items())
+
+
+def _mixed(counts: dict[str, int], source: str, kind: str) -> InputError:
+    likely = next((w for w in counts if any(k in w.lower() for k in _LIKELY[kind])), next(iter(counts)))
+    return InputError(f"its lines are tagged records of {len(counts)} types ({_listed(counts)}): keep one "
+                      f"with {RECORD_FLAGS[kind]} {likely} (its tag is dropped: the columns count from the "
+                      "field after it)", source=source)
+
+
+def _named_first(sample: list[tuple[int, str]], words: list[str | None]) -> bool:
+    """Whether the first of the ``sample`` lines (their record types ``words``) is a header:
+    a word leads it and no other line, and none of its other fields is a number (a record
+    holds numbers; a header names columns, so a word under it is text, not a type)."""
+    first = words[0]
+    return first is not None and words.count(first) == 1 and not any(
+        map(is_number, _FIELDS.split(sample[0][1])[1:]))
+
+
+def _check_untagged(text: str, source: str, kind: str) -> None:
+    """Refuse a file of several record types read without the flag that keeps one.
+
+    Only the first data lines are looked at unless they look tagged: a word leads two of
+    them, or two words lead them (a header's first name aside, :func:`_named_first`).
+    """
+    sample = list(itertools.islice(content_lines(text), _SAMPLE + 1))
+    words = [_tag_of(content) for _, content in sample]
+    if not sample or _named_first(sample, words):
+        return
+    tags = [w for w in words if w is not None]
+    if len(set(tags)) < 2 and len(tags) == len(set(tags)):
+        return
+    counts = record_counts(text)
+    if len(counts) > 1:
+        raise _mixed(counts, source, kind)
+
+
+def select_record(text: str, source: str, record: str | None, kind: str = "log") -> str:
+    """The text with only the lines of one record type, their tag dropped.
+
+    The one place where both text readers (:mod:`odomkit.io.csvlog`, :mod:`odomkit.io.truth`)
+    choose lines by their type. A line is kept when its first field is ``record`` exactly
+    (case included), followed by a delimiter (comma, semicolon, tab or spaces) or the end
+    of the line; the tag and that delimiter are dropped, so the columns count from the
+    field after the tag. Every other line that holds something becomes a comment (``#``),
+    so that line numbers stay the file's own; comment and blank lines stay as they are.
+
+    Parameters
+    ----------
+    text : the file's text (:func:`read_text`)
+    source : the file, for messages
+    record : the record type to keep (``--record``, ``--truth-record``); None: keep every
+        line, but refuse a file whose lines are tagged records of several types
+    kind : "log" or "truth": which flag (:data:`RECORD_FLAGS`) the messages name
+
+    Returns
+    -------
+    str
+        The text as the table readers read it: as many lines as ``text``.
+
+    Raises
+    ------
+    InputError
+        ``record`` None and the lines are records of several types (each type with its
+        line count, and the flag to give); ``record`` leads no line (naming the types that do).
+
+    Examples
+    --------
+    >>> select_record("odom2 0 1 2\\nloop 0 1 0.9\\nodom2,0.1,1,2\\n", "f.txt", "odom2")
+    '0 1 2\\n#\\n0.1,1,2\\n'
+    """
+    flag = RECORD_FLAGS[kind]
+    if record is None:
+        _check_untagged(text, source, kind)
+        return text
+    word = record.strip()
+    if not word or _LEAD.fullmatch(word) is None:
+        raise InputError(f"{flag} takes the one word that leads the lines to read (e.g. odom2), "
+                         f"got {record!r}")
+    tag = re.compile(rf"[ \t]*{re.escape(word)}(?:[ \t]*[,;]|[ \t]+|(?=[\r#]|$))")
+    lines = text.split("\n")
+    kept = 0
+    for i, line in enumerate(lines):
+        match = tag.match(line)
+        if match is not None:
+            lines[i] = line[match.end():]
+            kept += 1
+        elif line.split("#", 1)[0].strip():
+            lines[i] = "#"
+    if not kept:
+        counts = record_counts(text)
+        if not counts:
+            raise InputError(f"no line is a {word!r} record: the lines start with numbers, not with a "
+                             f"record type (leave out {flag})", source=source)
+        near = [w for w in counts if w.lower() == word.lower()]
+        said = f"; did you mean {near[0]}? (types match exactly, case included)" if near else ""
+        raise InputError(f"no line is a {word!r} record ({flag} {word}); its lines start with "
+                         f"{_listed(counts)}{said}", source=source)
+    return "\n".join(lines)
+
+
+def check_record_columns(columns: object, ncols: int, record: str, source: str, kind: str = "log") -> None:
+    """Refuse, saying why, columns for a read of one record type (:func:`select_record`)
+    that cannot be meant: a map of header names (the record's lines have no header), or one
+    more than the fields after the tag, led by ``_`` (the tag counted, which is dropped).
+
+    Parameters
+    ----------
+    columns : the columns as parsed: a sequence of names in order, a mapping of header
+        names, or None
+    ncols : fields after the tag in the records read
+    record : the record type read
+    source : the file, for messages
+    kind : "log" (``--record``, ``--columns``) or "truth" (``--truth-record``, ``--truth-columns``)
+    """
+    flag, columns_flag = RECORD_FLAGS[kind], {"log": "--columns", "truth": "--truth-columns"}[kind]
+    if isinstance(columns, Mapping):
+        raise InputError(f"{flag} keeps lines without a header: name the columns in order in {columns_flag}, "
+                         "counted from the field after the tag (e.g. t,speed,_,yaw_rate)", source=source)
+    if isinstance(columns, Sequence) and not isinstance(columns, str) and len(columns) > ncols and (
+            columns[0] == "_"):
+        shown = list(columns[1:])
+        while shown and shown[-1] == "_":
+            shown.pop()
+        raise InputError(f"{flag} {record.strip()} drops the tag: {columns_flag} counts from the field after "
+                         f"it; leave out the leading _ ({','.join(shown)})", source=source)
+
+
+def mixed_records_at(text: str, source: str, line: int | None, kind: str = "log") -> InputError | None:
+    """The error of a file of several record types, for a reader that failed at ``line``
+    (a column count, a field that is not a number) where that line is led by another
+    record type than the data line before it; else None (the reader's own error stands).
+
+    Parameters
+    ----------
+    text : the file's text as read (:func:`read_text`)
+    source : the file, for messages
+    line : the 1-based line of the reader's error (None: no line, no answer)
+    kind : "log" or "truth" (:data:`RECORD_FLAGS`)
+    """
+    if line is None:
+        return None
+    lines = list(itertools.takewhile(lambda item: item[0] <= line, content_lines(text)))
+    if len(lines) < 2 or lines[-1][0] != line:
+        return None
+    at, before = _tag_of(lines[-1][1]), _tag_of(lines[-2][1])
+    if at is None or before in (None, at):
+        return None
+    counts = record_counts(text)
+    first = next(iter(counts))
+    head = list(itertools.islice(content_lines(text), _SAMPLE + 1))
+    if counts[first] == 1 and _named_first(head, [_tag_of(c) for _, c in head]):
+        del counts[first]  # a header's first name, not a record type
+    return _mixed(counts, source, kind) if len(counts) > 1 else None
+
+
+def record_error(error: InputError, text: str, record: str | None, kind: str = "log") -> InputError:
+    """A text reader's ``error``, said in terms of record types.
+
+    With ``record``, an error at a line of the file says that the columns count from the
+    field after the tag (the user may have counted the tag); without, an error at a line
+    led by another record type than the line before it becomes the error naming the file's
+    types (:func:`mixed_records_at`). Any other error is returned as it is.
+
+    Parameters
+    ----------
+    error : what the reader raised
+    text : the file's whole text as read (:func:`read_text`), before :func:`select_record`
+    record : the record type read, or None
+    kind : "log" or "truth" (:data:`RECORD_FLAGS`)
+    """
+    if error.line is None or error.source is None:
+        return error
+    if record is None:
+        return mixed_records_at(text, error.source, error.line, kind) or error
+    message = str(error).removeprefix(f"{error.source}, line {error.line}: ")
+    if "drops the tag" in message:
+        return error
+    return InputError(f"{message} ({RECORD_FLAGS[kind]} {record.strip()} drops the tag: column 1 is the "
+                      "field after it)", source=error.source, line=error.line)
 
 
 def seconds_per_unit(unit: str | float, flag: str = "--time-unit") -> float:

@@ -30,13 +30,25 @@ Formats (``--truth-format``):
     ``theta``/``yaw``/``heading`` column in such a file is refused: its convention is unknown.
     A file with both x, y and latitude/longitude columns is refused; so are a latitude
     beyond ±90° and a longitude beyond ±180°.
+
+    Or GPS fixes ``t,ecef_x,ecef_y,ecef_z[,heading_deg_north]`` [s, m, m, m, deg]:
+    earth-centred, earth-fixed WGS 84 coordinates (an RTK receiver's or a SPAN system's;
+    headers ``ecef_x``/``x_ecef``/``ecefx`` and so on for y and z, any case), projected as
+    latitude/longitude fixes are, about the first fix in time (:func:`project_ecef`). A
+    file with ECEF and x, y or latitude/longitude columns is refused, and so is a point
+    whose distance from the earth's centre is not one on or near the earth (6.30e6 m to
+    6.42e6 m). Plain x, y columns that look like ECEF (beside a further column z with
+    x² + y² + z² the earth's radius squared and a height above the ellipsoid that a point
+    on the ground has) get a warning: read so, they are a plane through the earth's centre.
 ``auto``
     A header means ``csv``; otherwise 8 columns mean ``tum``, 13 (or 12) ``kitti``, 3 or 4
     ``csv``.
 
 Every format: comma, semicolon, tab or whitespace separated, ``#`` comments, plain or gzip
 (``.gz``), sniffed as a log's text is (:func:`odomkit.io.text.sniff_layout`); time in s, ms,
-us or ns, or seconds per unit as a number (``--truth-time-unit``). Rows are put in time order
+us or ns, or seconds per unit as a number (``--truth-time-unit``); of a file of tagged records
+(libRSF's ``point2 t x y ...`` among ``angle ...`` lines), the lines of one type, their tag
+dropped (``record``, ``--truth-record``: :func:`odomkit.io.text.select_record`). Rows are put in time order
 (with a warning) and repeated times dropped (with a warning that counts them); a NaN is an
 error naming its line: leave such fixes out, and the gap is left out and counted.
 """
@@ -56,13 +68,25 @@ from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
 from odomkit.io._headers import no_such_column, time_text_error
 from odomkit.io.table import to_seconds
-from odomkit.io.text import content_lines, is_number, read_text, seconds_per_unit, sniff_layout, split_fields
+from odomkit.io.text import (
+    check_record_columns,
+    content_lines,
+    is_number,
+    read_text,
+    record_error,
+    seconds_per_unit,
+    select_record,
+    sniff_layout,
+    split_fields,
+)
 from odomkit.truth import Truth
 
-__all__ = ["GEO_SPAN_WARNING", "project_latlon", "TRUTH_FORMATS", "parse_truth_columns", "read_truth"]
+__all__ = ["ECEF_RADIUS_RANGE", "GEO_SPAN_WARNING", "project_ecef", "project_latlon", "TRUTH_FORMATS",
+           "parse_truth_columns", "read_truth"]
 
 TRUTH_FORMATS = ("auto", "tum", "kitti", "csv")
-_TARGETS = ("t", "x", "y", "theta", "theta_deg", "lat", "lon", "alt", "heading_deg_north")
+_ECEF = ("ecef_x", "ecef_y", "ecef_z")
+_TARGETS = ("t", "x", "y", "theta", "theta_deg", "lat", "lon", "alt", *_ECEF, "heading_deg_north")
 _HEADER_NAMES = {
     "t": ("t", "time", "timestamp", "stamp", "time_s"),
     "x": ("x", "gt_x", "x_gt", "pos_x", "tx"),
@@ -72,6 +96,9 @@ _HEADER_NAMES = {
     "lat": ("lat", "latitude"),
     "lon": ("lon", "lng", "long", "longitude"),
     "alt": ("alt", "altitude", "height"),
+    "ecef_x": ("ecef_x", "x_ecef", "ecefx"),
+    "ecef_y": ("ecef_y", "y_ecef", "ecefy"),
+    "ecef_z": ("ecef_z", "z_ecef", "ecefz"),
     "heading_deg_north": ("heading_deg_north",),
 }
 #: Fixes farther than this from the first [m] get a warning: the east-north plane of the first
@@ -84,6 +111,16 @@ GEO_SPAN_WARNING = 20_000.0
 _MEAN_RADIUS = 6_371_008.8
 _GEO_COLUMNS = "t=TIME,lat=LAT,lon=LON"
 _GEO_HINT = f"--truth-columns {_GEO_COLUMNS}"
+_ECEF_COLUMNS = "t=TIME,ecef_x=X,ecef_y=Y,ecef_z=Z"
+#: Distances from the earth's centre [m] that an ECEF fix may have: the ellipsoid's radii run
+#: from 6,356,752 m (poles) to 6,378,137 m (equator), and this range holds 57 km below the one
+#: and 42 km above the other, so that it refuses only what is nowhere near the earth: local
+#: x, y, z in metres, or kilometres, read as ECEF.
+ECEF_RADIUS_RANGE = (6.30e6, 6.42e6)
+# WGS 84 (NIMA TR8350.2, table 3.1): semi-major axis [m] and flattening; only for the
+# ECEF-likeness of plain x, y, z (the projection itself is pymap3d's).
+_WGS84_A = 6_378_137.0
+_WGS84_F = 1 / 298.257223563
 
 
 def parse_truth_columns(text: str) -> dict[str, str] | list[str]:
@@ -217,15 +254,18 @@ def _csv_columns(path: Path, header: list[str] | None, ncols: int,
         raise InputError(f"{ncols} columns and no header: name them with --truth-columns "
                          "(e.g. t,x,y,theta) or give --truth-format tum|kitti", source=str(path))
     explicit = columns is not None
-    geo = [k for k in ("lat", "lon") if k in index]
+    geo = [k for k in ("lat", "lon", *_ECEF) if k in index]
+    if any(k in index for k in _ECEF) and "alt" in index and not explicit:
+        del index["alt"]  # a height beside ECEF coordinates (they hold it already): not read
     if not geo:
         if "alt" in index and not explicit:
             del index["alt"]  # a height beside x, y (it was never read): not a GPS file
         extra = [k for k in ("alt", "heading_deg_north") if k in index]
         if extra:
-            raise InputError(f"{extra[0]} goes with latitude/longitude columns (lat, lon), and the file "
-                             f"has none; x, y truth takes its heading as theta (rad, counter-clockwise "
-                             f"from x) or theta_deg", source=str(path))
+            raise InputError(f"{extra[0]} goes with latitude/longitude columns (lat, lon) or ECEF ones "
+                             f"(ecef_x, ecef_y, ecef_z), and the file has none; x, y truth takes its "
+                             f"heading as theta (rad, counter-clockwise from x) or theta_deg",
+                             source=str(path))
     else:
         _check_geo_columns(path, header, index)
         return index
@@ -233,7 +273,8 @@ def _csv_columns(path: Path, header: list[str] | None, ncols: int,
     if missing:
         raise InputError(f"no column for {', '.join(missing)} (header {header}); name the columns "
                          "with --truth-columns, e.g. t=time,x=px,y=py,theta=yaw (or "
-                         f"{_GEO_HINT} for GPS fixes)", source=str(path))
+                         f"{_GEO_HINT} for GPS fixes, or {_ECEF_COLUMNS} for ECEF ones)",
+                         source=str(path))
     if "theta" in index and "theta_deg" in index:
         raise InputError("give theta or theta_deg, not both", source=str(path))
     return index
@@ -244,39 +285,67 @@ def _column_name(header: list[str] | None, index: int) -> str:
 
 
 def _check_geo_columns(path: Path, header: list[str] | None, index: dict[str, int]) -> None:
-    """A latitude/longitude file's columns: t, lat and lon, no x or y, and a heading only
-    as ``heading_deg_north``."""
-    plane = [k for k in ("x", "y") if k in index]
-    if plane:
-        both = ", ".join(f"{k} ({_column_name(header, index[k])})" for k in (*plane, "lat", "lon")
-                         if k in index)
-        raise InputError(f"the file has both x, y and latitude/longitude columns: {both}; name the "
-                         f"ones to read with --truth-columns (t=TIME,x=X,y=Y or {_GEO_COLUMNS})",
-                         source=str(path))
-    missing = [k for k in ("t", "lat", "lon") if k not in index]
+    """A GPS file's columns: t and either lat, lon[, alt] or ecef_x, ecef_y, ecef_z, never
+    two of these and x, y, and a heading only as ``heading_deg_north``."""
+    kinds = [(what, keys, hint) for what, keys, hint in (
+        ("x, y", ("x", "y"), "t=TIME,x=X,y=Y"), ("latitude/longitude", ("lat", "lon", "alt"), _GEO_COLUMNS),
+        ("ECEF", _ECEF, _ECEF_COLUMNS)) if any(k in index for k in keys)]
+    if len(kinds) > 1:
+        found = ", ".join(f"{k} ({_column_name(header, index[k])})" for _, keys, _ in kinds for k in keys
+                          if k in index)
+        names = [what for what, _, _ in kinds]
+        said = ("both " if len(names) == 2 else "") + ", ".join(names[:-1]) + " and " + names[-1]
+        raise InputError(f"the file has {said} columns: {found}; name the ones to read with --truth-columns "
+                         f"({' or '.join(hint for _, _, hint in kinds)})", source=str(path))
+    ecef = any(k in index for k in _ECEF)
+    position, columns = (_ECEF, _ECEF_COLUMNS) if ecef else (("lat", "lon", "alt"), _GEO_COLUMNS)
+    missing = [k for k in ("t", *position[:3 if ecef else 2]) if k not in index]
     if missing:
         raise InputError(f"no column for {', '.join(missing)} (header {header}); name the columns "
-                         f"with {_GEO_HINT}", source=str(path))
+                         f"with --truth-columns {columns}", source=str(path))
     angles = [k for k in ("theta", "theta_deg") if k in index]
     if angles:
         col = index[angles[0]]
         if header is not None:
-            mapped = ",".join(f"{k}={header[index[k]]}" for k in ("t", "lat", "lon", "alt") if k in index)
+            mapped = ",".join(f"{k}={header[index[k]]}" for k in ("t", *position) if k in index)
             hint = f"--truth-columns {mapped},heading_deg_north={header[col]}"
         else:
             order = {i: k for k, i in index.items()} | {col: "heading_deg_north"}
             hint = "--truth-columns " + ",".join(order.get(i, "_") for i in range(max(order) + 1))
         raise InputError(
-            f"a latitude/longitude file's heading must say its convention, and {_column_name(header, col)} "
+            f"{'an ECEF' if ecef else 'a latitude/longitude'} file's heading must say its convention, and "
+            f"{_column_name(header, col)} "
             "does not: if it is degrees clockwise from true north (a compass's, a GNSS receiver's), "
             f"read it as heading_deg_north ({hint}) and odomkit turns it into its θ (counter-clockwise "
             "from east); otherwise convert it to that, or leave it out (position-only truth)",
             source=str(path))
 
 
+def _off_the_earth(x: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64]
+                   ) -> tuple[int, str] | None:
+    """The first ECEF point outside :data:`ECEF_RADIUS_RANGE` and what to say of it, or None."""
+    r = np.sqrt(x**2 + y**2 + z**2)
+    lo, hi = ECEF_RADIUS_RANGE
+    bad = np.flatnonzero(~((r >= lo) & (r <= hi)))
+    if not bad.size:
+        return None
+    return int(bad[0]), (f"not ECEF (|r| = {r[bad[0]]:.4g} m; a point on or near the earth is "
+                         f"{lo / 1e6:.2f}e6 to {hi / 1e6:.2f}e6 m from its centre); read local "
+                         "coordinates as x, y")
+
+
 def _check_geo_range(path: Path, rows: list[tuple[int, list[str]]], data: NDArray[np.float64],
                      header: list[str] | None, index: dict[str, int]) -> None:
-    """|latitude| <= 90° and |longitude| <= 180°, else one line naming the row and column."""
+    """|latitude| <= 90° and |longitude| <= 180°, or ECEF points near the earth
+    (:data:`ECEF_RADIUS_RANGE`), else one line naming the row and columns."""
+    if "ecef_x" in index:
+        cols = [index[k] for k in _ECEF]
+        off = _off_the_earth(*(data[:, c] for c in cols))
+        if off is not None:
+            names = ", ".join(k if header is None else header[index[k]] for k in _ECEF)
+            raise InputError(f"columns {', '.join(str(c + 1) for c in cols)} ({names}) are {off[1]}",
+                             source=str(path), line=rows[off[0]][0])
+        return
     for key, limit, what in (("lat", 90.0, "latitude"), ("lon", 180.0, "longitude")):
         col = index[key]
         bad = np.flatnonzero(np.abs(data[:, col]) > limit)
@@ -286,13 +355,103 @@ def _check_geo_range(path: Path, rows: list[tuple[int, list[str]]], data: NDArra
                              f"within ±{limit:g}", source=str(path), line=rows[bad[0]][0])
 
 
-def _require_pymap3d() -> Any:
+#: Plain x, y [m] at least this far from 0 on every row can be ECEF X, Y (so can any point
+#: farther than 100 km from the poles' axis, i.e. 0.9° from a pole); no local frame reaches it.
+_ECEF_LIKE_XY = 1e5
+#: ... and are, with a further column z, where x² + y² + z² is within this share of the earth's
+#: radius squared on every row ...
+_ECEF_LIKE_R2 = 0.01
+#: ... and the point's height above the ellipsoid within this range [m] (no ground below the
+#: first, hardly a road above the second): UTM eastings and northings near 57° N or 33° S
+#: (~5e5, ~6.34e6) with a height beside them pass the first two tests, as a point near the
+#: equator some 20 km under the ground, and fail this one.
+_ECEF_LIKE_HEIGHT = (-1e3, 1e4)
+
+
+def _warn_if_ecef(path: Path, rows: list[tuple[int, list[str]]], xy: NDArray[np.float64],
+                  header: list[str] | None, index: dict[str, int], spec: dict[str, str] | list[str] | None
+                  ) -> None:
+    """Warn where plain x, y look like ECEF X, Y: read so, the track is in the plane of the
+    equator through the earth's centre (a drive in Berlin, 3.8e6 m from the origin, with its
+    distances shortened by the angle between that plane and the ground, and no warning).
+
+    The test: every row's x, y at least :data:`_ECEF_LIKE_XY` from 0, and a column not read
+    whose every value z puts (x, y, z) at the earth's radius (:data:`_ECEF_LIKE_R2`) and at a
+    height above the WGS 84 ellipsoid that ground has (:data:`_ECEF_LIKE_HEIGHT`). Only a
+    warning: UTM eastings and northings in a band near 57° N or 33° S with a height
+    beside them pass it.
+    """
+    p = np.hypot(xy[:, 0], xy[:, 1])
+    if not np.all(p >= _ECEF_LIKE_XY):
+        return
+    used = set(index.values())
+    for col in (c for c in range(len(rows[0][1])) if c not in used):
+        try:
+            z = np.array([f[col] for _, f in rows], dtype=float)
+        except ValueError:
+            continue  # text: not a coordinate
+        r2 = p**2 + z**2
+        if not np.all(np.abs(r2 / _MEAN_RADIUS**2 - 1) <= _ECEF_LIKE_R2):
+            continue
+        # The ellipsoid's radius at geocentric latitude ψ, a(1 − f sin²ψ), is good to f²a (~70 m),
+        # plenty for a range of kilometres.
+        h = np.sqrt(r2) - _WGS84_A * (1 - _WGS84_F * z**2 / r2)
+        if not np.all((h >= _ECEF_LIKE_HEIGHT[0]) & (h <= _ECEF_LIKE_HEIGHT[1])):
+            continue
+        names = {"t": index["t"], "ecef_x": index["x"], "ecef_y": index["y"], "ecef_z": col}
+        if header is not None:
+            hint = ",".join(f"{k}={header[i]}" for k, i in names.items())
+        else:
+            order = {i: k for k, i in names.items()}
+            hint = ",".join(order.get(i, "_") for i in range(max(order) + 1))
+        radius = f"{np.sqrt(np.median(r2)):.2e}".replace("e+0", "e")  # 6.36e6
+        warnings.warn(f"{path}: columns x ({_column_name(header, index['x'])}), y "
+                      f"({_column_name(header, index['y'])}) and {_column_name(header, col)} look like "
+                      f"earth-centred (ECEF) coordinates (|r| ≈ {radius} m): read them "
+                      f"with ecef_x,ecef_y,ecef_z (--truth-columns {hint}) for metres east and north of "
+                      "the first fix; read as x, y they lie in the plane of the equator, not of the ground",
+                      stacklevel=3)
+        return
+
+
+def _require_pymap3d(what: str = "latitude/longitude") -> Any:
     """The ``pymap3d`` package (WGS 84 geodesy), or one line saying how to install it."""
     try:
         import pymap3d
     except ImportError:
-        raise InputError("reading latitude/longitude needs pymap3d: pip install 'odomkit[gps]'") from None
+        raise InputError(f"reading {what} needs pymap3d: pip install 'odomkit[gps]'") from None
     return pymap3d
+
+
+def _onto_plane(
+    pm: Any,
+    east: NDArray[np.float64],
+    north: NDArray[np.float64],
+    lat0: float,
+    lon0: float,
+    heading: tuple[ArrayLike, NDArray[np.float64], NDArray[np.float64]] | None,
+    source: str,
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """The one projection home of GPS fixes, whatever their coordinates: east and north of
+    the first fix [m] as x, y, with the warning beyond :data:`GEO_SPAN_WARNING`, and
+    ``heading`` = (ψ [deg] clockwise from north, latitude, longitude [deg] of each fix) as θ
+    in the first fix's plane (its latitude ``lat0``, longitude ``lon0`` [deg])."""
+    xy = np.column_stack((east, north)).astype(float)
+    reach = float(np.max(np.hypot(xy[:, 0], xy[:, 1])))
+    if reach > GEO_SPAN_WARNING:
+        short = 1.0 - math.cos(reach / _MEAN_RADIUS)
+        warnings.warn(f"{source}: the fixes reach {reach / 1e3:.1f} km from the first, which is the origin "
+                      f"of the east-north plane they are projected onto; distances there are short by up to "
+                      f"{short:.1e} of their length (1 - cos(d/R)); split the drive into parts nearer "
+                      "their first fix if that matters", stacklevel=4)
+    if heading is None:
+        return xy, None
+    psi = np.radians(np.asarray(heading[0], dtype=float))
+    lat, lon = heading[1], heading[2]
+    # The heading as a unit vector in the fix's own east-north-up frame, then in the first fix's.
+    ex, ey, ez = pm.enu2ecefv(np.sin(psi), np.cos(psi), np.zeros_like(psi), lat, lon)
+    e, n, _ = pm.ecef2enuv(ex, ey, ez, lat0, lon0)
+    return xy, unwrap_angle(np.arctan2(n, e))
 
 
 def project_latlon(
@@ -349,21 +508,70 @@ def project_latlon(
     lon = np.asarray(lon, dtype=float)
     h = np.zeros_like(lat) if alt is None else np.asarray(alt, dtype=float)
     east, north, _ = pm.geodetic2enu(lat, lon, h, lat[0], lon[0], h[0])
-    xy = np.column_stack((east, north)).astype(float)
-    reach = float(np.max(np.hypot(xy[:, 0], xy[:, 1])))
-    if reach > GEO_SPAN_WARNING:
-        short = 1.0 - math.cos(reach / _MEAN_RADIUS)
-        warnings.warn(f"{source}: the fixes reach {reach / 1e3:.1f} km from the first, which is the origin "
-                      f"of the east-north plane they are projected onto; distances there are short by up to "
-                      f"{short:.1e} of their length (1 - cos(d/R)); split the drive into parts nearer "
-                      "their first fix if that matters", stacklevel=3)
-    if heading_north is None:
-        return xy, None
-    psi = np.radians(np.asarray(heading_north, dtype=float))
-    # The heading as a unit vector in the fix's own east-north-up frame, then in the first fix's.
-    ex, ey, ez = pm.enu2ecefv(np.sin(psi), np.cos(psi), np.zeros_like(psi), lat, lon)
-    e, n, _ = pm.ecef2enuv(ex, ey, ez, lat[0], lon[0])
-    return xy, unwrap_angle(np.arctan2(n, e))
+    return _onto_plane(pm, east, north, lat[0], lon[0],
+                       None if heading_north is None else (heading_north, lat, lon), source)
+
+
+def project_ecef(
+    x: ArrayLike,
+    y: ArrayLike,
+    z: ArrayLike,
+    heading_north: ArrayLike | None = None,
+    source: str = "<memory>",
+) -> tuple[NDArray[np.float64], NDArray[np.float64] | None]:
+    """GPS fixes in earth-centred, earth-fixed coordinates onto the local east-north plane of
+    the first fix (``pymap3d``, WGS 84), as :func:`project_latlon` projects latitude/longitude.
+
+    The first fix's latitude and longitude (:func:`pymap3d.ecef2geodetic`) set the
+    east-north-up frame; each fix's offset from the first is rotated into it (the rotation
+    of :func:`pymap3d.ecef2enu`, :func:`pymap3d.uvw2enu`, applied to the offsets themselves,
+    so that the first fix is exactly 0, 0); east and north are kept, up is dropped. The same
+    plane, the same scale error away from the first fix (:data:`GEO_SPAN_WARNING`) and the
+    same heading as the fixes' latitude, longitude and height give.
+
+    Parameters
+    ----------
+    x, y, z : array_like, shape (K,)
+        ECEF coordinates, WGS 84 [m]: x towards latitude 0, longitude 0; z towards the north
+        pole. Each fix's distance from the centre must be within :data:`ECEF_RADIUS_RANGE`.
+    heading_north : array_like, shape (K,), optional
+        Heading at each fix [deg], clockwise from true north there; turned into the first
+        fix's plane as :func:`project_latlon` does.
+    source : str
+        Where the fixes came from (messages).
+
+    Returns
+    -------
+    xy : ndarray, shape (K, 2)
+        East and north of the first fix [m] (x east, y north; the first row is 0, 0).
+    theta : ndarray, shape (K,) or None
+        Heading counter-clockwise from x = east [rad], continuous (unwrapped); None
+        without ``heading_north``.
+
+    Raises
+    ------
+    InputError
+        A point off the earth (``not ECEF (|r| = ... m)``), or ``pymap3d`` is not installed
+        (the ``gps`` extra).
+
+    Warns
+    -----
+    UserWarning
+        A fix farther than :data:`GEO_SPAN_WARNING` from the first, with the scale error
+        there.
+    """
+    x, y, z = (np.asarray(v, dtype=float).reshape(-1) for v in (x, y, z))
+    off = _off_the_earth(x, y, z)
+    if off is not None:
+        raise InputError(f"fix {off[0]} is {off[1]}", source=source)
+    pm = _require_pymap3d("ECEF coordinates")
+    lat0, lon0, _ = pm.ecef2geodetic(x[0], y[0], z[0])
+    east, north, _ = pm.uvw2enu(x - x[0], y - y[0], z - z[0], lat0, lon0)
+    heading = None
+    if heading_north is not None:
+        lat, lon, _ = pm.ecef2geodetic(x, y, z)
+        heading = (heading_north, np.asarray(lat, dtype=float), np.asarray(lon, dtype=float))
+    return _onto_plane(pm, east, north, float(lat0), float(lon0), heading, source)
 
 
 def read_truth(
@@ -372,6 +580,8 @@ def read_truth(
     columns: str | None = None,
     time_unit: str = "s",
     sigma: float = 0.0,
+    *,
+    record: str | None = None,
 ) -> Truth:
     """Read a ground-truth file (formats in the module docstring).
 
@@ -383,12 +593,17 @@ def read_truth(
     time_unit : {"s", "ms", "us", "ns"} or seconds per unit, unit of the time column
         (:func:`odomkit.io.text.seconds_per_unit`)
     sigma : standard deviation of each truth position per axis [m]
+    record : read only the lines whose first field is this word (``--truth-record``: a file
+        of tagged records such as libRSF's ``point2 t x y ...`` beside ``angle t heading 0``,
+        or CARMEN's ``TRUEPOS ...`` among other types), the tag dropped: ``columns`` then
+        name the fields after it (:func:`odomkit.io.text.select_record`). None: every line,
+        and a file whose lines are records of several types is refused, naming them.
 
     Returns
     -------
     Truth with strictly increasing times [s] and, unless the file is position-only, a
-    continuous heading [rad]. GPS fixes (latitude/longitude columns) are east and north of
-    the first fix [m] (:func:`project_latlon`).
+    continuous heading [rad]. GPS fixes (latitude/longitude or ECEF columns) are east and
+    north of the first fix [m] (:func:`project_latlon`, :func:`project_ecef`).
     """
     path = Path(path)
     if not path.is_file():
@@ -400,7 +615,19 @@ def read_truth(
     if spec is not None and fmt in ("tum", "kitti"):
         raise InputError(f"--truth-columns applies to csv truth, not {fmt}")
     text = read_text(path, kind="truth file")
+    try:
+        return _truth_of_text(path, select_record(text, str(path), record, "truth"), fmt, spec, seconds,
+                              sigma, record)
+    except InputError as exc:
+        raise record_error(exc, text, record, "truth") from None
+
+
+def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[str] | None, seconds: float,
+                   sigma: float, record: str | None) -> Truth:
+    """The truth in ``text``, the lines of the file that :func:`read_truth` reads."""
     layout = sniff_layout(text, str(path))
+    if record is not None:
+        check_record_columns(spec, layout.ncols, record, str(path), "truth")
     if isinstance(spec, list) and layout.header is not None and fmt in ("auto", "csv"):
         read = [layout.header[i] for i, key in enumerate(spec) if key != "_" and i < layout.ncols]
         if read and all(map(is_number, read)):
@@ -436,7 +663,9 @@ def read_truth(
     # Only the columns named are read as numbers: the others may hold text (a GPS log's date).
     data = _table(path, rows, want, sorted(set(index.values())) if fmt == "csv" else None)
     theta: NDArray[np.float64] | None
-    geo, north = None, False  # GPS fixes (lat, lon, alt, heading) and whether the heading is given
+    # GPS fixes (lat, lon, alt, heading, or ECEF x, y, z, heading), whether they are ECEF, and
+    # whether the heading is given.
+    geo, ecef, north = None, False, False
     if fmt == "tum":
         t, xy = data[:, 0], data[:, 1:3]
         qx, qy, qz, qw = data[:, 4], data[:, 5], data[:, 6], data[:, 7]
@@ -453,18 +682,20 @@ def read_truth(
         theta = np.arctan2(data[:, 5], data[:, 1])  # atan2(r21, r11)
     else:
         t = data[:, index["t"]]
-        if "lat" in index:
+        ecef = "ecef_x" in index
+        if ecef or "lat" in index:
             _check_geo_range(path, rows, data, header, index)
             north = "heading_deg_north" in index
-            # lat, lon, alt, heading: sorted and thinned with the times, projected after (the
-            # origin is the first fix in time); xy and θ are set from them then.
-            geo = np.column_stack([data[:, index[k]] if k in index else np.zeros(len(t))
-                                   for k in ("lat", "lon", "alt", "heading_deg_north")])
+            # lat, lon, alt, heading (or ECEF x, y, z, heading): sorted and thinned with the times,
+            # projected after (the origin is the first fix in time); xy and θ are set from them then.
+            keys = (*(_ECEF if ecef else ("lat", "lon", "alt")), "heading_deg_north")
+            geo = np.column_stack([data[:, index[k]] if k in index else np.zeros(len(t)) for k in keys])
             xy, theta = geo[:, :2], None
         else:
             xy = data[:, [index["x"], index["y"]]]
             theta = (data[:, index["theta"]] if "theta" in index
                      else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
+            _warn_if_ecef(path, rows, xy, header, index, spec)
     t = to_seconds(t, seconds)
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):
@@ -480,14 +711,14 @@ def read_truth(
         theta = None if theta is None else theta[keep]
         geo = None if geo is None else geo[keep]
     if theta is None:
-        held = _held_fixes(t, geo[:, :2] if geo is not None else xy, path)
+        held = _held_fixes(t, geo[:, :3 if ecef else 2] if geo is not None else xy, path)
         if held is not None:
             t, xy = t[held], xy[held]
             geo = None if geo is None else geo[held]
     if not math.isfinite(sigma) or sigma < 0:
         raise InputError(f"--truth-sigma must be a non-negative number of metres, got {sigma!r}")
     if geo is not None:
-        xy, theta = project_latlon(geo[:, 0], geo[:, 1], geo[:, 2],
-                                   geo[:, 3] if north else None, str(path))
+        project = project_ecef if ecef else project_latlon
+        xy, theta = project(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3] if north else None, str(path))
     return Truth(t.copy(), np.ascontiguousarray(xy, dtype=float),
                  None if theta is None else unwrap_angle(theta), float(sigma), str(path))

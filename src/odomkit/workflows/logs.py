@@ -43,7 +43,7 @@ _COUNTER_BITS = (8, 16, 24, 32, 64)
 
 # The options each format reads; any other option given for it is an error, not ignored.
 _APPLIES = {
-    "csv": {"columns", "cumulative", "wrap_bits", "time_unit"},
+    "csv": {"columns", "cumulative", "wrap_bits", "time_unit", "record"},
     "khepera": {"cumulative", "wrap_bits", "period"},  # cumulative counts by definition
     "snowhite": {"period"},
     "optiodom": set(),
@@ -51,7 +51,7 @@ _APPLIES = {
 }
 _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
           "period": "--period", "time_unit": "--time-unit", "topic": "--topic", "joints": "--joints",
-          "bag_time": "--bag-time", "truth_topic": "--truth-topic"}
+          "bag_time": "--bag-time", "truth_topic": "--truth-topic", "record": "--record"}
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")  # odomkit.io.bag.is_bag, without importing it
 
 
@@ -122,6 +122,10 @@ class LogOptions:
     truth_topic : a ROS bag pose topic that is the log's ground truth (bag only)
     span : the part of the log to use, ``START:END`` from its first row, in seconds or in
         percent of its duration (``:50%`` the first half, ``50%:`` the rest; :func:`parse_span`)
+    record : a text log of tagged records (every line led by a word naming its type, several
+        types in one file): read only the lines of this type, the tag dropped, so that
+        ``columns`` count from the field after it (csv only;
+        :func:`odomkit.io.text.select_record`)
     """
 
     format: str = "auto"
@@ -136,6 +140,7 @@ class LogOptions:
     bag_time: bool = False
     truth_topic: str | None = None
     span: str | None = None
+    record: str | None = None
 
     def __post_init__(self) -> None:
         if self.span is not None:
@@ -285,7 +290,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
             log = read_csv_log(path, parse_columns(options.columns) if options.columns else None,
                                cumulative=options.cumulative, wrap_bits=options.wrap_bits,
                                time_unit=options.time_unit,
-                               example=COLUMN_EXAMPLES[robot_type_name(robot)])
+                               example=COLUMN_EXAMPLES[robot_type_name(robot)], record=options.record)
         return _in_span(log, options)
 
 

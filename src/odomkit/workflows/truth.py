@@ -30,7 +30,9 @@ class TruthOptions:
     interpolate across (None: no limit). ``time_offset`` [s] is how late the truth's clock
     runs against the log's: a fix stamped t is the pose at log time t − ``time_offset``
     (``--truth-time-offset``; None: not given, the robot file's ``[truth] time_offset`` or
-    zero, and ``calibrate --truth`` fits it).
+    zero, and ``calibrate --truth`` fits it). ``record`` reads only the lines of a file of
+    tagged records that this word leads, the tag dropped (``--truth-record``;
+    :func:`odomkit.io.text.select_record`).
     """
 
     path: Path | None = None
@@ -42,6 +44,7 @@ class TruthOptions:
     heading_sigma: float | None = None
     time_sigma: float | None = None
     time_offset: float | None = None
+    record: str | None = None
 
     def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
         """These options with each truth noise and the clock offset not given taken from
@@ -83,7 +86,8 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
 
     sigma, heading_sigma = options.sigma or 0.0, options.heading_sigma or 0.0
     time_sigma = options.time_sigma or 0.0
-    found = (read_truth(options.path, options.format, options.columns, options.time_unit, sigma)
+    found = (read_truth(options.path, options.format, options.columns, options.time_unit, sigma,
+                        record=options.record)
              if options.path is not None else None if log is None else truth_from_log(log))
     if found is None:
         return None
