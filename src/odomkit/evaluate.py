@@ -24,9 +24,10 @@ from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 
 __all__ = [
-    "ALIGNMENTS", "align_track", "COVERAGE_LEVELS", "coverage", "ellipse_points", "evaluate_track", "nees",
-    "nees_bounds", "nees_summary", "pose_errors", "relative_pose_errors", "rpe_pairs", "TrackEvaluation",
-    "umeyama_se2",
+    "ALIGNMENTS", "align_track", "COVERAGE_LEVELS", "coverage", "coverage_range", "coverage_verdicts",
+    "ellipse_points", "evaluate_track", "nees", "nees_bounds", "nees_summary", "nees_verdict",
+    "overall_verdict", "pose_errors", "relative_pose_errors", "rpe_pairs", "TrackEvaluation", "umeyama_se2",
+    "VERDICTS",
 ]
 
 ALIGNMENTS = ("none", "start", "se2")
@@ -305,6 +306,100 @@ def coverage(errors_xy: ArrayLike, cov_xy: ArrayLike,
             raise ModelError(f"coverage levels must be in (0, 1), got {p}")
         out[f"{p:g}"] = float(np.mean(values <= _chi2_2dof(p))) if values.size else None
     return out
+
+
+#: The verdicts of a covariance against its independent samples: ``optimistic`` (too small:
+#: too few samples inside, NEES too large), ``consistent`` (inside the range an honest
+#: covariance's figure falls in), ``pessimistic`` (too large); :func:`overall_verdict` adds
+#: ``mixed`` for coverage that is optimistic at some levels and pessimistic at others.
+VERDICTS = ("optimistic", "consistent", "pessimistic", "mixed")
+
+
+def coverage_range(n: int, level: float, prob: float = 0.95) -> tuple[float, float]:
+    """Where an honest covariance's coverage at ``level`` falls over ``n`` independent samples.
+
+    The count of samples inside the ``level`` ellipse is Binomial(n, level), so the range is
+    its (1 − prob)/2 and (1 + prob)/2 points over n: a consistent covariance's figure falls
+    inside it with probability at least ``prob`` (the count is discrete, so a little more).
+
+    Parameters
+    ----------
+    n : number of independent samples (window ends), ≥ 1
+    level : the ellipse's probability, in (0, 1)
+    prob : the probability the range holds
+
+    Returns
+    -------
+    (low, high) fractions in [0, 1].
+
+    Examples
+    --------
+    >>> coverage_range(6, 0.95)  # 4 to 6 of 6 ends inside
+    (0.6666666666666666, 1.0)
+    """
+    from scipy.special import bdtr  # scipy.stats costs 1.5 s of start-up
+
+    n = validate.positive_int(n, "number of coverage samples")
+    if not 0 < level < 1 or not 0 < prob < 1:
+        raise ModelError(f"coverage level and probability must be in (0, 1), got {level}, {prob}")
+    cdf = bdtr(np.arange(n + 1), n, level)  # P(count ≤ k)
+    tail = (1.0 - prob) / 2.0
+    # The smallest k with P(count ≤ k) ≥ q: the binomial quantile (scipy.stats.binom.ppf).
+    low, high = (int(np.searchsorted(cdf, q, side="left")) for q in (tail, 1.0 - tail))
+    return min(low, n) / n, min(high, n) / n
+
+
+def coverage_verdicts(fractions: dict[str, float | None], n: int, prob: float = 0.95
+                      ) -> dict[str, str | None]:
+    """Each level's coverage (:func:`coverage`'s dict) against :func:`coverage_range`.
+
+    Parameters
+    ----------
+    fractions : {level text ("0.95"): fraction or None}
+    n : the independent samples they were counted over (None verdicts when 0)
+    prob : the probability each range holds
+
+    Returns
+    -------
+    {level text: "optimistic" (below its range: the covariance too small), "pessimistic"
+    (above: too large), "consistent", or None where the fraction is None}.
+
+    Examples
+    --------
+    >>> coverage_verdicts({"0.5": 0.57, "0.95": 0.78}, 37)
+    {'0.5': 'consistent', '0.95': 'optimistic'}
+    """
+    out: dict[str, str | None] = {}
+    for level, value in fractions.items():
+        if value is None or n < 1:
+            out[level] = None
+            continue
+        low, high = coverage_range(n, float(level), prob)
+        out[level] = "optimistic" if value < low else "pessimistic" if value > high else "consistent"
+    return out
+
+
+def overall_verdict(verdicts: dict[str, str | None]) -> str | None:
+    """One word for the levels' verdicts (:func:`coverage_verdicts`): ``optimistic`` or
+    ``pessimistic`` when some levels are and none the other way, ``mixed`` when both (heavy
+    tails: the core of the errors narrower than predicted and their tails wider, which no
+    scaling of the covariance mends), ``consistent`` when none is, None without any."""
+    given = {v for v in verdicts.values() if v is not None}
+    if not given:
+        return None
+    if {"optimistic", "pessimistic"} <= given:
+        return "mixed"
+    return ("optimistic" if "optimistic" in given else "pessimistic" if "pessimistic" in given
+            else "consistent")
+
+
+def nees_verdict(mean: float | None, bounds: tuple[float, float] | list[float] | None) -> str | None:
+    """The mean NEES against its bounds (:func:`nees_bounds`): ``optimistic`` above them,
+    ``pessimistic`` below, else ``consistent``; None without a mean."""
+    if mean is None or bounds is None:
+        return None
+    low, high = bounds
+    return "optimistic" if mean > high else "pessimistic" if mean < low else "consistent"
 
 
 @dataclass(frozen=True)

@@ -72,9 +72,15 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     keys = {"rows_evaluated", "rows_skipped", "final_position_error", "max_position_error", "ate_rmse", "rpe",
             "drift_percent", "windows", "nees_position_mean", "nees_position_median", "nees_bounds",
             "coverage", "inside_95_fraction"}
+    # Added beside the DESIGN.md keys (none renamed): the honesty verdicts and the whole run's start.
+    keys |= {"coverage_bounds", "coverage_verdict", "coverage_overall", "nees_verdict", "verdict_note",
+             "start_time", "start_heading", "start_heading_sigma", "start_heading_fitted"}
     assert set(got) == keys | {"window", "per_log", "warnings"} and got["window"] == "10 s"
     assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
+    assert set(got["coverage_bounds"]) == set(got["coverage_verdict"]) == set(got["coverage"])
+    assert got["start_heading"] is None and not got["start_heading_fitted"]  # two logs: each in per_log
     assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends", "warnings"}] * 2
+    assert all(p["start_heading"] is not None and not p["start_heading_fitted"] for p in got["per_log"])
     assert [len(p["window_ends"]) for p in got["per_log"]] == [p["windows"] for p in got["per_log"]]
     assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees"}
     assert got["windows"] == sum(p["windows"] for p in got["per_log"])

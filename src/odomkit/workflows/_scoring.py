@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from odomkit.workflows.truth import TruthOptions
 
 __all__ = ["FEW_WINDOW_ENDS", "issue_notes", "NEAR_SINGULAR", "NO_ERROR", "pooled_report", "require_truth",
-           "score_rows", "Scored", "summarise", "TrackRows"]
+           "score_rows", "Scored", "summarise", "TrackRows", "verdicts"]
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,12 @@ class Scored:
     # Windows left out and why, (what, count): its warning reads "{label}: {count} {what}",
     # and several logs' are pooled into one line (:func:`_pooled_notes`)
     left_out: tuple[tuple[str, int], ...] = ()
+    # The whole run's start (a log's: run_start): log time [s], heading and its σ [rad], and
+    # whether the heading was fitted to position-only truth (the whole-run figures hang on it)
+    start_time: float | None = None
+    start_heading: float | None = None
+    start_heading_sigma: float | None = None
+    start_heading_fitted: bool = False
 
 
 @dataclass(frozen=True)
@@ -232,13 +238,76 @@ def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: 
     window per log), ``per_log`` (each with its own ``warnings``), and ``warnings``: every
     log's, those that say the same of several logs in one line (:func:`_pooled_notes`)."""
     out: dict[str, Any] = {"window": window, **summarise(scored, rpe_distances)}
-    out["per_log"] = [{"log": s.label, **summarise([s], rpe_distances), **_window_ends(s),
+    out.update(verdicts(out, scored, windowed=window is not None))
+    out.update(_start(scored[0]) if len(scored) == 1 else _start(None))
+    out["per_log"] = [{"log": s.label, **(one := summarise([s], rpe_distances)),
+                       **verdicts(one, [s], windowed=window is not None), **_start(s), **_window_ends(s),
                        "warnings": list(s.warnings)} for s in scored]
     out["warnings"] = _pooled_notes(scored, noun)
     few = _few_ends_note(out["windows"])
     if few:
         out["warnings"].append(few)
     return out
+
+
+def _start(s: Scored | None) -> dict[str, Any]:
+    """The keys of the whole run's start (:class:`Scored`'s ``start_*``): None for a track,
+    or (pooled) for several logs, each of which has its own in ``per_log``."""
+    return {"start_time": None if s is None else s.start_time,
+            "start_heading": None if s is None else s.start_heading,
+            "start_heading_sigma": None if s is None else s.start_heading_sigma,
+            "start_heading_fitted": False if s is None else s.start_heading_fitted}
+
+
+def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) -> dict[str, Any]:
+    """The honesty verdicts of a :func:`summarise` of ``scored``: ``coverage_bounds``
+    {level: [low, high]} (:func:`odomkit.evaluate.coverage_range`: where an honest model's
+    coverage falls in 95 % of such tests over this many window ends), ``coverage_verdict``
+    {level: "optimistic" | "consistent" | "pessimistic"}, ``coverage_overall`` (one word,
+    :func:`odomkit.evaluate.overall_verdict`), ``nees_verdict`` (the mean against
+    ``nees_bounds``) and ``verdict_note``, which of the two to trust where they differ.
+
+    Only for window ends (``windowed``), the independent samples both ranges assume; every
+    key None otherwise (track rows, one window per log)."""
+    from odomkit.evaluate import coverage_range, coverage_verdicts, nees, nees_verdict, overall_verdict
+
+    empty: dict[str, Any] = {"coverage_bounds": None, "coverage_verdict": None, "coverage_overall": None,
+                             "nees_verdict": None, "verdict_note": None}
+    if not windowed or summary.get("nees_position_mean") is None:
+        return empty
+    he = np.concatenate([s.honesty_errors for s in scored])
+    hc = np.concatenate([s.honesty_cov for s in scored])
+    values = nees(he, hc)
+    values = values[np.isfinite(values)]
+    n = int(values.size)
+    cover = summary["coverage"]
+    levels = coverage_verdicts(cover, n)
+    overall = overall_verdict(levels)
+    by_nees = nees_verdict(summary["nees_position_mean"], summary["nees_bounds"])
+    note = None
+    if overall is not None and by_nees is not None and overall != by_nees:
+        if overall == "mixed":
+            low = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "optimistic"]
+            high = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "pessimistic"]
+            note = (f"coverage is optimistic at {', '.join(low)} and pessimistic at {', '.join(high)} "
+                    "(heavy tails: more ends than predicted near the centre and beyond the outer "
+                    f"ellipses), which the NEES mean ({by_nees}) averages away: trust coverage, level by "
+                    "level; no scaling of the covariance mends it")
+        else:
+            big, mid = float(values.max()), float(np.median(values))
+            why = (f"more ends fall outside the ellipses than an honest covariance's would, while the mean "
+                   f"averages them with many small ones (median {mid:.3g})" if overall == "optimistic" else
+                   f"a few large ends pull the mean up (largest {big:.3g}, median {mid:.3g})"
+                   if by_nees == "optimistic" else
+                   f"more ends fall inside the ellipses than an honest covariance's would, while a few large "
+                   f"ones hold the mean up (largest {big:.3g}, median {mid:.3g})" if overall == "pessimistic"
+                   else f"the mean weighs each end by its size (largest {big:.3g}, median {mid:.3g})")
+            note = (f"the NEES mean says {by_nees} but coverage says {overall}: trust coverage, which "
+                    f"counts each window end once, in or out; {why}; each end is in --json's per_log "
+                    "window_ends")
+    return {"coverage_bounds": {k: list(coverage_range(n, float(k))) for k in cover},
+            "coverage_verdict": levels, "coverage_overall": overall, "nees_verdict": by_nees,
+            "verdict_note": note}
 
 
 def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:
@@ -282,9 +351,9 @@ def _few_ends_note(ends: int) -> str | None:
     an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points)."""
     if not 0 < ends < FEW_WINDOW_ENDS:
         return None
-    from scipy.stats import binom
+    from odomkit.evaluate import coverage_range
 
-    low, high = (float(binom.ppf(q, ends, 0.95)) / ends for q in (0.025, 0.975))
+    low, high = coverage_range(ends, 0.95)
     return (f"only {ends} window end(s): coverage moves in steps of 1/{ends}, and an honest model's "
             f"95 % figure falls anywhere in {low:.2f}..{high:.2f} in 95 % of such tests; score more "
             "windows (more or longer logs, shorter windows) before judging the model")

@@ -194,6 +194,7 @@ def evaluate_logs(
                               method=method, progress=progress, errors_only=True)
     reports = [pooled_report(scored, rpe_distances, None if spec is None else str(spec))
                for spec, scored in zip(specs, by_spec, strict=True)]
+    _unscored_lengths(specs, by_spec, reports)
     out = dict(reports[0])
     if len(reports) > 1:
         out["warnings"] = several_lengths_notes(by_spec, reports)
@@ -220,6 +221,41 @@ def evaluate_logs(
                                                           np.concatenate([a.honesty_cov for a in alone]))
         out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"], window))}
     return out
+
+
+def _unscored_lengths(specs: Sequence[Any], by_spec: Sequence[Sequence[Scored]],
+                      reports: list[dict[str, Any]]) -> None:
+    """An error when no window end of any ``--window`` length could be scored (every window
+    left out: a test of nothing, which used to end with "this is the test to trust" and exit
+    0), naming why and what to do; where other lengths were scored, a warning in each
+    unscored length's report instead."""
+    empty = [i for i, (spec, r) in enumerate(zip(specs, reports, strict=True))
+             if spec is not None and r["windows"] == 0]
+    if not empty:
+        return
+    whys = []
+    for i in empty:
+        counts: dict[str, int] = {}
+        for s in by_spec[i]:
+            for what, n in s.left_out:
+                counts[what] = counts.get(what, 0) + n
+        whys.append("; ".join(f"{n} {what}" for what, n in counts.items()) or "every window was left out")
+    advice = []
+    if any("start heading" in w for w in whys):
+        advice.append("longer windows (each must start where the fixes give a heading: the robot moving, "
+                      "fixes on both sides) or truth with heading")
+    if any("travelled less" in w for w in whys):
+        advice.append("longer windows or a smaller --min-travel")
+    todo = " or ".join(advice) or "longer windows"
+    if len(empty) == sum(spec is not None for spec in specs):
+        said = "; ".join(f"{specs[i]} windows: {w}" if len(empty) > 1 else w
+                         for i, w in zip(empty, whys, strict=True))
+        logs = by_spec[empty[0]]
+        raise InputError(f"no window end could be scored, so there is no honesty test: {said}; use {todo}",
+                         source=logs[0].label if len(logs) == 1 else None)
+    for i, why in zip(empty, whys, strict=True):
+        reports[i]["warnings"].append(f"no window end could be scored ({why}): this length tests nothing; "
+                                      f"use {todo}")
 
 
 def _check_plot(plot: str | Path | None, overwrite: bool, inputs: Sequence[str | Path]) -> None:

@@ -79,6 +79,8 @@ class PreparedLog:
     reason: str | None
     scatter: float | None = None  # the truth's fixes about a smooth path [m] (truth.scatter_sigma)
     off: tuple[str, ...] = ()  # travel or turning off the truth's by more than 2x: a unit, a robot file
+    # Each window of ``basis``, in its order, as warnings name it: "log.csv 10-20 s"
+    window_labels: tuple[str, ...] = ()
 
 
 def prepare_log(task: LogTask) -> PreparedLog:
@@ -107,7 +109,9 @@ def prepare_log(task: LogTask) -> PreparedLog:
 
         scatter = scatter_sigma(truth)
         off = motion_problems(log, task.robot, truth, task.truth.max_gap, noise=truth_noise(truth, scatter))
-        return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off))
+        short = Path(name).name
+        labels = tuple(f"{short} {log.t[w.start]:.6g}-{log.t[w.end]:.6g} s" for w in basis.windows)
+        return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off), labels)
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
@@ -317,13 +321,17 @@ def fit_noise_files(
                      "position-only truth")
     held = truths[0].held  # the truth-noise flags are shared by every log
     names = [p.name for p in used]
+    labels = [p.window_labels for p in used]
     if groups is not None:
         of_used = [g for p, g in zip(prepared, groups, strict=True) if p.basis is not None]
         bases, names = _grouped(bases, of_used)
+        # Merged as the bases are (WindowBasis.merge: the group's logs in order).
+        labels = [tuple(x for lab, g in zip(labels, of_used, strict=True) if g == name for x in lab)
+                  for name in names]
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                         level=level, log_names=names, cross_validate=cross_validate,
-                        trim=trim, truth_held=held)
+                        trim=trim, truth_held=held, window_labels=labels)
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
                                    "variances": list(fit.variances.values()),
