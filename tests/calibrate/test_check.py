@@ -244,3 +244,73 @@ def test_no_check_passes_a_figure_that_is_not_a_number():
     t[5] = np.nan
     found = check_time(OdometryLog(t, make_log(left, right).channels))
     assert statuses(found, "time") == ["fail"] and "row(s) 6" in found[0].message
+
+
+def _unicycle_stand_then_drive(stand=40.0, dt=0.1, drive=30.0, v=0.4):
+    """A unicycle that stands ``stand`` s, speeds up over 1 s to ``v`` and drives straight:
+    its log (speed, yaw rate) and true positions at each row."""
+    t = np.arange(0.0, stand + drive, dt)
+    speed = np.clip((t - stand) / 1.0, 0.0, 1.0) * v
+    log = OdometryLog(t, {"speed": speed, "yaw_rate": np.zeros(t.size)})
+    x = np.concatenate(([0.0], np.cumsum(speed[:-1] * dt)))
+    return log, np.column_stack((x, np.zeros(t.size)))
+
+
+def test_a_truth_that_moves_before_the_odometry_starts_is_its_clock_not_a_stuck_encoder():
+    """TUC SLAM study: the robot stands 42 s, and the truth starts moving 0.5 s before the
+    odometry does (its fixes stamped 0.5 s early: it leads). That was a FAIL blaming a truth
+    that *lags*; it is a warning that measures the lead."""
+    from odomkit.robot import Unicycle
+
+    log, xy = _unicycle_stand_then_drive()
+    lead = 0.5
+    truth = Truth(log.t[::2] - lead, xy[::2], None)  # each pose stamped 0.5 s early
+    found = check_stuck(log, Unicycle(), truth)
+    assert statuses(found, "stuck") == ["warn"], found
+    assert "before the odometry" in found[0].message and "leads" in found[0].message
+    said = float(found[0].message.split("all of it in the last ")[1].split()[0])
+    assert said == pytest.approx(lead, abs=0.25)
+    # stamped late (it lags): the same stand, the truth still moving after the odometry stops
+    back = OdometryLog(log.t, {"speed": log.channels["speed"][::-1].copy(), "yaw_rate": np.zeros(len(log))})
+    x_back = np.concatenate(([0.0], np.cumsum(back.channels["speed"][:-1] * 0.1)))
+    late = Truth(log.t[::2] + lead, np.column_stack((x_back, np.zeros(len(log))))[::2], None)
+    found = check_stuck(back, Unicycle(), late)
+    assert statuses(found, "stuck") == ["warn"] and "lags" in found[0].message
+
+
+def test_a_truth_that_creeps_while_the_robot_stands_is_a_warning():
+    """The truth drifts 8 cm evenly over 40 s while the robot stands (its clock right): no
+    robot drives on a stuck encoder at 2 mm/s beside 0.4 m/s."""
+    from odomkit.robot import Unicycle
+
+    log, xy = _unicycle_stand_then_drive()
+    creep = np.where(log.t < 40.0, 0.002 * log.t, 0.08)
+    drifting = xy + np.column_stack((np.zeros(len(log)), creep))
+    found = check_stuck(log, Unicycle(), Truth(log.t, drifting, None))
+    assert statuses(found, "stuck") == ["warn"] and "creep" in found[0].message
+
+
+def test_a_speed_that_reads_zero_at_a_crawl_is_named_and_a_stuck_speed_still_fails():
+    """smartLoc car study: the speed reads 0 below 0.3 m/s as the car stops for 1 s, and the
+    GNSS fixes jump 0.4 m while it stands. A warning naming a cutoff near 0.3 m/s. The same
+    speed channel stuck at 0 for 3 s of driving at 8 m/s still fails."""
+    from odomkit.robot import Unicycle
+
+    dt = 0.2
+    t = np.arange(0.0, 60.0, dt)
+    # 8 m/s, brake at 1 m/s² to a stop at t = 28 s, stand 1 s, speed up again at 1 m/s²
+    true_speed = np.clip(np.minimum(np.abs(t - 28.5) - 0.5, 8.0), 0.0, None)
+    x = np.concatenate(([0.0], np.cumsum(true_speed[:-1] * dt)))
+    rng = np.random.default_rng(3)
+    xy = np.column_stack((x, np.zeros(t.size))) + rng.normal(0.0, 0.02, (t.size, 2))
+    xy[(t >= 28.0) & (t < 33.0), 1] += 0.4  # a multipath jump while the car stands
+    truth = Truth(t, xy, None)
+    read = np.where(true_speed < 0.3, 0.0, true_speed)
+    log = OdometryLog(t, {"speed": read, "yaw_rate": np.zeros(t.size)})
+    found = check_stuck(log, Unicycle(), truth)
+    assert statuses(found, "stuck") == ["warn"], found
+    cutoff = float(found[0].message.split("reads 0 below about ")[1].split()[0])
+    assert 0.3 <= cutoff <= 0.6
+    stuck = np.where((t > 10.0) & (t < 13.0), 0.0, true_speed)
+    found = check_stuck(OdometryLog(t, {"speed": stuck, "yaw_rate": np.zeros(t.size)}), Unicycle(), truth)
+    assert statuses(found, "stuck") == ["fail"] and "stuck encoder" in found[0].message

@@ -33,12 +33,15 @@ def test_a_good_run_passes(run_cli, diff_data):
     assert code == 0, err
     # Every check passes but one about the truth itself: this OptiTrack body sits 9 mrad off
     # the robot's axis (tests/calibrate/test_check_truth.py), which is said, not failed.
+    # The identifiability figures count the odometry's drift against the truth: the wheel
+    # base of a 16 m run may come out weakly pinned (a warning, never a failure).
     assert report["ok"] and all(f["status"] == "ok" for f in report["findings"]
-                                if f["check"] != "truth_heading"), report["findings"]
+                                if f["check"] not in ("truth_heading", "identifiable")), report["findings"]
+    assert all(f["status"] != "fail" for f in _by_check(report, "identifiable"))
     (heading,) = _by_check(report, "truth_heading")
     assert heading["status"] == "warn" and -0.012 < heading["value"] < -0.007
     assert report["truth"] == str(run)  # the run's own OptiTrack columns
-    assert len(report["next"]) == 1 and "rigid body" in report["next"][0]
+    assert "rigid body" in report["next"][0]
     # a UMBmark square run passes too, with the advice to turn the other way as well
     code, report, _ = _run(run_cli, diff_data / "square" / "230620202042" / "230620202042_run-01.csv")
     assert code == 0 and report["ok"]

@@ -380,9 +380,20 @@ def _channels_against_positions(log: OdometryLog, robot: Robot, truth: Truth,
               if math.isfinite(best) else "")
     detail = (f" (each mapping's path turned and shifted onto {len(fixes)} stretch(es) of about {length:.2g} "
               f"s of fixes: {leaves}the fixes spread {math.sqrt(spread / n):.3g} m RMS)")
+    # Why two mappings tie, from what was measured (UWB user study: "the log turns too
+    # little" of a robot that turned 52 rad, whose robot file halved its wheel base).
+    turned = sum(float(np.sum(np.abs(np.diff(at_fixes[0][s, 2])))) for s in stretches)
+    rms = math.sqrt(best * spread / (2 * n - 3 * len(fixes))) if math.isfinite(best) else math.nan
+    if math.isfinite(rms) and rms > 3.0 * noise and turned > math.pi:
+        close_why = (f"the log turns {turned:.3g} rad over those stretches, but the best mapping leaves "
+                     f"{rms / max(noise, 1e-12):.3g}x the truth's noise ({1000 * noise:.3g} mm): the "
+                     "odometry's drift, a robot-file error (wheel base, wheel size) or a clock offset "
+                     "misfits every mapping alike")
+    else:
+        close_why = (f"the log turns {turned:.3g} rad over those stretches: too little, or the truth too "
+                     "short or too noisy, to tell the mappings apart")
     found = _verdict(misfit[0], others, floor=0.0, what="the truth's positions", detail=detail,
-                     close_why="the log turns too little, or the truth is too short or too noisy, to "
-                     "tell the mappings apart",
+                     close_why=close_why,
                      close_advice="drive turns both ways inside the truth's coverage (or give a truth with "
                      "heading), then check again",
                      poor_advice="check the robot file and the truth's clock; a truth whose noise is as "

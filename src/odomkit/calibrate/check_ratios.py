@@ -15,7 +15,10 @@ the user is told nothing about why. Both show plainly against a truth, position-
 * **turning**: with a heading truth, its heading change over each stretch against the
   odometry's; with a position-only truth, the change of direction between consecutive
   stretches' chords, the same on both sides (a chord's direction is the heading at its
-  middle for a steady turn, and flips alike on both sides where the robot reverses).
+  middle for a steady turn, and flips alike on both sides where the robot reverses), also
+  across stretches where the robot stands or turns on the spot (their chords are too short to
+  have a direction); a pair counts where the truth turns beyond its noise or the odometry
+  turns well beyond the wobble a smoothed truth does not show.
 
 Each is a ratio of sums (odometry over truth), with a standard error from the spread of the
 stretches' own ratios. The ratios name a likely cause where they sit on a known unit factor,
@@ -34,12 +37,12 @@ from numpy.typing import NDArray
 
 from odomkit import units
 from odomkit.calibrate.check_finding import Finding, Status
-from odomkit.log import OdometryLog
+from odomkit.log import SPEED_CHANNELS, OdometryLog
 from odomkit.robot import Car, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
 __all__ = ["check_truth_motion", "motion_problems", "MotionRatios", "motion_ratios", "RATIO_FAIL",
-           "TRAVEL_WARN", "TURN_WARN"]
+           "TRAVEL_WARN", "TURN_WARN", "unit_mixup"]
 
 #: A stretch's truth chord counts where it exceeds this many times the chord's own noise
 #: (σ√2 for two fixes of σ per axis): a 7 % error on one stretch's ratio at worst, and a
@@ -59,10 +62,21 @@ STRAIGHT_RADIUS = 20.0
 STRAIGHT_TURN_FLOOR = 0.01
 #: Each half of a straight stretch holds at least this share of its distance.
 EVEN_SHARE = 0.3
-#: A turn counts where odometry or truth turns more than this [rad], and more than
-#: :data:`TURN_SIGMAS` times the truth turn's own noise.
+#: A turn counts where the truth turns more than this [rad], and more than
+#: :data:`TURN_SIGMAS` times its turn's own noise, ...
 MIN_TURN = 0.1
 TURN_SIGMAS = 4.0
+#: ... or where the odometry turns more than this [rad] (and the truth's noise): a truth
+#: that barely turns against an odometry that spins (a unit read wrong) still gives its
+#: ratio. Higher than :data:`MIN_TURN` because the odometry's own short-term wobble, which a
+#: smoothed truth does not show, is not in the truth's noise: chosen where either side passed
+#: 0.1 rad, the pairs of a corridor robot's 1.2 s chords that passed only by the odometry's
+#: wobble (0.11 rad against the truth's 0.00) made it turn 1.54 × as much as the truth,
+#: against 0.91 with a heading truth and a calibrated yaw-rate scale of 1.03 (TUC SLAM study).
+ODOMETRY_TURN = 0.5
+#: Two chords' directions this close to a half turn apart [rad] are a turn round (a robot
+#: turning on the spot between two drives): its sign is the odometry's.
+HALF_TURN_MARGIN = 0.5
 #: Fewer stretches than this give no ratio.
 MIN_STRETCHES = 5
 #: The longest stretch tried [s]: a stretch span doubles from the truth's heading span until
@@ -264,26 +278,50 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
         odo_turn = heading_at[last] - heading_at[first]
         turn_noise = np.full(truth_turn.shape, math.sqrt(2.0) * truth.heading_sigma)
     else:
-        # Consecutive stretches (sharing a fix), both with chords beyond the noise and driven
-        # the same way: the truth's turn between their chords' directions (a chord's direction
-        # is the heading at its middle on a steady turn, turned by π when reversing), with its
-        # noise from each direction's σ√2/chord, against the change of the odometry's own
-        # mean heading over each stretch (unwrapped: an odometry that spins more than a turn
-        # between them still counts every turn).
+        # Each stretch with a chord beyond the noise and the next such one, driven the same
+        # way, with no gap in the truth between them (consecutive stretches, or stretches
+        # without a chord between: a robot that turns on the spot between two drives, as a
+        # corridor robot turns round, shows its turn only across them): the truth's turn
+        # between their chords' directions (a chord's direction is the heading at its
+        # middle on a steady turn, turned by π when reversing), with its noise from each
+        # direction's σ√2/chord, against the change of the odometry's own mean heading over
+        # each stretch (unwrapped: an odometry that spins more than a turn between two
+        # consecutive stretches still counts every turn).
         way = np.sign(travelled[last] - travelled[first])
-        pair = long_enough[:-1] & long_enough[1:] & (last[:-1] == first[1:]) & (way[:-1] == way[1:])
-        a, b = np.flatnonzero(pair), np.flatnonzero(pair) + 1
+        chain = np.cumsum(np.concatenate(([True], last[:-1] != first[1:])))
+        chorded = np.flatnonzero(long_enough)
+        a, b = chorded[:-1], chorded[1:]
+        same = (chain[a] == chain[b]) & (way[a] == way[b])
+        a, b = a[same], b[same]
         ang = np.arctan2(truth_step[:, 1], truth_step[:, 0])
         truth_turn = np.angle(np.exp(1j * (ang[b] - ang[a])))
         mean_heading = (heading_sum[last] - heading_sum[first]) / np.maximum(
             rolled[last] - rolled[first], 1e-300)
         odo_turn = mean_heading[b] - mean_heading[a]
+        # A turn round lies at ±π between the chords, either sign alike: the odometry's.
+        round_ = (np.abs(truth_turn) > math.pi - HALF_TURN_MARGIN) & (truth_turn * odo_turn < 0)
+        truth_turn = np.where(round_, truth_turn + 2 * math.pi * np.sign(odo_turn), truth_turn)
+        # Across standing stretches the chords cannot count whole turns: more than a turn and
+        # a half on the odometry is left out there.
+        countable = (b == a + 1) | (np.abs(odo_turn) <= 1.5 * math.pi)
+        a, b = a[countable], b[countable]
+        truth_turn, odo_turn = truth_turn[countable], odo_turn[countable]
         with np.errstate(divide="ignore"):
             turn_noise = math.sqrt(2.0) * noise * np.hypot(1 / truth_chord[a], 1 / truth_chord[b])
-    # Chosen on the larger of the two turns, so that neither side's turns alone pick them: a
-    # truth that barely turns against an odometry that spins still gives its ratio.
-    larger = np.maximum(np.abs(truth_turn), np.abs(odo_turn))
-    turning = (larger >= MIN_TURN) & (larger >= TURN_SIGMAS * turn_noise)
+    beyond_noise = np.maximum(np.abs(truth_turn), np.abs(odo_turn)) >= TURN_SIGMAS * turn_noise
+    if heading is not None:
+        # Chosen on the larger of the two turns over the same stretch, so that neither
+        # side's turns alone pick them: a truth that barely turns against an odometry that
+        # spins still gives its ratio.
+        turning = beyond_noise & (np.maximum(np.abs(truth_turn), np.abs(odo_turn)) >= MIN_TURN)
+    else:
+        # Chosen on each side's turn against its own threshold: the truth's beyond MIN_TURN
+        # (and its noise), the odometry's beyond ODOMETRY_TURN, so that a truth that barely
+        # turns against an odometry that spins still gives its ratio, while the odometry's
+        # short-term wobble, which the chords smooth away and the truth's noise does not
+        # hold, cannot pick pairs on its own (a pair chosen by one side's wobble biases the
+        # ratio that side's way).
+        turning = beyond_noise & ((np.abs(truth_turn) >= MIN_TURN) | (np.abs(odo_turn) >= ODOMETRY_TURN))
     way_turned = np.sign(odo_turn + truth_turn)[turning]
     turn, turn_se = _ratio(way_turned * odo_turn[turning], way_turned * truth_turn[turning])
     return MotionRatios(travel, travel_se, int(np.count_nonzero(is_straight)), turn, turn_se,
@@ -295,6 +333,16 @@ def _unit(ratio: float, units: tuple[tuple[float, str, str], ...]) -> tuple[str,
     for factor, what, fix in units:
         if abs(math.log(ratio / factor)) <= _UNIT_TOLERANCE:
             return what, fix
+    return None
+
+
+def unit_mixup(travel: float, turn: float) -> str | None:
+    """What a travel ratio or a turning gain (odometry over truth) near a unit factor says
+    (``"a speed in mph read as m/s"``), or None: a unit read wrong, which the user fixes
+    at the column, not by calibrating it away."""
+    for ratio, table in ((travel, _TRAVEL_UNITS), (turn, _TURN_UNITS)):
+        if math.isfinite(ratio) and ratio > 0 and (found := _unit(ratio, table)) is not None:
+            return found[0]
     return None
 
 
@@ -313,7 +361,8 @@ def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool) -> Finding:
     if unit is not None:
         return Finding("travel_ratio", status, f"{said}: {unit[0]}?", unit[1], r.travel)
     if isinstance(robot, DiffDrive):
-        entry = "m_per_tick (the wheels' radius and ticks per revolution)"
+        entry = ("the wheel speeds' unit (m/s) and c_left, c_right" if speed_fed
+                 else "m_per_tick (the wheels' radius and ticks per revolution)")
     else:
         entry = "the speed's unit and c_scale" if speed_fed else "m_per_tick"
     why = ("no calibration error is this large" if status == "fail"
@@ -366,7 +415,7 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
         r = motion_ratios(log, robot, truth, max_gap, noise)
     found = []
     if math.isfinite(r.travel):
-        found.append(_travel_finding(r, robot, "speed" in log.channels))
+        found.append(_travel_finding(r, robot, not SPEED_CHANNELS.isdisjoint(log.channels)))
     else:
         found.append(Finding("travel_ratio", "ok", f"only {r.travel_stretches} straight stretch(es) where "
                              "the truth moves beyond its noise: the odometry's travel not compared with the "

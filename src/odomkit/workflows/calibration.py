@@ -8,11 +8,14 @@ Nothing existing is overwritten unless ``overwrite=True`` (CLI ``--force``).
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from odomkit.calibrate.exact import ExactCalibration, calibrate_exact
 from odomkit.calibrate.export import twist_covariance
@@ -181,11 +184,24 @@ def calibrate_files(
             # truths above are already on the log's clock).
             given = truth[0].time_offset
             gaps = [o.max_gap for o in truth]
+            def fit_from(start: Any) -> ExactCalibration:
+                return calibrate_positions(runs, truths, start, fit_time_offset=given is None,
+                                           steering_cubic=steering_cubic)
+
             try:
-                cal = calibrate_positions(runs, truths, robot, fit_time_offset=given is None,
-                                          steering_cubic=steering_cubic)
+                with warnings.catch_warnings(record=True) as said_first:
+                    warnings.simplefilter("always")
+                    cal = fit_from(robot)
             except ModelError as exc:
-                raise ModelError(str(exc) + _why_off(runs, truths, robot, gaps)) from exc
+                cal = None
+                failed = exc
+            kept = cal
+            cal = _better_start(cal, runs, truths, robot, gaps, fit_from)
+            if cal is not None and cal is kept:  # the fit from the file's values stands: what it said too
+                for w in said_first:
+                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+            if cal is None:
+                raise ModelError(str(failed) + _why_off(runs, truths, robot, gaps)) from failed
             # A unit read wrong can also land in a local minimum inside the range (mph read as
             # m/s on a simulated car: c_scale 0.71, wheel base 1.65 m, 65 m residuals).
             if off := _why_off(runs, truths, robot, gaps, only_failures=True):
@@ -314,6 +330,94 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
                       f"for every gain on the steering ({gains}) as well as the length; if the length is "
                       "known, check the steering's unit and ratio (odomkit check --truth compares turning)",
                       UserWarning, stacklevel=3)
+
+
+#: A calibration from a start the travel and turning ratios suggest replaces the robot
+#: file's when its residual variance is below this share of the file's start's.
+RESTART_GAIN = 0.5
+
+
+def _ratio_start(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot,
+                 max_gaps: Sequence[float | None]) -> tuple[Any, str] | None:
+    """A start for the calibration from the odometry's travel and turning against the truth
+    (:func:`odomkit.calibrate.check_ratios.motion_ratios`, the median over the runs) where
+    either is off beyond check's warning, and what it changed; None where both are within
+    it (or cannot be measured)."""
+    from odomkit.calibrate.check_ratios import TRAVEL_WARN, TURN_WARN, motion_ratios, unit_mixup
+    from odomkit.robot import GyroOdometry, Unicycle
+
+    ratios = [motion_ratios(log, robot, truth, gap) for log, truth, gap in
+              zip(runs, truths, max_gaps, strict=True)]
+    travel = float(np.nanmedian([r.travel for r in ratios])) if any(
+        np.isfinite(r.travel) for r in ratios) else math.nan
+    turn = float(np.nanmedian([r.turn for r in ratios])) if any(
+        np.isfinite(r.turn) for r in ratios) else math.nan
+    travel_off = math.isfinite(travel) and travel > 0 and abs(math.log(travel)) > math.log(TRAVEL_WARN)
+    # A wheeled base turns by the distance it rolls: its wheel base or steering speaks in the
+    # turning per metre (check_ratios._turn_finding); a gyro's turning is its own.
+    wheeled = isinstance(robot, DiffDrive | Car | Tricycle)
+    gain = turn / travel if wheeled and math.isfinite(travel) and travel > 0 else turn
+    turn_off = math.isfinite(gain) and gain > 0 and abs(math.log(gain)) > math.log(TURN_WARN)
+    if not (travel_off or turn_off) or unit_mixup(travel, gain) is not None:
+        return None  # a unit read wrong is named (check_ratios), not calibrated away
+    changes: dict[str, float] = {}
+    scale = 1 / travel if travel_off else 1.0
+    if isinstance(robot, DiffDrive):
+        if travel_off:
+            changes.update(c_left=robot.c_left * scale, c_right=robot.c_right * scale)
+        if turn_off:
+            changes["wheel_base"] = robot.wheel_base * gain
+    elif isinstance(robot, Car | Tricycle):
+        if travel_off:
+            changes["c_scale"] = robot.c_scale * scale
+        if turn_off:
+            length = "wheel_base" if isinstance(robot, Car) else "wheel_to_axle"
+            changes[length] = float(getattr(robot, length)) * gain
+    elif isinstance(robot, Unicycle):
+        if travel_off:
+            changes["c_scale"] = robot.c_scale * scale
+        if turn_off:
+            changes["yaw_rate_scale"] = robot.yaw_rate_scale / gain
+    elif isinstance(robot, GyroOdometry):
+        if travel_off:
+            changes["m_per_tick"] = robot.m_per_tick * scale
+        if turn_off:
+            changes["gyro_scale"] = robot.gyro_scale / gain
+    if not changes:
+        return None
+    said = ", ".join(f"{k} {v:.4g}" for k, v in changes.items())
+    started: Any = robot  # every vehicle's fields named above are its own
+    return replace(started, **changes), said
+
+
+def _better_start(cal: ExactCalibration | None, runs: Sequence[OdometryLog], truths: Sequence[Truth],
+                  robot: Robot, max_gaps: Sequence[float | None],
+                  fit_from: Callable[[Any], ExactCalibration]) -> ExactCalibration | None:
+    """The calibration from the robot file's values, or from the start the travel and
+    turning ratios suggest (:func:`_ratio_start`) where that fits clearly better
+    (:data:`RESTART_GAIN`) or the file's start failed. A fit from values far off finds a
+    local minimum: a real diff robot whose file halved its wheel base calibrated to
+    c_right 1.32 and a wheel base +25 % (residuals 0.18 m), where the start the turning
+    suggested, 0.166 m, fitted to 0.02 m."""
+    start = _ratio_start(runs, truths, robot, max_gaps)
+    if start is None:
+        return cal
+    try:
+        with warnings.catch_warnings():  # the fit kept says what it has to say
+            warnings.simplefilter("ignore")
+            other = fit_from(start[0])
+    except ModelError:
+        return cal
+    if cal is not None and not other.residual_variance < RESTART_GAIN * cal.residual_variance:
+        return cal
+    other = fit_from(start[0])  # again, for its warnings
+    before = (f"residual RMS {math.sqrt(other.residual_variance):.3g} against "
+              f"{math.sqrt(cal.residual_variance):.3g} from the robot file's values"
+              if cal is not None else "the robot file's values gave no fit")
+    warnings.warn(f"the calibration started again from the values the odometry's travel and turning "
+                  f"against the truth suggest ({start[1]}): {before}; the robot file is far off "
+                  "(odomkit check names the entry)", UserWarning, stacklevel=3)
+    return other
 
 
 def _why_off(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot,
