@@ -401,3 +401,21 @@ def test_a_vehicle_standing_under_wandering_fixes_gets_no_start_heading():
     assert start_heading(fixes, 20.0, t_odo, odometry) is None
     moving = start_heading(fixes, 45.0, t_odo, odometry)
     assert moving is not None and abs(moving[0] - heading) < 0.06
+
+
+def test_a_truth_whose_noise_is_its_clock_still_gives_headings():
+    """Fixes 1 s apart of a car at 8 m/s along heading 0.4, each stamped with a clock error of
+    σ_t = 0.3 s (so off along the path by 8·0.3 = 2.4 m) and a stated position σ of 1 cm: a
+    noise fit can give exactly that split. The residual limit counts the clock's share at
+    the fitted speed, so the heading is fitted (within 3σ of 0.4); on the position σ alone
+    every fit was refused."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 60.0, 1.0)
+    along = 8.0 * (t + rng.normal(0.0, 0.3, t.size))
+    xy = np.outer(along, [np.cos(0.4), np.sin(0.4)])
+    truth = Truth(t, xy, None, 0.01, time_sigma=0.3)
+    found = [heading_from_positions(truth, float(time)) for time in np.arange(10.0, 50.0, 5.0)]
+    assert all(f is not None for f in found), found
+    assert all(abs(h - 0.4) <= 3 * np.sqrt(var) for h, var in found)  # type: ignore[misc]
+    assert all(heading_from_positions(Truth(t, xy, None, 0.01), float(time)) is None
+               for time in np.arange(10.0, 50.0, 5.0))  # the position σ alone refuses them

@@ -75,3 +75,47 @@ def test_windows_span_a_truth_gap_shorter_than_a_window():
 def test_a_window_longer_than_the_log_gives_none():
     t = np.arange(0.0, 5.01, 0.5)
     assert split_windows(t, t, WindowSpec(30.0, "s")) == ([], 0)
+
+
+def test_windows_against_a_sparse_truth_end_at_its_fixes_not_on_its_chords(run_cli, tmp_path):
+    """A unicycle turning 90° in 2.5 s every 5 s, logged at 10 Hz without error, against a
+    noise-free truth with heading given only every 2.2 s (as a reference interpolated between
+    keyframes, thinned to them): window ends at rows between fixes would score the chord
+    between two fixes (centimetres to decimetres off the arc) as odometry error; at the rows
+    of the fixes the odometry is exact, so every window end's error is its rounding."""
+    import json
+
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Unicycle
+    from odomkit.track import dead_reckon_log
+    from odomkit.windows import rows_at_fixes
+
+    t = np.round(np.arange(0.0, 120.0, 0.1), 10)
+    speed = np.full(t.size, 0.6)
+    yaw_rate = np.where((t % 5.0) < 2.5, 0.6283185307179586, 0.0)
+    log = OdometryLog(t, {"speed": speed, "yaw_rate": yaw_rate})
+    poses = dead_reckon_log(log, Unicycle(), pose0=np.zeros(3)).poses
+    keys = np.flatnonzero(np.isclose(np.round(t / 2.2) * 2.2, t, atol=1e-9))
+    log_path, truth_path, robot_path = tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "u.toml"
+    np.savetxt(log_path, np.column_stack((t, speed, yaw_rate)), delimiter=",", header="t,speed,yaw_rate",
+               comments="", fmt="%.17g")
+    np.savetxt(truth_path, np.column_stack((t[keys], poses[keys])), delimiter=",", header="t,x,y,theta",
+               comments="", fmt="%.17g")
+    robot_path.write_text('[robot]\ntype = "unicycle"\n[noise]\nalpha_ss = 1e-4\npsd_gyro = 1e-5\n')
+    valid = np.ones(t.size, dtype=bool)
+    assert np.flatnonzero(rows_at_fixes(t, t[keys], valid)).tolist() == keys.tolist()
+    assert rows_at_fixes(t, t, valid).all()  # a truth as dense as the log: every row
+    code, out, err = run_cli("evaluate", log_path, "--robot", robot_path, "--truth", truth_path,
+                             "--window", "10s", "--json")
+    assert code == 0, err
+    ends = json.loads(out)["per_log"][0]["window_ends"]
+    assert len(ends) >= 8
+    assert max(np.hypot(*e["error"]) for e in ends) < 1e-9
+    # The same windows ended at every row: the chords' error (the test above would fail).
+    chord = []
+    for end in (e["end"] + 0.1 for e in ends):
+        row = int(round(end / 0.1))
+        if row < t.size:
+            truth_xy = [np.interp(t[row], t[keys], poses[keys, k]) for k in (0, 1)]
+            chord.append(np.hypot(*(poses[row, :2] - truth_xy)))
+    assert max(chord) > 0.01

@@ -305,12 +305,18 @@ def _fit_spans(span: float | None, truth: Truth, min_fixes: int) -> tuple[float,
     return (validate.positive(span, "span", unit="s", error=InputError),)
 
 
-def _residual_limit(truth: Truth, given: float | None) -> float:
+def _residual_limit(truth: Truth, given: float | None, speed: float = 0.0) -> float:
     """A heading fit's largest residual RMS per axis [m]: ``given``, else
-    :data:`MAX_RESIDUAL_SIGMAS` × the truth's stated σ, else no limit (inf)."""
+    :data:`MAX_RESIDUAL_SIGMAS` × the truth's stated noise at ``speed`` [m/s], else no limit
+    (inf). The stated noise is its position σ and its clock's, a fix ``time_sigma`` off
+    being off by the speed times that along the path: √(σ² + (v σ_t)²/2) per axis. A
+    noise fit may give the position σ as zero and the clock all of it (a 1 Hz GPS under a
+    car, scored at its fixes: σ 0 m, σ_t 0.56 s), and the position σ alone then refused
+    every heading."""
     if given is not None:
         return given
-    return MAX_RESIDUAL_SIGMAS * truth.sigma if truth.sigma > 0 else math.inf
+    stated = math.sqrt(truth.sigma**2 + 0.5 * (speed * truth.time_sigma) ** 2)
+    return MAX_RESIDUAL_SIGMAS * stated if stated > 0 else math.inf
 
 
 def heading_from_positions(
@@ -414,10 +420,10 @@ def _quadratic_heading(truth: Truth, time: float, span: float, min_fixes: int,
     resid = truth.xy[near] - A @ coef
     dof = near.size - 3
     s2 = float(np.sum(resid**2)) / (2 * dof)  # pooled over x and y
-    if math.sqrt(s2) > _residual_limit(truth, max_residual):
+    vx, vy = coef[1, 0] / scale, coef[1, 1] / scale
+    if math.sqrt(s2) > _residual_limit(truth, max_residual, math.hypot(vx, vy)):
         return None
     sigma2 = max(truth.sigma**2, s2, _resolution(truth.xy[near]) ** 2)
-    vx, vy = coef[1, 0] / scale, coef[1, 1] / scale
     speed2 = vx * vx + vy * vy
     if speed2 == 0.0:
         return None
@@ -510,7 +516,9 @@ def _aligned_heading(truth: Truth, time: float, t_odo: NDArray[np.float64], pose
     c, s = math.cos(phi), math.sin(phi)
     resid = x_c - r_c @ np.array([[c, s], [-s, c]])
     s2 = float(np.sum(resid**2)) / max(2 * near.size - 3, 1)
-    if math.sqrt(s2) > _residual_limit(truth, max_residual):
+    lasted = float(truth.t[near[-1]] - truth.t[near[0]])
+    speed = float(np.linalg.norm(r[-1] - r[0])) / lasted if lasted > 0 else 0.0
+    if math.sqrt(s2) > _residual_limit(truth, max_residual, speed):
         return None
     var = max(truth.sigma**2, s2, _resolution(x) ** 2) / spread
     if var > MAX_HEADING_SIGMA**2:

@@ -44,7 +44,15 @@ from odomkit.kinematics import BodySteps, body_steps
 from odomkit.log import OdometryLog
 from odomkit.noise import NoiseModel, NoiseSet
 from odomkit.robot import Robot
-from odomkit.windows import Window, WindowSpec, cumulative_travel, late_start_note, run_start, split_windows
+from odomkit.windows import (
+    Window,
+    WindowSpec,
+    cumulative_travel,
+    late_start_note,
+    rows_at_fixes,
+    run_start,
+    split_windows,
+)
 
 if TYPE_CHECKING:
     from odomkit.propagate.plan import NoiseArg
@@ -543,8 +551,9 @@ def log_window_basis(
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)
     parts, skipped, notes, counts = [], 0, [], []
+    at_fixes = rows_at_fixes(log.t, truth.t, samples.valid)  # a sparse truth: only next to its fixes
     for spec in specs:
-        valid = samples.valid
+        valid = at_fixes
         windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
         if spec is None and windows and not truth.has_heading:
             valid, note = _whole_log_rows(log, steps, truth, valid, max_gap, method)

@@ -30,6 +30,7 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
 
 __all__ = [
+    "SPARSE_TRUTH",
     "START_STRIDE",
     "Window",
     "WindowSpec",
@@ -37,6 +38,7 @@ __all__ = [
     "late_start_note",
     "parse_window",
     "parse_windows",
+    "rows_at_fixes",
     "run_start",
     "split_windows",
     "truth_stretches",
@@ -205,6 +207,58 @@ def split_windows(
             add(int(rows[i]), int(rows[j]))
             i = j
     return windows, skipped
+
+
+#: A truth whose fixes come this many times farther apart than the log's rows (median
+#: spacings) is sparse: a window starts and ends only at the row next to one of its fixes
+#: (:func:`rows_at_fixes`).
+SPARSE_TRUTH = 1.5
+
+
+def rows_at_fixes(t: ArrayLike, truth_t: ArrayLike, valid: ArrayLike) -> NDArray[np.bool_]:
+    """The rows of ``valid`` a window may start or end at, shape (N,).
+
+    Where the truth's fixes are about as dense as the log's rows, every valid row: the
+    truth interpolated to a row moves it by a fraction of a fix's step. Where they are
+    sparser (:data:`SPARSE_TRUTH`: a 1 Hz GPS under a 10 Hz log, a reference every 2 s),
+    only the row nearest each fix, within half the log's median row spacing: between two
+    fixes the truth is a chord of the path, off it by the path's curvature (a robot turning
+    90° between fixes 2 s apart is 0.25 m off the chord midway, and its interpolated heading
+    lags), and a window ending there would score that as the odometry's error. The row is at
+    most half a row spacing from its fix, over which the interpolation moves the truth by
+    the speed times that time, along the path.
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Time of each log row [s], non-decreasing.
+    truth_t : array_like, shape (K,)
+        Times of the truth's fixes [s] on the log's clock, increasing.
+    valid : array_like of bool, shape (N,)
+        Rows with valid truth (:func:`odomkit.truth.truth_at`).
+
+    Examples
+    --------
+    >>> t = np.round(np.arange(0.0, 3.01, 0.1), 10)
+    >>> rows = rows_at_fixes(t, [0.0, 1.02, 2.0, 2.96], np.ones(t.size, dtype=bool))
+    >>> t[rows].tolist()
+    [0.0, 1.0, 2.0, 3.0]
+    """
+    t = np.asarray(t, dtype=float)
+    fixes = np.asarray(truth_t, dtype=float)
+    ok = np.asarray(valid, dtype=bool)
+    if t.size < 2 or fixes.size < 2:
+        return ok
+    row_step = float(np.median(np.diff(t)))
+    if not float(np.median(np.diff(fixes))) > SPARSE_TRUTH * row_step:
+        return ok
+    inside = fixes[(fixes >= t[0] - row_step / 2) & (fixes <= t[-1] + row_step / 2)]
+    after = np.searchsorted(t, inside).clip(1, t.size - 1)
+    nearest = np.where(np.abs(t[after - 1] - inside) <= np.abs(t[after] - inside), after - 1, after)
+    near = np.abs(t[nearest] - inside) <= row_step / 2
+    at_fix = np.zeros(t.size, dtype=bool)
+    at_fix[nearest[near]] = True
+    return ok & at_fix
 
 
 def truth_stretches(axis: NDArray[np.float64], length: float) -> list[tuple[int, int]]:

@@ -134,7 +134,8 @@ def test_evaluate_on_a_bag_with_a_truth_topic_equals_the_text_log(run_cli, bags)
     for got, want in zip(bag["per_log"][0]["window_ends"], text["per_log"][0]["window_ends"], strict=True):
         assert got["end"] - got["start"] == pytest.approx(want["end"] - want["start"], abs=1e-6)
     close(bag, text, rel=1e-8, abs_=1e-10,
-          skip=("outputs", "warnings", "duration", "source", "sources", "files", "start", "end", "start_time"))
+          skip=("outputs", "warnings", "duration", "source", "sources", "files", "start", "end",
+                "start_time"))
     if bag["start_time"] is not None:  # the start of the scored run, on each log's own clock
         assert bag["start_time"] - bag["per_log"][0]["window_ends"][0]["start"] == pytest.approx(
             text["start_time"] - text["per_log"][0]["window_ends"][0]["start"], abs=1e-6)

@@ -21,6 +21,8 @@ what to do about it:
   leaves (a robot that spins all the time);
 * :func:`~odomkit.calibrate.check_truth.check_truth_heading` — a truth's heading against
   the direction its positions move;
+* :func:`~odomkit.calibrate.check_truth.check_truth_interpolated` — a truth interpolated
+  between sparse keyframes, not measured;
 * :func:`~odomkit.calibrate.check_ratios.check_truth_motion` — the odometry's travel and
   turning against the truth's (a unit read wrong, a robot-file entry missing);
 * :func:`check_motion` — distance and turning both ways;
@@ -49,7 +51,7 @@ from odomkit.calibrate.check_channels import check_channels
 from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_identifiable import check_identifiable, identifiability_sigma
 from odomkit.calibrate.check_ratios import check_truth_motion
-from odomkit.calibrate.check_truth import check_truth_heading
+from odomkit.calibrate.check_truth import check_truth_heading, check_truth_interpolated
 from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at, truth_noise
@@ -451,6 +453,7 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     if any(f.status == "fail" and f.check == "channels" for f in found):
         return found  # what the motion identifies means nothing until the channels are right
     found += check_truth_heading(log, robot, truth, max_gap)
+    found += check_truth_interpolated(truth)
     found += check_truth_motion(log, robot, truth, max_gap)
     found += check_motion(log, robot)
     found += check_identifiable(log, robot, identifiability_sigma(truth, log, robot, max_gap))

@@ -27,8 +27,8 @@ class Finding:
     ----------
     check : str
         Which check (``time``, ``values``, ``counters``, ``stuck``, ``channels``,
-        ``truth_heading``, ``travel_ratio``, ``turn_ratio``, ``distance``, ``turning``,
-        ``identifiable``, ``reading``).
+        ``truth_heading``, ``truth_interpolated``, ``travel_ratio``, ``turn_ratio``, ``distance``,
+        ``turning``, ``identifiable``, ``reading``).
     status : {"ok", "warn", "fail"}
     message : str
         What was found, in the log's numbers.
@@ -39,6 +39,7 @@ class Finding:
         standard error, relative for a scale or length, rad for a steering offset, rad/s
         for a yaw-rate bias; ``channels``: the misfit of the mapping as given;
         ``truth_heading``: the truth's heading minus its direction of motion, rad;
+        ``truth_interpolated``: the share of its moving fixes on straight lines;
         ``travel_ratio``: the odometry's distance over the truth's; ``turn_ratio``: its
         turning over the truth's, per metre driven for a wheeled base).
     """

@@ -13,6 +13,9 @@ least δ), and :mod:`odomkit.calibrate` bends its parameters towards it.
 
 Measured on OptiOdom (docs/results/honesty.md): the tricycle's body is 19 mrad off, the
 differential robot's 6–9 mrad.
+
+:func:`check_truth_interpolated` says when the truth is no measurement at all but a
+reference interpolated between sparse keyframes (:mod:`odomkit.truth_knots`).
 """
 
 from __future__ import annotations
@@ -25,8 +28,9 @@ from odomkit.calibrate.check_finding import Finding
 from odomkit.log import OdometryLog
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at
+from odomkit.truth_knots import INTERPOLATED_ADVICE, truth_knots
 
-__all__ = ["check_truth_heading", "heading_misalignment"]
+__all__ = ["check_truth_heading", "check_truth_interpolated", "heading_misalignment"]
 
 #: Half-width [s] of the stretch over which the truth's direction of motion is taken.
 HALF_SPAN = 0.5
@@ -112,3 +116,15 @@ def check_truth_heading(log: OdometryLog, robot: Robot, truth: Truth | None,
             "align the motion capture's rigid body with the robot's axis, or know that fit-noise's "
             f"truth_heading_sigma will hold at least {abs(delta):.3g} rad of it", delta)]
     return [Finding("truth_heading", "ok", said, value=delta)]
+
+
+def check_truth_interpolated(truth: Truth | None) -> list[Finding]:
+    """The ``truth_interpolated`` finding: a warning where the truth's fixes lie on straight
+    lines between sparse knots (:func:`odomkit.truth_knots.truth_knots`; its ``value`` the
+    share of the moving fixes on them), none otherwise (a measured truth, or none)."""
+    if truth is None:
+        return []
+    knots = truth_knots(truth)
+    if not knots.interpolated:
+        return []
+    return [Finding("truth_interpolated", "warn", knots.describe(), INTERPOLATED_ADVICE, knots.share)]

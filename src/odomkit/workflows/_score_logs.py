@@ -164,6 +164,12 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
             whole = replace(whole, warnings=[*whole.warnings, f"{log.source}: {note}"])
     if noise is None:  # the errors alone (score_logs' errors_only)
         return [whole for _ in specs]
+    if any(spec is not None for spec in specs):  # once per log, whatever the lengths
+        from odomkit.truth_knots import interpolated_note
+
+        knots = interpolated_note(truth)
+        if knots:
+            whole = replace(whole, warnings=[*whole.warnings, f"{log.source}: {knots}"])
     return [_score_windows(log, robot, noise, truth, samples, whole, spec, first=first,
                            first_valid=int(rows[0]), travel=travel, min_travel=min_travel, method=method)
             for spec in specs]
@@ -205,8 +211,9 @@ def start_heading_note(whole: Scored, truth_xy: NDArray[np.float64],
     return (f"the whole run starts from a heading fitted to the position-only truth, "
             f"{whole.start_heading:.4g} ± {sigma:.2g} rad at {whole.start_time:.6g} s, and that heading's "
             f"own uncertainty alone moves the end by ±{end:.3g} m (2σ; final error {final:.3g} m) and the "
-            f"track by ±{rms:.3g} m RMS (ATE {ate:.3g} m): the final error and ATE measure the start heading as "
-            "much as the odometry; use --align se2, or truth with heading, or --window for the honesty test")
+            f"track by ±{rms:.3g} m RMS (ATE {ate:.3g} m): the final error and ATE measure the start "
+            "heading as much as the odometry; use --align se2, or truth with heading, or --window for the "
+            "honesty test")
 
 
 def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, samples: TruthSamples,
@@ -218,10 +225,10 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     :func:`odomkit.window_errors.log_window_basis`)."""
     from odomkit.calibrate.fit_noise import first_order_note
     from odomkit.window_errors import window_errors
-    from odomkit.windows import late_start_note, split_windows, why_no_windows
+    from odomkit.windows import late_start_note, rows_at_fixes, split_windows, why_no_windows
 
     notes = list(whole.warnings)
-    valid = samples.valid
+    valid = rows_at_fixes(log.t, truth.t, samples.valid)  # a sparse truth: only next to its fixes
     if spec is None:
         valid = valid.copy()
         valid[:first] = False

@@ -81,6 +81,8 @@ class PreparedLog:
     off: tuple[str, ...] = ()  # travel or turning off the truth's by more than 2x: a unit, a robot file
     # Each window of ``basis``, in its order, as warnings name it: "log.csv 10-20 s"
     window_labels: tuple[str, ...] = ()
+    # The truth interpolated between sparse knots (odomkit.truth_knots.interpolated_note), or None.
+    interpolated: str | None = None
 
 
 def prepare_log(task: LogTask) -> PreparedLog:
@@ -88,7 +90,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
     from odomkit.kinematics import body_steps
     from odomkit.truth import no_overlap, scatter_sigma, truth_at, truth_noise
     from odomkit.window_errors import log_window_basis
-    from odomkit.windows import cumulative_travel, why_no_windows
+    from odomkit.windows import cumulative_travel, rows_at_fixes, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -111,13 +113,17 @@ def prepare_log(task: LogTask) -> PreparedLog:
         off = motion_problems(log, task.robot, truth, task.truth.max_gap, noise=truth_noise(truth, scatter))
         short = Path(name).name
         labels = tuple(f"{short} {log.t[w.start]:.6g}-{log.t[w.end]:.6g} s" for w in basis.windows)
-        return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off), labels)
+        from odomkit.truth_knots import interpolated_note
+
+        return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off), labels,
+                           interpolated_note(truth))
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
         return PreparedLog(name, None, len(log), skipped, no_overlap(truth, log.t))
     travel = cumulative_travel(body_steps(task.robot, log))
-    reason = why_no_windows(log.t, travel, samples.valid, task.specs[0], task.min_travel, skipped)
+    valid = rows_at_fixes(log.t, truth.t, samples.valid)  # as log_window_basis cut them
+    reason = why_no_windows(log.t, travel, valid, task.specs[0], task.min_travel, skipped)
     return PreparedLog(name, None, len(log), skipped, reason)
 
 
@@ -309,6 +315,7 @@ def fit_noise_files(
     notes += [n for b in bases for n in b.notes]  # where a whole-log window starts late, and why
     notes += [f"the noise fit takes odometry that does not move as the truth does: {o}"
               for p in used for o in p.off]
+    notes += [f"{p.name}: {p.interpolated}" for p in used if p.interpolated]
     if not any(len(b.windows) for b in bases):
         # Whole-log windows say why they have no start (no row gives a heading) in their notes.
         why = "; ".join(n for b in bases for n in b.notes[:1])

@@ -317,15 +317,17 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
 
 
 def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dict[str, float],
-                   ev: dict[str, Any], ev_fit: dict[str, Any] | None, figures: ReportFigures) -> Section:
+                   ev: dict[str, Any], ev_fit: dict[str, Any] | None, figures: ReportFigures,
+                   unscored: str | None = None) -> Section:
     blocks: list[Any] = [Paragraph(
         "The noise variances that make the window ends most likely (maximum likelihood, odomkit "
         "fit-noise), with their 95 % profile-likelihood intervals, fitted with the calibrated robot. "
         "The honesty test with the fitted noise is in-sample here (fitted and scored on the same windows): "
         "score it on another log (odomkit evaluate) before trusting it.")]
-    if fit is None or ev_fit is None:
+    if fit is None:
         blocks.append(Paragraph(f"No noise fit: {problem}", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
+
     def interval(key: str) -> Cell:
         ends = fit["interval95"].get(key)
         return Cell("n/a" if ends is None else " … ".join(
@@ -337,6 +339,9 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
     blocks.append(Table(("parameter", "robot file", "fitted", "95 % interval"), rows,
                         f"Fitted on {fit['windows']} windows (in the robot file's units: k_* m^½, "
                         "sigma_* as named)"))
+    if ev_fit is None:
+        blocks.append(Paragraph(f"The fitted noise could not be scored: {unscored}", "warning"))
+        return Section("noise", "The fitted noise", tuple(blocks))
     n = ev_fit["windows"]
     # The two noises may score different ends: a position-only truth's fitted noise can leave
     # out starts whose heading its fixes no longer support (odomkit.truth.MAX_HEADING_SIGMA).
@@ -553,7 +558,12 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         fit = _attempt("the noise fit", lambda: fit_noise_files(
             base, [log], [options], fit_path, window=window, kinds=kinds, log_options=log_options,
             method=method), problems)
-        ev_fit = None if fit is None else _scored(log, fit_path, options, log_options, window, method)[1]
+        # The fitted noise scored like the file's; a fit whose truth noise leaves no start
+        # heading (a car fitted 19 m of GPS noise) is a note, as a failed fit is.
+        fit_problem = problems[-1] if len(problems) > before else None
+        scored_fit = None if fit is None else _attempt("the fitted noise's honesty test", lambda: _scored(
+            log, fit_path, options, log_options, window, method), problems)
+        ev_fit = None if scored_fit is None else scored_fit[1]
         for note in [] if fit is None else fit["warnings"]:  # the CLI prints them; here they join the page's
             warnings.warn(f"the noise fit: {note}", stacklevel=2)
         guessed = {k: float(v) for m in read_robot(robot)[1] for k, v in vars(m).items()
@@ -561,8 +571,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         # The truth's own noise is no noise model: the robot file keeps it in [truth] (sigma,
         # heading_sigma, time_sigma), which fit-noise fits as truth_sigma, ... and writes back there.
         guessed.update({f"truth_{k}": v for k, v in read_truth_table(robot).items() if k in TRUTH_SIGMAS})
-        sections.append(_noise_section(fit, problems[-1] if len(problems) > before else None, guessed, ev,
-                                       ev_fit, figures))
+        unscored = problems[-1] if fit is not None and scored_fit is None and problems else None
+        sections.append(_noise_section(fit, fit_problem, guessed, ev, ev_fit, figures, unscored))
         step.advance()
         amcl = _attempt("nav2 AMCL's α's", lambda: fit_amcl_files(
             [log], [options], robot_path=base, log_options=log_options, method=method,
