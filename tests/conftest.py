@@ -91,3 +91,38 @@ def car_gps_drive():
     """The simulated car and GPS the calibration-stability and report tests share
     (:func:`_car_gps_drive`)."""
     return _car_gps_drive
+
+
+def _noisy_diff_log(tmp_path, k_true, k_model, seconds, seed=11, truth_noise=0.0):
+    """A diff-drive log whose wheel noise is known (variance k_true²|d| per wheel and step,
+    0.1 s rows, wheel base 0.4 m) with its exact truth: ``log.csv`` (t,L,R), ``gt.csv``
+    (t,x,y,theta), ``xy.csv`` (positions with ``truth_noise`` [m] per axis) and
+    ``robot.toml`` (k_left = k_right = ``k_model``); returns (log, gt, robot) paths."""
+    from odomkit.integrate import dead_reckon
+
+    rng = np.random.default_rng(seed)
+    dt, B = 0.1, 0.4
+    t = np.arange(0.0, seconds + dt / 2, dt)
+    w = 0.4 * np.sin(0.05 * t)
+    dl, dr = (0.3 - w * B / 2) * dt, (0.3 + w * B / 2) * dt
+    dl[0] = dr[0] = 0.0
+    truth = dead_reckon((dl[1:] + dr[1:]) / 2, (dr[1:] - dl[1:]) / B, (0.0, 0.0, 0.0), "exact")
+    ml = dl + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dl))
+    mr = dr + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dr))
+    np.savetxt(tmp_path / "log.csv", np.column_stack((t, ml, mr)), delimiter=",", header="t,L,R",
+               comments="")
+    np.savetxt(tmp_path / "gt.csv", np.column_stack((t, truth)), delimiter=",", header="t,x,y,theta",
+               comments="")
+    xy = truth[:, :2] + truth_noise * rng.standard_normal((t.size, 2))
+    np.savetxt(tmp_path / "xy.csv", np.column_stack((t, xy)), delimiter=",", header="t,x,y", comments="")
+    (tmp_path / "robot.toml").write_text(
+        f'[robot]\ntype = "diff"\nwheel_base = {B}\nm_per_tick = 0.0001\n'
+        f"[noise]\nk_left = {k_model}\nk_right = {k_model}\n")
+    return tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "robot.toml"
+
+
+@pytest.fixture(scope="session")
+def noisy_diff_log():
+    """The simulated diff-drive log of known wheel noise the evaluate tests share
+    (:func:`_noisy_diff_log`)."""
+    return _noisy_diff_log

@@ -9,7 +9,6 @@ import pytest
 from scipy.stats import chi2
 
 from odomkit.errors import InputError
-from odomkit.integrate import dead_reckon
 from odomkit.io.trackio import read_track_csv
 from odomkit.workflows.evaluate import evaluate_logs, evaluate_tracks
 from odomkit.workflows.logs import LogOptions
@@ -162,30 +161,15 @@ def test_track_with_truth_then_evaluate_equals_the_log_form(tmp_path):
     assert b["windows"] == 1 and a["windows"] == 0  # one window per log without --window
 
 
-def _simulate(tmp_path, k_true, k_model, seconds=600.0, seed=11):
-    """A diff-drive log whose wheel noise is known: variance k²|d| per wheel and step."""
-    rng = np.random.default_rng(seed)
-    dt, B = 0.1, 0.4
-    t = np.arange(0.0, seconds + dt / 2, dt)
-    w = 0.4 * np.sin(0.05 * t)
-    dl, dr = (0.3 - w * B / 2) * dt, (0.3 + w * B / 2) * dt
-    dl[0] = dr[0] = 0.0
-    truth = dead_reckon((dl[1:] + dr[1:]) / 2, (dr[1:] - dl[1:]) / B, (0.0, 0.0, 0.0), "exact")
-    ml = dl + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dl))
-    mr = dr + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dr))
-    np.savetxt(tmp_path / "log.csv", np.column_stack((t, ml, mr)), delimiter=",", header="t,L,R",
-               comments="")
-    np.savetxt(tmp_path / "gt.csv", np.column_stack((t, truth)), delimiter=",", header="t,x,y,theta",
-               comments="")
-    (tmp_path / "robot.toml").write_text(
-        f'[robot]\ntype = "diff"\nwheel_base = {B}\nm_per_tick = 0.0001\n'
-        f"[noise]\nk_left = {k_model}\nk_right = {k_model}\n")
-    return tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "robot.toml"
+def _simulate(make, tmp_path, k_true, k_model, seconds=600.0, seed=11, truth_noise=0.0):
+    """A diff-drive log whose wheel noise is known (``make``: the ``noisy_diff_log`` fixture of
+    tests/conftest.py)."""
+    return make(tmp_path, k_true, k_model, seconds, seed, truth_noise)
 
 
 @pytest.mark.slow
-def test_windowed_coverage_is_right_when_the_noise_is_known(tmp_path):
-    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01)
+def test_windowed_coverage_is_right_when_the_noise_is_known(noisy_diff_log, tmp_path):
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01)
     out = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
                         window="3s")
     n = out["windows"]
@@ -197,14 +181,14 @@ def test_windowed_coverage_is_right_when_the_noise_is_known(tmp_path):
     assert lo < out["nees_position_mean"] < hi
     # The same errors under a model with half the true noise (a quarter of the variance):
     # the test must see it.
-    _simulate(tmp_path, k_true=0.01, k_model=0.005)
+    _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.005)
     low = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
                         window="3s")
     assert low["coverage"]["0.95"] < 0.8 and low["nees_position_mean"] > hi
 
 
-def test_position_only_truth_and_truth_sigma_in_the_log_form(tmp_path):
-    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
+def test_position_only_truth_and_truth_sigma_in_the_log_form(noisy_diff_log, tmp_path):
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
     data = np.loadtxt(gt, delimiter=",", skiprows=1)
     np.savetxt(tmp_path / "xy.csv", data[:, :3], delimiter=",")  # t,x,y: no heading
     opts = LogOptions(columns=SIM_COLUMNS)
@@ -225,8 +209,8 @@ def test_position_only_truth_and_truth_sigma_in_the_log_form(tmp_path):
     ("long_window", "longer than the log"),
     ("standing", "no motion"),
 ])
-def test_bad_log_form_input(tmp_path, make, match):
-    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=20.0)
+def test_bad_log_form_input(noisy_diff_log, tmp_path, make, match):
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=20.0)
     window = "10s"
     if make == "late_truth":
         data = np.loadtxt(gt, delimiter=",", skiprows=1)
@@ -277,7 +261,7 @@ def test_snowhite_whole_run_matches_the_data_notes(data_dir, tmp_path):
     assert out["windows"] == 10
 
 
-def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp_path):
+def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(noisy_diff_log, tmp_path):
     """Truth present 20 s out of every 55 s holds no 30 s window (its gaps, 35 s, are longer
     than a window): alone, that log is one line naming the longest stretch between such gaps
     (it used to say "the log shows no motion", a robot driving all along); beside a log with
@@ -286,8 +270,9 @@ def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp
     needs truth at its two ends only."""
     (tmp_path / "a").mkdir()
     (tmp_path / "b").mkdir()
-    log, gt, robot = _simulate(tmp_path / "a", k_true=0.01, k_model=0.01, seconds=120.0)
-    gappy_log, gappy_gt, _ = _simulate(tmp_path / "b", k_true=0.01, k_model=0.01, seconds=120.0, seed=12)
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path / "a", k_true=0.01, k_model=0.01, seconds=120.0)
+    gappy_log, gappy_gt, _ = _simulate(noisy_diff_log, tmp_path / "b", k_true=0.01, k_model=0.01,
+                                       seconds=120.0, seed=12)
     data = np.loadtxt(gappy_gt, delimiter=",", skiprows=1)
     opts = LogOptions(columns=SIM_COLUMNS)
     alone = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="30s")
@@ -307,12 +292,12 @@ def test_a_log_with_no_window_is_left_out_and_named_when_others_have_windows(tmp
     assert len(left_out) == 1 and str(gappy_log) in left_out[0]
 
 
-def test_evaluate_warns_where_the_scored_covariance_leaves_the_first_order_regime(tmp_path):
+def test_evaluate_warns_where_the_scored_covariance_leaves_the_first_order_regime(noisy_diff_log, tmp_path):
     """fit-noise warns when σθ at a window end passes 0.2 rad; evaluate now says the same of
     the covariance it scores (heading σ of a robot file with k = 0.03 m^½ on a 0.4 m wheel
     base: 0.32 rad after 60 s at 0.3 m/s, 0.09 rad after 5 s), and not of the same log in 5 s
     windows."""
-    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.03, seconds=240.0)
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.03, seconds=240.0)
     opts = LogOptions(columns=SIM_COLUMNS)
     long = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="60s")
     short = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=opts, window="5s")
@@ -320,14 +305,14 @@ def test_evaluate_warns_where_the_scored_covariance_leaves_the_first_order_regim
     assert not any("first-order model may not hold" in w for w in short["warnings"])
 
 
-def test_few_window_ends_are_warned_about_with_an_honest_models_spread(tmp_path):
+def test_few_window_ends_are_warned_about_with_an_honest_models_spread(noisy_diff_log, tmp_path):
     """6 window ends: a 95 % figure moves in steps of 1/6, and an honest model's count of
     ends inside is Binomial(6, 0.95): its 2.5 and 97.5 % points (summed here from the
     pmf) are 4 and 6 ends, so the warning says 0.67..1.00. 200 ends (the slow test
     above) get no such warning."""
     from math import comb
 
-    log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=60.0)
     with pytest.warns(UserWarning, match=r"only 6 window end\(s\)") as caught:
         out = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
                             window="10s")

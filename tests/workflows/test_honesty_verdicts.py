@@ -18,7 +18,6 @@ import pytest
 
 from odomkit.errors import InputError
 from odomkit.evaluate import COVERAGE_LEVELS, coverage, coverage_range, coverage_verdicts, overall_verdict
-from odomkit.integrate import dead_reckon
 from odomkit.workflows._scoring import Scored, summarise, verdicts
 from odomkit.workflows.evaluate import evaluate_logs
 from odomkit.workflows.logs import LogOptions
@@ -111,38 +110,21 @@ def test_nees_inside_its_bounds_but_coverage_optimistic_says_to_trust_coverage()
     assert set(verdicts(summarise([s], (1.0,)), [s], windowed=False).values()) == {None}
 
 
-def _simulate(tmp_path, k_true, k_model, seconds=300.0, seed=11, truth_noise=0.0):
-    """A diff-drive log whose wheel noise is known: variance k²|d| per wheel and step."""
-    rng = np.random.default_rng(seed)
-    dt, B = 0.1, 0.4
-    t = np.arange(0.0, seconds + dt / 2, dt)
-    w = 0.4 * np.sin(0.05 * t)
-    dl, dr = (0.3 - w * B / 2) * dt, (0.3 + w * B / 2) * dt
-    dl[0] = dr[0] = 0.0
-    truth = dead_reckon((dl[1:] + dr[1:]) / 2, (dr[1:] - dl[1:]) / B, (0.0, 0.0, 0.0), "exact")
-    ml = dl + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dl))
-    mr = dr + rng.standard_normal(t.size) * k_true * np.sqrt(np.abs(dr))
-    np.savetxt(tmp_path / "log.csv", np.column_stack((t, ml, mr)), delimiter=",", header="t,L,R",
-               comments="")
-    np.savetxt(tmp_path / "gt.csv", np.column_stack((t, truth)), delimiter=",", header="t,x,y,theta",
-               comments="")
-    xy = truth[:, :2] + truth_noise * rng.standard_normal((t.size, 2))
-    np.savetxt(tmp_path / "xy.csv", np.column_stack((t, xy)), delimiter=",", header="t,x,y", comments="")
-    (tmp_path / "robot.toml").write_text(
-        f'[robot]\ntype = "diff"\nwheel_base = {B}\nm_per_tick = 0.0001\n'
-        f"[noise]\nk_left = {k_model}\nk_right = {k_model}\n")
-    return tmp_path / "log.csv", tmp_path / "gt.csv", tmp_path / "robot.toml"
+def _simulate(make, tmp_path, k_true, k_model, seconds=300.0, seed=11, truth_noise=0.0):
+    """A diff-drive log whose wheel noise is known (``make``: the ``noisy_diff_log`` fixture of
+    tests/conftest.py)."""
+    return make(tmp_path, k_true, k_model, seconds, seed, truth_noise)
 
 
 @pytest.mark.parametrize(("k_model", "expected"), [(0.01, "consistent"), (0.005, "optimistic"),
                                                    (0.02, "pessimistic")])
-def test_evaluate_gives_the_verdict_of_a_model_of_known_size(tmp_path, k_model, expected):
+def test_evaluate_gives_the_verdict_of_a_model_of_known_size(noisy_diff_log, tmp_path, k_model, expected):
     """The log's wheels have k = 0.01 m^½; a robot file with k half or twice that is told
     optimistic or pessimistic, one with the true k consistent in most of 5 seeds (each
     misses with probability ~12 %: 5 seeds all but one pass with probability 0.88)."""
     got = []
     for seed in range(5):
-        log, gt, robot = _simulate(tmp_path, k_true=0.01, k_model=k_model, seed=seed)
+        log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=k_model, seed=seed)
         out = evaluate_logs([log], robot, [TruthOptions(gt)], log_options=LogOptions(columns=SIM_COLUMNS),
                             window="3s")
         assert out["windows"] == 100
@@ -156,13 +138,14 @@ def test_evaluate_gives_the_verdict_of_a_model_of_known_size(tmp_path, k_model, 
     assert got.count(expected) >= (4 if expected == "consistent" else 5), got
 
 
-def test_every_window_left_out_is_an_error_unless_another_length_was_scored(tmp_path):
+def test_every_window_left_out_is_an_error_unless_another_length_was_scored(noisy_diff_log, tmp_path):
     """Position-only truth whose fixes scatter 2 cm, stated as 1 mm (--truth-sigma), but for
     2 s: no start heading can be fitted at any window start (the fit's residual is 20 σ), so
     every window is left out, while the whole run starts in the clean 2 s. Alone that is an
     error saying why and what to do, not a report that ends with "this is the test to
     trust"; beside a length that was scored, a warning."""
-    log, _, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0, truth_noise=0.02)
+    log, _, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=60.0,
+                              truth_noise=0.02)
     data = np.loadtxt(tmp_path / "xy.csv", delimiter=",", skiprows=1)
     # Clean fixes from 1.5 to 3.5 s: the whole run starts there, but no 5 s window does.
     data[15:36, 1:] = np.loadtxt(tmp_path / "gt.csv", delimiter=",", skiprows=1)[15:36, 1:3]
@@ -178,13 +161,15 @@ def test_every_window_left_out_is_an_error_unless_another_length_was_scored(tmp_
     assert both["by_window"]["5 s"]["coverage_overall"] is None
 
 
-def test_evaluate_shows_the_fitted_start_heading_and_warns_where_the_whole_run_hangs_on_it(tmp_path, run_cli):
+def test_evaluate_shows_the_fitted_start_heading_and_warns_where_the_whole_run_hangs_on_it(
+        noisy_diff_log, tmp_path, run_cli):
     """Position-only truth scattering 2 cm: the whole run starts from a heading fitted to the
     fixes, with a σ of its own; the report shows both, and where 2σθ × the run's distance
     from its start is over half the final error (or 2σθ × its RMS over half the ATE) it warns
     with that figure (2σ), computed here from the truth file. With --align se2 the heading is
     refitted and nothing is said; with heading truth nothing is fitted."""
-    log, gt, robot = _simulate(tmp_path, k_true=0.002, k_model=0.002, seconds=120.0, truth_noise=0.02)
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.002, k_model=0.002, seconds=120.0,
+                               truth_noise=0.02)
     opts = LogOptions(columns=SIM_COLUMNS)
     with pytest.warns(UserWarning):
         out = evaluate_logs([log], robot, [TruthOptions(tmp_path / "xy.csv")], log_options=opts)
@@ -215,8 +200,9 @@ def test_evaluate_shows_the_fitted_start_heading_and_warns_where_the_whole_run_h
     assert not any("start heading" in w for w in headed["warnings"])
 
 
-def test_every_window_left_out_is_one_line_and_exit_2(tmp_path, run_cli):
-    log, _, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=60.0, truth_noise=0.02)
+def test_every_window_left_out_is_one_line_and_exit_2(noisy_diff_log, tmp_path, run_cli):
+    log, _, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=60.0,
+                              truth_noise=0.02)
     data = np.loadtxt(tmp_path / "xy.csv", delimiter=",", skiprows=1)
     data[15:36, 1:] = np.loadtxt(tmp_path / "gt.csv", delimiter=",", skiprows=1)[15:36, 1:3]
     np.savetxt(tmp_path / "xy.csv", data, delimiter=",", header="t,x,y", comments="")
@@ -227,12 +213,12 @@ def test_every_window_left_out_is_one_line_and_exit_2(tmp_path, run_cli):
     assert len(line) == 1 and "no window end could be scored" in line[0] and "Traceback" not in err
 
 
-def _fit(tmp_path, k_true, seed, *, slip=0.0, trim=None, kinds=("white",), window="3s", truth="gt.csv"):
+def _fit(make, tmp_path, k_true, seed, *, slip=0.0, trim=None, kinds=("white",), window="3s", truth="gt.csv"):
     """fit-noise of a robot file's k on a simulated log; ``slip``: with probability 0.005 a step
     also slips one wheel by that much [m] (a heavy tail no Gaussian model holds)."""
     from odomkit.workflows.fit_noise import fit_noise_files
 
-    log, gt, robot = _simulate(tmp_path, k_true=k_true, k_model=0.005, seed=seed)
+    log, gt, robot = _simulate(make, tmp_path, k_true=k_true, k_model=0.005, seed=seed)
     if slip:
         data = np.loadtxt(log, delimiter=",", skiprows=1)
         rng = np.random.default_rng(100 + seed)
@@ -250,7 +236,7 @@ def _misfit(result):
     return [w for w in result["warnings"] if w.startswith("in-sample coverage misses")]
 
 
-def test_fit_noise_of_the_right_family_is_not_warned_about():
+def test_fit_noise_of_the_right_family_is_not_warned_about(noisy_diff_log):
     """Gaussian wheel noise fitted with the wheel-noise model: in-sample coverage inside its
     range in most seeds (each misses with probability ~12 %)."""
     import tempfile
@@ -259,39 +245,39 @@ def test_fit_noise_of_the_right_family_is_not_warned_about():
     warned = 0
     for seed in range(5):
         with tempfile.TemporaryDirectory() as d:
-            result = _fit(Path(d), 0.01, seed)
+            result = _fit(noisy_diff_log, Path(d), 0.01, seed)
             assert result["windows"] == 100
             warned += bool(_misfit(result))
     assert warned <= 1
 
 
-def test_fit_noise_says_when_its_model_family_misses_its_own_windows(tmp_path):
+def test_fit_noise_says_when_its_model_family_misses_its_own_windows(noisy_diff_log, tmp_path):
     """Wheel slips of 10 cm in 0.5 % of the steps (about one 3 s window in seven; a window's own
     wheel noise is about 1 cm): a Gaussian k fitted
     to every window (--trim 1) is too large for the bulk and too small for the slipped ones,
     so its own in-sample coverage is outside its range, and the warning names the window
     ends of largest eᵀΣ⁻¹e by log and time; trimmed (the default 0.999), far more than 5 %
     of the ends are left out, which is no rare tail."""
-    result = _fit(tmp_path, 0.01, 0, slip=0.1)
+    result = _fit(noisy_diff_log, tmp_path, 0.01, 0, slip=0.1)
     said = _misfit(result)
     assert len(said) == 1 and "does not describe these logs" in said[0] and "WheelNoise" in said[0]
     assert "log.csv " in said[0] and " s (" in said[0]
     cov = result["coverage_in_sample"]
     lo, hi = coverage_range(result["windows"], 0.5)
     assert cov["0.5"] > hi or cov["0.99"] < coverage_range(result["windows"], 0.99)[0]
-    trimmed = _fit(tmp_path, 0.01, 0, slip=0.1, trim=0.999)
+    trimmed = _fit(noisy_diff_log, tmp_path, 0.01, 0, slip=0.1, trim=0.999)
     assert trimmed["windows_trimmed"] > 0.05 * (trimmed["windows"] + trimmed["windows_trimmed"])
     note = [w for w in trimmed["warnings"] if "ellipse of the fit and were left out" in w]
     assert len(note) == 1 and "no rare tail" in note[0] and "does not describe these logs" in note[0]
     # Without slips nothing is trimmed past 5 %: no such note.
-    clean = _fit(tmp_path, 0.01, 0, trim=0.999)
+    clean = _fit(noisy_diff_log, tmp_path, 0.01, 0, trim=0.999)
     assert not any("no rare tail" in w for w in clean["warnings"])
 
 
 @pytest.mark.parametrize(("kinds", "suggested"), [("white", False), ("white,bias", True)])
-def test_an_undetermined_fit_suggests_fewer_kinds_only_where_both_were_asked(tmp_path, run_cli, kinds,
-                                                                             suggested):
-    log, _, robot = _simulate(tmp_path, k_true=0.01, k_model=0.01, seconds=20.0)
+def test_an_undetermined_fit_suggests_fewer_kinds_only_where_both_were_asked(
+        noisy_diff_log, tmp_path, run_cli, kinds, suggested):
+    log, _, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.01, k_model=0.01, seconds=20.0)
     code, _, err = run_cli("fit-noise", "--robot", robot, "--log", log, "--columns", SIM_COLUMNS, "--truth",
                            tmp_path / "xy.csv", "--window", "10s", "--kinds", kinds,
                            "--out", tmp_path / "f.toml")
