@@ -557,6 +557,18 @@ NULL_KEYS: dict[str, str] = {
     "truth": "check: no truth file given",
     # fit-noise / evaluate: --window not given (one window per log)
     "window": "fit-noise/evaluate: no --window, one window per log",
+    # evaluate: no verdict without --window (one end per log is no test), and no note where
+    # the NEES and the coverage agree
+    "coverage_bounds": "evaluate: no --window, no verdict",
+    "coverage_verdict": "evaluate: no --window, no verdict",
+    "coverage_overall": "evaluate: no --window, no verdict",
+    "nees_verdict": "evaluate: no --window, no verdict",
+    "verdict_note": "evaluate: NEES and coverage agree",
+    # evaluate: the whole run's start is one log's (null for a track file, or several logs)
+    "start_time": "evaluate: a track file or several logs",
+    "start_heading": "evaluate: a track file or several logs",
+    "start_heading_sigma": "evaluate: a track file or several logs",
+    "start_heading_fitted": "evaluate: a track file or several logs",
     # umbmark: an infinite turning radius (no Type-A curvature), and the 3·SEM verdict
     # needs two runs per direction
     "radius": "umbmark: infinite radius",

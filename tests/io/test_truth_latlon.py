@@ -180,11 +180,13 @@ def test_evaluate_with_latlon_truth_equals_the_planar_truth(run_cli, optiodom):
                                rtol=0, atol=1e-8)
     planar, planar_warnings = _evaluate(run_cli, d / "log.csv", "--truth", d / "planar.csv")
     geo, geo_warnings = _evaluate(run_cli, d / "log.csv", "--truth", d / "latlon.csv")
-    # ... and the scores agree to 3e-6 relative: the whole run's start heading is fitted to
-    # fixes a few millimetres apart (the robot starting off), which turns those 1e-9 m into
-    # ~1e-6 rad (measured: ATE RMSE 2.6e-6, window NEES 3.7e-7 relative).
+    # ... and the scores agree to 3e-5 relative: the whole run's start heading, and a window's
+    # that starts at a fix as the robot starts off, are fitted to fixes a few millimetres
+    # apart, which turns those 1e-9 m into ~1e-6 rad (measured: ATE RMSE 2.6e-6 relative; the
+    # window ends' NEES 1.2e-5 at most, since windows against this truth, sparser than the
+    # log, start at its fixes).
     _close(json.loads(json.dumps(planar).replace("planar.csv", "X")),
-           json.loads(json.dumps(geo).replace("latlon.csv", "X")), rel=1e-5)
+           json.loads(json.dumps(geo).replace("latlon.csv", "X")), rel=3e-5)
     assert [w.replace("planar.csv", "X") for w in planar_warnings] == \
         [w.replace("latlon.csv", "X") for w in geo_warnings]
 
