@@ -189,19 +189,15 @@ def calibrate_files(
                                            steering_cubic=steering_cubic)
 
             try:
-                with warnings.catch_warnings(record=True) as said_first:
-                    warnings.simplefilter("always")
-                    cal = fit_from(robot)
+                first = _fit_said(fit_from, robot)
             except ModelError as exc:
-                cal = None
-                failed = exc
-            kept = cal
-            cal = _better_start(cal, runs, truths, robot, gaps, fit_from)
-            if cal is not None and cal is kept:  # the fit from the file's values stands: what it said too
-                for w in said_first:
-                    warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-            if cal is None:
+                first, failed = None, exc
+            chosen = _better_start(first, runs, truths, robot, gaps, fit_from)
+            if chosen is None:
                 raise ModelError(str(failed) + _why_off(runs, truths, robot, gaps)) from failed
+            cal, start, said = chosen
+            for w in said:  # what the fit kept had to say
+                warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
             # A unit read wrong can also land in a local minimum inside the range (mph read as
             # m/s on a simulated car: c_scale 0.71, wheel base 1.65 m, 65 m residuals).
             if off := _why_off(runs, truths, robot, gaps, only_failures=True):
@@ -209,11 +205,12 @@ def calibrate_files(
                               stacklevel=2)
             summary = cal.to_dict()
             if len(runs) > 1:
+                # Each run alone (each half) from the start the joint fit came from.
                 summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_positions(
-                    [runs[i]], [truths[i]], robot, fit_time_offset=given is None,
+                    [runs[i]], [truths[i]], start, fit_time_offset=given is None,
                     steering_cubic=steering_cubic))
             else:
-                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], robot, given is None,
+                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], start, given is None,
                                                      steering_cubic, cubic_hint)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
@@ -311,7 +308,7 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
             warnings.warn(f"the calibrated wheel base {after:.4g} m is {100 * off:+.0f} % from "
                           f"the robot file's {before:.4g} m: wheels slip in turns by a few per cent, not so "
                           "much; the file's wheel_base is wrong, or the fit started too far off and found a "
-                          f"local minimum (start from a closer wheel_base); {advice}", UserWarning,
+                          f"local minimum; {advice}", UserWarning,
                           stacklevel=3)
         return
     if isinstance(robot, Car):
@@ -365,8 +362,8 @@ def _ratio_start(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Ro
     if isinstance(robot, DiffDrive):
         if travel_off:
             changes.update(c_left=robot.c_left * scale, c_right=robot.c_right * scale)
-        if turn_off:
-            changes["wheel_base"] = robot.wheel_base * gain
+        if turn_off:  # the correction, as calibrate fits it (the file's wheel_base stays)
+            changes["c_wheel_base"] = robot.c_wheel_base * gain
     elif isinstance(robot, Car | Tricycle):
         if travel_off:
             changes["c_scale"] = robot.c_scale * scale
@@ -385,37 +382,48 @@ def _ratio_start(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Ro
             changes["gyro_scale"] = robot.gyro_scale / gain
     if not changes:
         return None
-    said = ", ".join(f"{k} {v:.4g}" for k, v in changes.items())
     started: Any = robot  # every vehicle's fields named above are its own
-    return replace(started, **changes), said
+    start = replace(started, **changes)
+    said = ", ".join(f"wheel base {start.effective_wheel_base:.4g} m (c_wheel_base {v:.4g})"
+                     if k == "c_wheel_base" else f"{k} {v:.4g}" for k, v in changes.items())
+    return start, said
 
 
-def _better_start(cal: ExactCalibration | None, runs: Sequence[OdometryLog], truths: Sequence[Truth],
+Fitted = tuple[ExactCalibration, Any, list[warnings.WarningMessage]]
+
+
+def _fit_said(fit_from: Callable[[Any], ExactCalibration], start: Any) -> Fitted:
+    """``fit_from(start)``, the start, and the warnings the fit gave, held back: only the fit
+    kept says what it has to say."""
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        cal = fit_from(start)
+    return cal, start, list(said)
+
+
+def _better_start(first: Fitted | None, runs: Sequence[OdometryLog], truths: Sequence[Truth],
                   robot: Robot, max_gaps: Sequence[float | None],
-                  fit_from: Callable[[Any], ExactCalibration]) -> ExactCalibration | None:
-    """The calibration from the robot file's values, or from the start the travel and
-    turning ratios suggest (:func:`_ratio_start`) where that fits clearly better
-    (:data:`RESTART_GAIN`) or the file's start failed. A fit from values far off finds a
-    local minimum: a real diff robot whose file halved its wheel base calibrated to
-    c_right 1.32 and a wheel base +25 % (residuals 0.18 m), where the start the turning
-    suggested, 0.166 m, fitted to 0.02 m."""
-    start = _ratio_start(runs, truths, robot, max_gaps)
-    if start is None:
-        return cal
+                  fit_from: Callable[[Any], ExactCalibration]) -> Fitted | None:
+    """The calibration from the robot file's values (``first``), or from the start the travel
+    and turning ratios suggest (:func:`_ratio_start`) where that fits clearly better
+    (:data:`RESTART_GAIN`) or the file's start failed (``first`` None). A fit from values
+    far off finds a local minimum: a real diff robot whose file halved its wheel base
+    calibrated to c_right 1.32 and a wheel base +25 % (residuals 0.18 m), where the start
+    the turning suggested, 0.166 m, fitted to 0.02 m."""
+    suggested = _ratio_start(runs, truths, robot, max_gaps)
+    if suggested is None:
+        return first
     try:
-        with warnings.catch_warnings():  # the fit kept says what it has to say
-            warnings.simplefilter("ignore")
-            other = fit_from(start[0])
+        other = _fit_said(fit_from, suggested[0])
     except ModelError:
-        return cal
-    if cal is not None and not other.residual_variance < RESTART_GAIN * cal.residual_variance:
-        return cal
-    other = fit_from(start[0])  # again, for its warnings
-    before = (f"residual RMS {math.sqrt(other.residual_variance):.3g} against "
-              f"{math.sqrt(cal.residual_variance):.3g} from the robot file's values"
-              if cal is not None else "the robot file's values gave no fit")
+        return first
+    if first is not None and not other[0].residual_variance < RESTART_GAIN * first[0].residual_variance:
+        return first
+    before = (f"residual RMS {math.sqrt(other[0].residual_variance):.3g} against "
+              f"{math.sqrt(first[0].residual_variance):.3g} from the robot file's values"
+              if first is not None else "the robot file's values gave no fit")
     warnings.warn(f"the calibration started again from the values the odometry's travel and turning "
-                  f"against the truth suggest ({start[1]}): {before}; the robot file is far off "
+                  f"against the truth suggest ({suggested[1]}): {before}; the robot file is far off "
                   "(odomkit check names the entry)", UserWarning, stacklevel=3)
     return other
 
