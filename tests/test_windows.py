@@ -119,3 +119,20 @@ def test_windows_against_a_sparse_truth_end_at_its_fixes_not_on_its_chords(run_c
             truth_xy = [np.interp(t[row], t[keys], poses[keys, k]) for k in (0, 1)]
             chord.append(np.hypot(*(poses[row, :2] - truth_xy)))
     assert max(chord) > 0.01
+
+
+def test_windows_shorter_than_a_sparse_truths_spacing_run_from_fix_to_fix():
+    """A 10 Hz log against a 1 Hz truth and 0.5 s windows: each window starts and ends at
+    the row next to a fix, so it runs from one fix to the next (1 s), and none is refused
+    as longer than a stretch of truth (the gap between two fixes is no gap in the truth).
+    A real gap of 5 s still ends a stretch."""
+    from odomkit.windows import WindowSpec, rows_at_fixes, split_windows
+
+    t = np.round(np.arange(0.0, 20.0, 0.1), 10)
+    fixes = np.r_[np.arange(0.0, 10.0, 1.0), np.arange(15.0, 20.0, 1.0)]
+    valid = (t <= 9.0) | (t >= 15.0)  # truth_at's valid rows: no truth across the 6 s gap
+    ends = rows_at_fixes(t, fixes, valid)
+    windows, skipped = split_windows(t, t, WindowSpec(0.5, "s"), 0.0, valid=valid, ends=ends)
+    assert skipped == 0
+    assert [(t[w.start], t[w.end]) for w in windows] == [(float(a), float(a + 1)) for a in
+                                                          [*range(0, 9), *range(15, 19)]]

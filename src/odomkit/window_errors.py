@@ -551,13 +551,13 @@ def log_window_basis(
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)
     parts, skipped, notes, counts = [], 0, [], []
-    at_fixes = rows_at_fixes(log.t, truth.t, samples.valid)  # a sparse truth: only next to its fixes
+    valid = samples.valid
+    at_fixes = rows_at_fixes(log.t, truth.t, valid)  # a sparse truth: ends only next to its fixes
     for spec in specs:
-        valid = at_fixes
-        windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
+        windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid, ends=at_fixes)
         if spec is None and windows and not truth.has_heading:
-            valid, note = _whole_log_rows(log, steps, truth, valid, max_gap, method)
-            windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid)
+            starts, note = _whole_log_rows(log, steps, truth, at_fixes, max_gap, method)
+            windows, left = split_windows(log.t, travel, spec, min_travel, valid=valid, ends=starts)
             notes += [note] if note else []
         skipped += left
         if windows:

@@ -134,6 +134,7 @@ def split_windows(
     min_travel: float = 0.05,
     *,
     valid: ArrayLike | None = None,
+    ends: ArrayLike | None = None,
 ) -> tuple[list[Window], int]:
     """Non-overlapping windows over the rows where the truth is valid.
 
@@ -157,6 +158,11 @@ def split_windows(
         still says nothing about its odometry.
     valid : array_like of bool, shape (N,), optional
         Rows where the truth is valid (default: all).
+    ends : array_like of bool, shape (N,), optional
+        Rows of ``valid`` a window may start and end at (default: every valid row; a sparse
+        truth: the rows next to its fixes, :func:`rows_at_fixes`). The stretches and gaps
+        are the truth's (``valid``), so a window shorter than the fixes' spacing is cut
+        from fix to fix, not refused as longer than a stretch.
 
     Returns
     -------
@@ -188,23 +194,27 @@ def split_windows(
         else:
             windows.append(w)
 
+    at = ok if ends is None else ok & np.asarray(ends, dtype=bool)
     rows = np.flatnonzero(ok)
     if rows.size == 0:
         return windows, 0
     if spec is None:
-        if rows[-1] > rows[0]:
-            add(int(rows[0]), int(rows[-1]))
+        usable = np.flatnonzero(at)
+        if usable.size and usable[-1] > usable[0]:
+            add(int(usable[0]), int(usable[-1]))
         return windows, skipped
-    axis = (t if spec.unit == "s" else s)[rows]
-    for first, last in truth_stretches(axis, spec.length):
-        i = first  # positions in ``rows``
+    along = t if spec.unit == "s" else s
+    for first, last in truth_stretches(along[rows], spec.length):
+        cand = rows[first] + np.flatnonzero(at[rows[first]:rows[last] + 1])  # the stretch's end rows
+        axis = along[cand]
+        i = 0  # positions in ``cand``
         while True:
-            j = int(np.searchsorted(axis, axis[i] + spec.length, side="left"))
+            j = int(np.searchsorted(axis, axis[i] + spec.length, side="left")) if cand.size else 0
             # searchsorted may land on a repeated value below the target; never before i+1.
             j = max(j, i + 1)
-            if j > last or axis[j] < axis[i] + spec.length:
+            if j >= cand.size or axis[j] < axis[i] + spec.length:
                 break
-            add(int(rows[i]), int(rows[j]))
+            add(int(cand[i]), int(cand[j]))
             i = j
     return windows, skipped
 

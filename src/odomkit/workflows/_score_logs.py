@@ -228,14 +228,15 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     from odomkit.windows import late_start_note, rows_at_fixes, split_windows, why_no_windows
 
     notes = list(whole.warnings)
-    valid = rows_at_fixes(log.t, truth.t, samples.valid)  # a sparse truth: only next to its fixes
+    valid = samples.valid
+    ends = rows_at_fixes(log.t, truth.t, valid)  # a sparse truth: ends only next to its fixes
     if spec is None:
-        valid = valid.copy()
-        valid[:first] = False
+        ends = ends.copy()
+        ends[:first] = False
     if first != first_valid:
         what = "the whole-run track" + (" (and its window)" if spec is None else "")
         notes.append(late_start_note(log.source, what, log.t, first, first_valid))
-    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=valid)
+    windows, skipped = split_windows(log.t, travel, spec, min_travel, valid=valid, ends=ends)
     if not windows:
         reason = why_no_windows(log.t, travel, valid, spec, min_travel, skipped)
         return replace(whole, honesty_errors=np.empty((0, 2)), honesty_cov=np.empty((0, 2, 2)), windows=0,

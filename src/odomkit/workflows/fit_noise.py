@@ -90,7 +90,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
     from odomkit.kinematics import body_steps
     from odomkit.truth import no_overlap, scatter_sigma, truth_at, truth_noise
     from odomkit.window_errors import log_window_basis
-    from odomkit.windows import cumulative_travel, rows_at_fixes, why_no_windows
+    from odomkit.windows import cumulative_travel, why_no_windows
     from odomkit.workflows.logs import load_log
     from odomkit.workflows.truth import load_truth
 
@@ -122,8 +122,7 @@ def prepare_log(task: LogTask) -> PreparedLog:
     if int(samples.valid.sum()) < 2:
         return PreparedLog(name, None, len(log), skipped, no_overlap(truth, log.t))
     travel = cumulative_travel(body_steps(task.robot, log))
-    valid = rows_at_fixes(log.t, truth.t, samples.valid)  # as log_window_basis cut them
-    reason = why_no_windows(log.t, travel, valid, task.specs[0], task.min_travel, skipped)
+    reason = why_no_windows(log.t, travel, samples.valid, task.specs[0], task.min_travel, skipped)
     return PreparedLog(name, None, len(log), skipped, reason)
 
 
