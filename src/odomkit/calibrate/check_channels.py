@@ -376,14 +376,13 @@ def _channels_against_positions(log: OdometryLog, robot: Robot, truth: Truth,
                if twin[h] != h else "") for h in named]
     # The residual RMS per axis of the best mapping: RSS over 2n − 3 degrees of freedom a stretch.
     best, n = min(misfit), sum(x.shape[0] for x in fixes)
-    leaves = (f"the best leaves {math.sqrt(best * spread / (2 * n - 3 * len(fixes))):.3g} m RMS per axis, "
-              if math.isfinite(best) else "")
+    rms = math.sqrt(best * spread / (2 * n - 3 * len(fixes))) if math.isfinite(best) else math.nan
+    leaves = f"the best leaves {rms:.3g} m RMS per axis, " if math.isfinite(rms) else ""
     detail = (f" (each mapping's path turned and shifted onto {len(fixes)} stretch(es) of about {length:.2g} "
               f"s of fixes: {leaves}the fixes spread {math.sqrt(spread / n):.3g} m RMS)")
     # Why two mappings tie, from what was measured (UWB user study: "the log turns too
     # little" of a robot that turned 52 rad, whose robot file halved its wheel base).
     turned = sum(float(np.sum(np.abs(np.diff(at_fixes[0][s, 2])))) for s in stretches)
-    rms = math.sqrt(best * spread / (2 * n - 3 * len(fixes))) if math.isfinite(best) else math.nan
     if math.isfinite(rms) and rms > 3.0 * noise and turned > math.pi:
         close_why = (f"the log turns {turned:.3g} rad over those stretches, but the best mapping leaves "
                      f"{rms / max(noise, 1e-12):.3g}x the truth's noise ({1000 * noise:.3g} mm): the "

@@ -369,8 +369,7 @@ _ECEF_LIKE_HEIGHT = (-1e3, 1e4)
 
 
 def _warn_if_ecef(path: Path, rows: list[tuple[int, list[str]]], xy: NDArray[np.float64],
-                  header: list[str] | None, index: dict[str, int], spec: dict[str, str] | list[str] | None
-                  ) -> None:
+                  header: list[str] | None, index: dict[str, int]) -> None:
     """Warn where plain x, y look like ECEF X, Y: read so, the track is in the plane of the
     equator through the earth's centre (a drive in Berlin, 3.8e6 m from the origin, with its
     distances shortened by the angle between that plane and the ground, and no warning).
@@ -695,7 +694,7 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
             xy = data[:, [index["x"], index["y"]]]
             theta = (data[:, index["theta"]] if "theta" in index
                      else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
-            _warn_if_ecef(path, rows, xy, header, index, spec)
+            _warn_if_ecef(path, rows, xy, header, index)
     t = to_seconds(t, seconds)
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):

@@ -30,7 +30,8 @@ _MARKERS = ("o", "s", "^", "D", "v", "P")
 def binomial_band(p: ArrayLike, n: int, level: float = 0.95
                   ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Central ``level`` range of the fraction of n independent samples inside an ellipse
-    of probability p: the binomial quantiles (scipy.stats.binom) divided by n.
+    of probability p: the binomial quantiles divided by n, each
+    :func:`odomkit.evaluate.coverage_range` (the range evaluate's verdict judges by).
 
     Parameters
     ----------
@@ -50,13 +51,13 @@ def binomial_band(p: ArrayLike, n: int, level: float = 0.95
     >>> lo.tolist(), hi.tolist()
     ([0.4, 0.9], [0.6, 0.99])
     """
-    from scipy.stats import binom
+    from odomkit.evaluate import coverage_range
 
     if not isinstance(n, int | np.integer) or n < 1:
         raise InputError(f"n_scored must be a positive integer, got {n!r}")
     q = np.asarray(p, dtype=float)
-    tail = (1.0 - level) / 2.0
-    return binom.ppf(tail, n, q) / n, binom.ppf(1.0 - tail, n, q) / n
+    ranges = np.array([coverage_range(int(n), float(x), level) for x in q.ravel()]).reshape(*q.shape, 2)
+    return ranges[..., 0], ranges[..., 1]
 
 
 def _levels(cover: Mapping[float, float | None] | Mapping[str, float | None]
