@@ -30,8 +30,8 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["score_by_window", "score_logs", "several_lengths_notes", "START_HEADING_SHARE",
-           "start_heading_note", "white_only", "window_specs"]
+__all__ = ["HEADLESS", "score_by_window", "score_logs", "several_lengths_notes", "START_HEADING_SHARE",
+           "start_heading_note", "STILL", "white_only", "window_specs"]
 
 
 def score_logs(
@@ -124,8 +124,8 @@ def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
 
 
 #: Why windows are left out, after their count in a log's warning (``_scoring._pooled_notes``).
-_STILL = "window(s) travelled less than {:g} m (standing still or turning on the spot) and were left out"
-_HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
+STILL = "window(s) travelled less than {:g} m (standing still or turning on the spot) and were left out"
+HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
 
 
 def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, opts: TruthOptions,
@@ -244,10 +244,10 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     own: list[str] = []
     left_out: list[tuple[str, int]] = []
     if skipped:
-        left_out.append((_STILL.format(min_travel), skipped))
+        left_out.append((STILL.format(min_travel), skipped))
     found = window_errors(log, robot, noise, samples.poses, valid, windows, truth=truth, method=method)
     if found.dropped:
-        left_out.append((_HEADLESS, found.dropped))
+        left_out.append((HEADLESS, found.dropped))
     own += [f"{log.source}: {n} {what}" for what, n in left_out]
     note = first_order_note(found.cov[:, 2, 2])
     if note:

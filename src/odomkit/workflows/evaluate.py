@@ -233,18 +233,23 @@ def _unscored_lengths(specs: Sequence[Any], by_spec: Sequence[Sequence[Scored]],
              if spec is not None and r["windows"] == 0]
     if not empty:
         return
-    whys = []
+    from odomkit.workflows._score_logs import HEADLESS, STILL
+
+    whys: list[str] = []
+    reasons: set[str] = set()
     for i in empty:
         counts: dict[str, int] = {}
         for s in by_spec[i]:
             for what, n in s.left_out:
                 counts[what] = counts.get(what, 0) + n
+        reasons |= counts.keys()
         whys.append("; ".join(f"{n} {what}" for what, n in counts.items()) or "every window was left out")
+    still = STILL.split("{")[0]  # its minimum travel is filled in
     advice = []
-    if any("start heading" in w for w in whys):
+    if HEADLESS in reasons:
         advice.append("longer windows (each must start where the fixes give a heading: the robot moving, "
                       "fixes on both sides) or truth with heading")
-    if any("travelled less" in w for w in whys):
+    if any(what.startswith(still) for what in reasons):
         advice.append("longer windows or a smaller --min-travel")
     todo = " or ".join(advice) or "longer windows"
     if len(empty) == sum(spec is not None for spec in specs):
