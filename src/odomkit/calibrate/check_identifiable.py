@@ -15,8 +15,9 @@ thresholds and advice are kept here with it.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -228,10 +229,11 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
                 ) -> AssumedSigma | None:
     """The position noise, correlated drift included, of the odometry against the truth.
 
-    One Gauss–Newton step of the trajectory fit the identifiability figures describe: the
-    nominal track (about one position a second, as :func:`check_identifiable` uses) turned
-    and shifted onto the truth (Umeyama), then the calibration parameters and the start pose
-    fitted linearly to what is left. Its residuals' RMS per axis, σ, would be the figures'
+    A quick trajectory fit of the kind the identifiability figures describe: the nominal
+    track (about one position a second, as :func:`check_identifiable` uses) turned and
+    shifted onto the truth (Umeyama), then the calibration parameters and the start pose
+    fitted to what is left by up to :data:`_FIT_STEPS` Gauss–Newton steps, each kept only
+    where it lowers the misfit. Its residuals' RMS per axis, σ, would be the figures'
     σ for independent errors; they are correlated over τ (the integrated autocorrelation
     time of each axis' residual series, its positive lags summed, averaged over the axes), so
     the σ returned is σ·√(τ / 1 s): a least-squares fit's standard error to first order for
@@ -340,8 +342,8 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
     return AssumedSigma(value, "drift", rms, tau_rows * period, windows)
 
 
-def _between_windows(misfit: object, start: NDArray[np.float64], free: list[int], n: int, rms: float,
-                     design: NDArray[np.float64]) -> list[float] | None:
+def _between_windows(misfit: Callable[..., Any], start: NDArray[np.float64], free: list[int], n: int,
+                     rms: float, design: NDArray[np.float64]) -> list[float] | None:
     """Per free parameter, the σ [m per axis] at which its figure (σ over the part of its
     column, in ``design`` (2n, P), that the others cannot mimic) matches the spread of its fits
     to :data:`_WINDOWS` consecutive windows of the run, each fitted alone from its own start
@@ -362,7 +364,7 @@ def _between_windows(misfit: object, start: NDArray[np.float64], free: list[int]
         keep[lo:hi] = True
         p = start.copy()
         for _ in range(3):
-            got = misfit(p, keep)  # type: ignore[operator]
+            got = misfit(p, keep)
             if got is None:
                 return None
             step, *_ = np.linalg.lstsq(got[1], got[0], rcond=None)
