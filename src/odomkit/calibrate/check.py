@@ -43,6 +43,7 @@ motion), :func:`check_log` and :func:`next_steps`. The channel-mapping check liv
 from __future__ import annotations
 
 import math
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,6 +56,10 @@ from odomkit.calibrate.check_truth import check_truth_heading, check_truth_inter
 from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at, truth_noise
+
+if TYPE_CHECKING:
+    from odomkit.kinematics import BodySteps
+    from odomkit.truth import TruthSamples
 
 __all__ = [
     "check_counters", "check_log", "check_motion", "check_stuck", "check_time", "check_values", "GAP_FACTOR",
@@ -197,12 +202,16 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
                                  "check the channel mapping (--columns) and the encoder"))
     pairs = WHEEL_PAIRS
     truth_turn = odo_turn = None
-    if truth is not None and truth.has_heading:
+    # The truth at the rows and the body steps, once for both checks below.
+    sampled = None if truth is None else truth_at(truth, t, max_gap)
+    steps = None
+    if truth is not None and channels:
         from odomkit.kinematics import body_steps
 
-        s = truth_at(truth, t, max_gap)
-        truth_turn = np.where(s.valid, s.poses[:, 2], np.nan)
-        odo_turn = np.concatenate(([0.0], np.cumsum(body_steps(robot, log).dtheta)))
+        steps = body_steps(robot, log)
+    if sampled is not None and steps is not None and truth is not None and truth.has_heading:
+        truth_turn = np.where(sampled.valid, sampled.poses[:, 2], np.nan)
+        odo_turn = np.concatenate(([0.0], np.cumsum(steps.dtheta)))
     for a, b in pairs:
         if a not in values or b not in values:
             continue
@@ -226,8 +235,8 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
                                          "stuck encoder, or a pivot about that wheel",
                                          "give --truth to tell a pivot from a stuck encoder"))
                 break
-    if truth is not None and channels:
-        found += _silent_while_truth_moves(log, robot, truth, values, max_gap)
+    if truth is not None and sampled is not None and steps is not None:
+        found += _silent_while_truth_moves(log, truth, values, sampled, steps)
     return found or [Finding("stuck", "ok", "no channel sits at zero while the robot moves")]
 
 
@@ -256,8 +265,8 @@ def _goes_on(truth: Truth, a: float, b: float, c: float, rest: float) -> bool:
                 and float(first @ second) >= 0.5 * size)
 
 
-def _silent_while_truth_moves(log: OdometryLog, robot: Robot, truth: Truth,
-                              values: dict[str, NDArray[np.float64]], max_gap: float | None) -> list[Finding]:
+def _silent_while_truth_moves(log: OdometryLog, truth: Truth, values: dict[str, NDArray[np.float64]],
+                              s: TruthSamples, steps: BodySteps) -> list[Finding]:
     """Stretches of at least 1 s where every distance channel reads 0 while the truth moves
     beyond its noise, each judged by how the truth's motion lies in time:
 
@@ -273,22 +282,17 @@ def _silent_while_truth_moves(log: OdometryLog, robot: Robot, truth: Truth,
     * otherwise a stuck encoder, or clocks seconds apart (fail).
 
     The truth's noise is :func:`odomkit.truth.truth_noise` (its stated σ or its fixes'
-    scatter about a smooth path): its net motion must pass max(5 cm, 10σ).
+    scatter about a smooth path): its net motion must pass max(5 cm, 10σ). ``s`` is the
+    truth at the log's rows and ``steps`` the log's body steps.
     """
-    from odomkit.kinematics import body_steps
+    from odomkit.integrate import dead_reckon
 
     t = log.t
     dt = np.diff(t)
-    s = truth_at(truth, t, max_gap)
     still = np.all([v == 0 for v in values.values()], axis=0)
     silent = still & s.valid[:-1] & s.valid[1:]
-    steps = body_steps(robot, log)
     rate = np.divide(np.abs(steps.dd), dt, out=np.zeros(dt.size), where=dt > 0)
-    # The odometry's own track from the origin (midpoint headings: enough for a chord).
-    heading = np.concatenate(([0.0], np.cumsum(steps.dtheta)))
-    mid = heading[:-1] + 0.5 * steps.dtheta
-    along = steps.dd[:, None] * np.column_stack((np.cos(mid), np.sin(mid)))
-    odo = np.vstack((np.zeros((1, 2)), np.cumsum(along, axis=0)))
+    odo: NDArray[np.float64] | None = None  # the odometry's own track, where a stretch needs it
     moving = ~still & (dt > 0)
     typical = float(np.median(rate[moving])) if moving.any() else math.nan
     noise = truth_noise(truth)
@@ -368,6 +372,8 @@ def _silent_while_truth_moves(log: OdometryLog, robot: Robot, truth: Truth,
         hi = int(np.searchsorted(t, t[j] + _CLOCK_SECONDS, side="right")) - 1
         lo = lo if s.valid[lo] else i
         hi = hi if s.valid[hi] else j
+        if odo is None:  # from the origin, midpoint headings: enough for a chord
+            odo = dead_reckon(steps.dd, steps.dtheta, (0.0, 0.0, 0.0), "midpoint")[:, :2]
         lost = float(np.hypot(*(xy[hi] - xy[lo])) - np.hypot(*(odo[hi] - odo[lo])))
         if lost < 0.5 * moved:
             warns.append(Finding(
