@@ -9,7 +9,9 @@ minimises the squared position errors, Umeyama 1991 without scale, evo's ``--ali
 ATE is the RMS position error after alignment; RPE (:func:`relative_pose_errors`) is the
 error of the motion over a given true travel, which no rigid alignment changes. The
 consistency of a covariance is scored by the position NEES eᵀP⁻¹e (2 dof) and by the
-fraction of poses inside the predicted ellipse of each probability (:func:`coverage`).
+fraction of poses inside the predicted ellipse of each probability (:func:`coverage`), and,
+where the truth has heading, by the heading NEES e_θ²/σθ² (1 dof, :func:`heading_nees`) and
+the fraction of headings inside the interval of each probability (:func:`heading_coverage`).
 """
 
 from __future__ import annotations
@@ -25,7 +27,8 @@ from odomkit.errors import ModelError
 
 __all__ = [
     "ALIGNMENTS", "align_track", "COVERAGE_LEVELS", "coverage", "coverage_range", "coverage_verdicts",
-    "ellipse_points", "evaluate_track", "nees", "nees_bounds", "nees_summary", "nees_verdict",
+    "ellipse_points", "evaluate_track", "heading_coverage", "heading_nees", "heading_nees_summary", "nees",
+    "nees_bounds", "nees_summary", "nees_verdict",
     "overall_verdict", "pose_errors", "relative_pose_errors", "rpe_pairs", "TrackEvaluation", "umeyama_se2",
     "VERDICTS",
 ]
@@ -264,12 +267,100 @@ def nees_summary(errors: ArrayLike, covs: ArrayLike) -> dict[str, object]:
     (:func:`nees_bounds` with k dof, None without a usable row) and ``count``, the rows used.
     """
     e = np.asarray(errors, dtype=float)
-    values = nees(e, covs)
+    return _summary(nees(e, covs), e.shape[1])
+
+
+def _summary(values: NDArray[np.float64], dof: int) -> dict[str, object]:
+    """:func:`nees_summary`'s dict of NEES ``values`` (n,) of ``dof`` dof, non-finite left out."""
     values = values[np.isfinite(values)]
     if values.size == 0:
         return {"mean": None, "median": None, "bounds": None, "count": 0}
     return {"mean": float(values.mean()), "median": float(np.median(values)),
-            "bounds": list(nees_bounds(values.size, e.shape[1])), "count": int(values.size)}
+            "bounds": list(nees_bounds(values.size, dof)), "count": int(values.size)}
+
+
+def heading_nees(errors: ArrayLike, variances: ArrayLike) -> NDArray[np.float64]:
+    """The heading NEES e_θ²/σθ² per row (1 dof), e_θ wrapped to [−π, π).
+
+    NaN where the error is NaN (truth without heading) or the variance is not positive
+    and finite (no claim to score, as :func:`nees` leaves a singular covariance out).
+
+    Parameters
+    ----------
+    errors : array_like, shape (n,)
+        Heading errors [rad].
+    variances : array_like, shape (n,)
+        Their predicted variances σθ² [rad²].
+
+    Examples
+    --------
+    >>> heading_nees([0.2, 2 * np.pi + 0.2, 0.1, np.nan], [0.01, 0.04, 0.0, 1.0]).round(12).tolist()
+    [4.0, 1.0, nan, nan]
+    """
+    e = wrap_angle(np.asarray(errors, dtype=float).reshape(-1))
+    v = validate.shape(variances, "heading variances", (e.size,))
+    out = np.full(e.size, np.nan)
+    ok = np.isfinite(e) & np.isfinite(v) & (v > 0)
+    out[ok] = e[ok] ** 2 / v[ok]
+    return out
+
+
+def heading_nees_summary(errors: ArrayLike, variances: ArrayLike) -> dict[str, object]:
+    """:func:`nees_summary` of the heading: mean and median of :func:`heading_nees` and the
+    95 % χ² bounds of the mean with 1 dof (:func:`nees_bounds`), over the rows that have one.
+
+    Parameters
+    ----------
+    errors : array_like, shape (n,)
+        Heading errors [rad] (NaN where the truth has none).
+    variances : array_like, shape (n,)
+        Their predicted variances [rad²].
+    """
+    return _summary(heading_nees(errors, variances), 1)
+
+
+def _chi2_1dof(p: float) -> float:
+    """Quantile of χ² with 1 dof: the square of the standard normal's (1 + p)/2 point."""
+    from statistics import NormalDist  # the standard library's: no scipy at start-up
+
+    return float(NormalDist().inv_cdf((1.0 + p) / 2.0) ** 2)
+
+
+def heading_coverage(errors: ArrayLike, variances: ArrayLike,
+                     levels: tuple[float, ...] = COVERAGE_LEVELS) -> dict[str, float | None]:
+    """Fraction of heading errors inside the predicted interval of each probability.
+
+    The interval holding probability p of a 1-D Gaussian is |e_θ| ≤ z σθ with z the
+    standard normal's (1 + p)/2 point (1.96 for 95 %), i.e. e_θ²/σθ² ≤ χ²₁(p). Rows without
+    a heading NEES (:func:`heading_nees`: no truth heading, no positive variance) are left
+    out, as :func:`coverage` leaves out a singular covariance.
+
+    Parameters
+    ----------
+    errors : array_like, shape (n,)
+        Heading errors [rad], wrapped here.
+    variances : array_like, shape (n,)
+        Their predicted variances [rad²].
+    levels : probabilities in (0, 1)
+
+    Returns
+    -------
+    dict mapping each level written with ``{:g}`` to a fraction, or to None when no row has
+    a heading NEES.
+
+    Examples
+    --------
+    >>> heading_coverage([0.5, 1.0, 3.0], [1.0, 1.0, 1.0], (0.5, 0.95))  # z 0.674, 1.96
+    {'0.5': 0.3333333333333333, '0.95': 0.6666666666666666}
+    """
+    values = heading_nees(errors, variances)
+    values = values[np.isfinite(values)]
+    out: dict[str, float | None] = {}
+    for p in levels:
+        if not 0 < p < 1:
+            raise ModelError(f"coverage levels must be in (0, 1), got {p}")
+        out[f"{p:g}"] = float(np.mean(values <= _chi2_1dof(p))) if values.size else None
+    return out
 
 
 def coverage(errors_xy: ArrayLike, cov_xy: ArrayLike,

@@ -75,6 +75,10 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     # Added beside the DESIGN.md keys (none renamed): the honesty verdicts and the whole run's start.
     keys |= {"coverage_bounds", "coverage_verdict", "coverage_overall", "nees_verdict", "verdict_note",
              "start_time", "start_heading", "start_heading_sigma", "start_heading_fitted"}
+    # And the heading's, where the truth has heading (OptiOdom runs have).
+    keys |= {"nees_heading_mean", "nees_heading_median", "nees_heading_bounds", "coverage_heading",
+             "coverage_heading_bounds", "coverage_heading_verdict", "coverage_heading_overall",
+             "nees_heading_verdict"}
     assert set(got) == keys | {"window", "per_log", "warnings"} and got["window"] == "10 s"
     assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
     assert set(got["coverage_bounds"]) == set(got["coverage_verdict"]) == set(got["coverage"])
@@ -82,7 +86,10 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends", "warnings"}] * 2
     assert all(p["start_heading"] is not None and not p["start_heading_fitted"] for p in got["per_log"])
     assert [len(p["window_ends"]) for p in got["per_log"]] == [p["windows"] for p in got["per_log"]]
-    assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees"}
+    assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees", "heading_error",
+                                                         "nees_heading"}
+    assert set(got["coverage_heading"]) == set(got["coverage_heading_verdict"]) == set(got["coverage"])
+    assert got["nees_heading_mean"] is not None and got["coverage_heading_overall"] is not None
     assert got["windows"] == sum(p["windows"] for p in got["per_log"])
 
 

@@ -564,6 +564,20 @@ NULL_KEYS: dict[str, str] = {
     "coverage_overall": "evaluate: no --window, no verdict",
     "nees_verdict": "evaluate: no --window, no verdict",
     "verdict_note": "evaluate: NEES and coverage agree",
+    # evaluate: the heading's NEES and coverage need truth with heading (position-only truth
+    # has none) and a covariance; its verdicts need --window too, as the position's
+    "nees_heading_mean": "evaluate: truth without heading, or no covariance",
+    "nees_heading_median": "evaluate: truth without heading, or no covariance",
+    "nees_heading_bounds": "evaluate: truth without heading, or no covariance",
+    "coverage_heading": "evaluate: truth without heading, or no covariance",
+    "coverage_heading_bounds": "evaluate: no --window or truth without heading, no verdict",
+    "coverage_heading_verdict": "evaluate: no --window or truth without heading, no verdict",
+    "coverage_heading_overall": "evaluate: no --window or truth without heading, no verdict",
+    "nees_heading_verdict": "evaluate: no --window or truth without heading, no verdict",
+    # evaluate: a window end's heading error and NEES, where the truth has no heading (or the
+    # predicted heading variance is zero)
+    "heading_error": "evaluate: a window end without truth heading",
+    "nees_heading": "evaluate: a window end without truth heading or heading variance",
     # evaluate: the whole run's start is one log's (null for a track file, or several logs)
     "start_time": "evaluate: a track file or several logs",
     "start_heading": "evaluate: a track file or several logs",

@@ -183,6 +183,8 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
             print(_coverage_text(out))
         if out.get("verdict_note"):
             print(f"NEES and coverage disagree: {out['verdict_note']}")
+        if out.get("nees_heading_mean") is not None:
+            print(_heading_text(out, what, verdicts=windowed and not whole_runs))
     elif windowed and not whole_runs and out.get("window"):
         print(f"honesty test: {out['window']} windows: no window end scored (see the warnings)")
     if windowed and not whole_runs and len(out["per_log"]) > 1:
@@ -196,6 +198,23 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
             print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
                   f"{_fmt(c['0.5'], '.2f')}, NEES mean {_nees_texts(one['nees_position_mean'], *bounds)[0]}"
                   f"{said}")
+
+
+def _heading_text(out: dict[str, Any], what: str, verdicts: bool) -> str:
+    """The heading's line, where the truth has heading: its NEES (1 dof) against its bounds,
+    its coverage of the 50/90/95/99 % intervals and (``verdicts``: window ends) the coverage
+    verdict in one word."""
+    lo, hi = out["nees_heading_bounds"]
+    mean = out["nees_heading_mean"]
+    shown, low, high = _nees_texts(mean, lo, hi)
+    side = ("" if not verdicts else " above its bounds (optimistic)," if mean > hi else
+            " below its bounds (pessimistic)," if mean < lo else " inside its bounds,")
+    cov = out["coverage_heading"]
+    word = out.get("coverage_heading_overall")
+    said = f", coverage {word} ({_MEANING[word]})" if verdicts and word is not None else ""
+    return (f"heading NEES over {what}: mean {shown} (95 % bounds {low}..{high} if independent, 1 dof),"
+            f"{side} median {out['nees_heading_median']:.3g}; inside the predicted 50/90/95/99 % intervals: "
+            + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")) + said)
 
 
 #: What each coverage verdict says of the covariance, in the text report.

@@ -240,7 +240,7 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     if not windows:
         reason = why_no_windows(log.t, travel, valid, spec, min_travel, skipped)
         return replace(whole, honesty_errors=np.empty((0, 2)), honesty_cov=np.empty((0, 2, 2)), windows=0,
-                       warnings=notes, no_windows=reason)
+                       warnings=notes, no_windows=reason, heading_errors=np.empty(0), heading_var=np.empty(0))
     own: list[str] = []
     left_out: list[tuple[str, int]] = []
     if skipped:
@@ -252,8 +252,11 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     note = first_order_note(found.cov[:, 2, 2])
     if note:
         own.append(f"{log.source}: {note}")
-    # found.cov holds the truth's noise at both window ends already (odomkit.window_errors).
+    # found.cov holds the truth's noise at both window ends already (odomkit.window_errors),
+    # its heading's too (heading_sigma² at the start, carried, and at the end); found.error's
+    # θ is NaN where the truth has no heading, so those ends have no heading NEES.
     return replace(whole, honesty_errors=found.error[:, :2], honesty_cov=found.cov[:, :2, :2],
+                   heading_errors=found.error[:, 2], heading_var=found.cov[:, 2, 2],
                    windows=len(found.windows), warnings=notes + own, window_notes=tuple(own),
                    left_out=tuple(left_out), honesty_t=log.t[found.end_rows],
                    honesty_t0=log.t[np.array([w.start for w in found.windows], dtype=np.int64)])

@@ -62,6 +62,11 @@ class Scored:
     start_heading: float | None = None
     start_heading_sigma: float | None = None
     start_heading_fitted: bool = False
+    # (m,) the heading errors [rad] at the honesty samples' rows (wrapped) and their predicted
+    # variance [rad²] (the truth's heading noise in), NaN where the truth has no heading; empty
+    # where no heading is scored (:func:`_headings` fills NaN)
+    heading_errors: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    heading_var: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
 
 
 @dataclass(frozen=True)
@@ -83,9 +88,13 @@ def _rpe_key(distance: float) -> str:
 def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] | None,
                truth: NDArray[np.float64], valid: NDArray[np.bool_], *, align: str,
                truth_sigma: float, rpe_distances: Sequence[float], min_travel: float,
-               honesty_from_rows: bool, t: NDArray[np.float64] | None = None) -> Scored:
+               honesty_from_rows: bool, t: NDArray[np.float64] | None = None,
+               truth_heading_sigma: float = 0.0) -> Scored:
     """Score the rows of one track where ``valid``; ``truth`` (N, 3), θ NaN if unknown;
-    ``t`` (N,) the rows' times, kept with them (:class:`TrackRows`) when given."""
+    ``t`` (N,) the rows' times, kept with them (:class:`TrackRows`) when given. The truth's
+    own noise, ``truth_sigma`` [m] per axis and ``truth_heading_sigma`` [rad], is added to
+    the covariance the rows are scored against (``honesty_from_rows``)."""
+    from odomkit.angles import wrap_angle
     from odomkit.evaluate import align_track, relative_pose_errors
 
     notes: list[str] = []
@@ -120,15 +129,18 @@ def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] 
         notes.append(f"{label}: no RPE over {', '.join(k for k, v in rpe.items() if v is None)} m ({why})")
     if honesty_from_rows and P is not None:
         he, hc = est[:, :2] - ref[:, :2], P[:, :2, :2] + truth_sigma**2 * np.eye(2)
+        # θ NaN where the truth has no heading: those rows have no heading NEES.
+        hh, hv = wrap_angle(est[:, 2] - ref[:, 2]), P[:, 2, 2] + truth_heading_sigma**2
         note = _singular_note(he, hc)
         if note:
             notes.append(f"{label}: {note}")
     else:
-        he, hc = np.empty((0, 2)), np.empty((0, 2, 2))
+        he, hc, hh, hv = np.empty((0, 2)), np.empty((0, 2, 2)), np.empty(0), np.empty(0)
         if honesty_from_rows:
             notes.append(f"{label}: the track has no covariance, so there is no NEES or coverage")
     kept = None if t is None else TrackRows(np.asarray(t, dtype=float)[rows], est, ref, P)
-    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept)
+    return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept,
+                  heading_errors=hh, heading_var=hv)
 
 
 #: A scored covariance whose smallest eigenvalue is below this fraction of its largest
@@ -179,13 +191,39 @@ def _singular_note(errors: NDArray[np.float64], cov: NDArray[np.float64]) -> str
             "the track with --initial-cov")
 
 
+def _headings(scored: Sequence[Scored]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The heading errors [rad] and variances [rad²] of ``scored``'s honesty samples, (m,)
+    each in their order, NaN where a log scored none (:class:`Scored`'s ``heading_*``)."""
+    errors, variances = [], []
+    for s in scored:
+        m = s.honesty_errors.shape[0]
+        have = s.heading_errors.shape == (m,) and s.heading_var.shape == (m,)
+        errors.append(s.heading_errors if have else np.full(m, np.nan))
+        variances.append(s.heading_var if have else np.full(m, np.nan))
+    return np.concatenate(errors), np.concatenate(variances)
+
+
+def _heading_summary(scored: Sequence[Scored]) -> dict[str, Any]:
+    """The heading's keys of :func:`summarise`: its NEES (1 dof) and coverage of the
+    intervals, each None where no sample has a truth heading (and a predicted variance)."""
+    from odomkit.evaluate import heading_coverage, heading_nees_summary
+
+    hh, hv = _headings(scored)
+    head = heading_nees_summary(hh, hv)
+    cover = heading_coverage(hh, hv) if head["count"] else None
+    return {"nees_heading_mean": head["mean"], "nees_heading_median": head["median"],
+            "nees_heading_bounds": head["bounds"], "coverage_heading": cover}
+
+
 def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
     """The output keys of DESIGN.md pooled over ``scored`` (without ``per_log``).
 
     Pooled: ``ate_rmse`` and each ``rpe`` are the RMS over every sample of every log,
     ``max_position_error`` the largest, ``final_position_error`` the mean of the logs'
     final errors, ``drift_percent`` 100 × Σ final errors / Σ true travel, and the NEES
-    and coverage figures use every scored pose (window ends, or track rows).
+    and coverage figures use every scored pose (window ends, or track rows); the heading's
+    (``nees_heading_*``, ``coverage_heading``) those of them where the truth has heading,
+    None where none has.
     """
     from odomkit.evaluate import coverage, nees_summary
 
@@ -215,21 +253,30 @@ def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[
         "nees_bounds": nees["bounds"],
         "coverage": cover,
         "inside_95_fraction": cover["0.95"],
+        **_heading_summary(scored),
     }
 
 
 def _window_ends(s: Scored) -> dict[str, Any]:
     """``window_ends`` of a log scored in windows: each window's ``start`` and ``end`` [s, log
-    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, so that
-    an outlier can be found and looked at; nothing for a whole-track score."""
+    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, and its
+    ``heading_error`` [rad] and ``nees_heading`` (None where the truth has no heading), so
+    that an outlier can be found and looked at; nothing for a whole-track score."""
     if not s.honesty_t0.size:
         return {}
-    from odomkit.evaluate import nees
+    from odomkit.evaluate import heading_nees, nees
 
     q = nees(s.honesty_errors, s.honesty_cov)
-    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, strict=True)
+    hh, hv = _headings([s])
+    qh = heading_nees(hh, hv)
+
+    def number(x: float) -> float | None:
+        return float(x) if np.isfinite(x) else None
+
+    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, hh, qh, strict=True)
     return {"window_ends": [{"start": float(a), "end": float(b), "error": [float(e[0]), float(e[1])],
-                             "nees": float(n)} for a, b, e, n in rows]}
+                             "nees": float(n), "heading_error": number(h), "nees_heading": number(nh)}
+                            for a, b, e, n, h, nh in rows]}
 
 
 def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: str | None = None,
@@ -265,14 +312,16 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
     coverage falls in 95 % of such tests over this many window ends), ``coverage_verdict``
     {level: "optimistic" | "consistent" | "pessimistic"}, ``coverage_overall`` (one word,
     :func:`odomkit.evaluate.overall_verdict`), ``nees_verdict`` (the mean against
-    ``nees_bounds``) and ``verdict_note``, which of the two to trust where they differ.
+    ``nees_bounds``) and ``verdict_note``, which of the two to trust where they differ; and
+    the heading's alike (:func:`_heading_verdicts`).
 
     Only for window ends (``windowed``), the independent samples both ranges assume; every
     key None otherwise (track rows, one window per log)."""
     from odomkit.evaluate import coverage_range, coverage_verdicts, nees, nees_verdict, overall_verdict
 
     empty: dict[str, Any] = {"coverage_bounds": None, "coverage_verdict": None, "coverage_overall": None,
-                             "nees_verdict": None, "verdict_note": None}
+                             "nees_verdict": None, "verdict_note": None,
+                             **_heading_verdicts(summary, scored, windowed)}
     if not windowed or summary.get("nees_position_mean") is None:
         return empty
     he = np.concatenate([s.honesty_errors for s in scored])
@@ -307,7 +356,28 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
                     "window_ends")
     return {"coverage_bounds": {k: list(coverage_range(n, float(k))) for k in cover},
             "coverage_verdict": levels, "coverage_overall": overall, "nees_verdict": by_nees,
-            "verdict_note": note}
+            "verdict_note": note, **_heading_verdicts(summary, scored, windowed)}
+
+
+def _heading_verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) -> dict[str, Any]:
+    """The heading's verdicts, as :func:`verdicts` gives the position's: ``coverage_heading_bounds``
+    (the binomial ranges over the ends that have a heading NEES), ``coverage_heading_verdict``,
+    ``coverage_heading_overall`` and ``nees_heading_verdict`` (the mean against
+    ``nees_heading_bounds``, 1 dof). None without window ends (``windowed``) or where the
+    truth has no heading."""
+    from odomkit import evaluate as ev
+
+    cover = summary.get("coverage_heading")
+    if not windowed or cover is None or summary.get("nees_heading_mean") is None:
+        return {"coverage_heading_bounds": None, "coverage_heading_verdict": None,
+                "coverage_heading_overall": None, "nees_heading_verdict": None}
+    values = ev.heading_nees(*_headings(scored))
+    n = int(np.count_nonzero(np.isfinite(values)))
+    levels = ev.coverage_verdicts(cover, n)
+    by_nees = ev.nees_verdict(summary["nees_heading_mean"], summary["nees_heading_bounds"])
+    return {"coverage_heading_bounds": {k: list(ev.coverage_range(n, float(k))) for k in cover},
+            "coverage_heading_verdict": levels, "coverage_heading_overall": ev.overall_verdict(levels),
+            "nees_heading_verdict": by_nees}
 
 
 def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:

@@ -127,7 +127,8 @@ def _score_track(path: Path, opts: TruthOptions, align: str, rpe_distances: Sequ
                          source=str(path))
     return score_rows(str(path), track.poses, track.cov, ref, valid, align=align,
                       truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
-                      min_travel=min_travel, honesty_from_rows=True, t=track.t)
+                      min_travel=min_travel, honesty_from_rows=True, t=track.t,
+                      truth_heading_sigma=opts.heading_sigma or 0.0)
 
 
 def _read_estimate(path: Path) -> TrackFile:
