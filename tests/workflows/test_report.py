@@ -345,3 +345,23 @@ def test_the_calibration_section_names_the_parameters_it_fitted(with_truth):
               and not key.startswith("calibration.std_error.") and key.count(".") == 1]
     assert fitted and f"The robot's systematic errors ({', '.join(fitted[:3])}" in text
     assert "unequal wheel sizes" not in text
+
+
+def test_a_robot_file_without_noise_gets_its_errors_and_the_fitted_noise_tested(run_cli, tmp_path):
+    """A robot file that names only the vehicle (no [noise]) predicts no covariance: the report
+    still gives the errors (as evaluate without --window does), says there is nothing of the
+    file's to test, and tests the noise it fits (as fit-noise and evaluate do); it stopped
+    with evaluate's one-line error before."""
+    robot = tmp_path / "bare.toml"
+    robot.write_text("\n".join(line for line in Path(ROBOT).read_text(encoding="utf-8").split("[noise]")[0]
+                               .splitlines()) + "\n")
+    assert "[noise]" not in robot.read_text(encoding="utf-8")
+    out = tmp_path / "bare.html"
+    code, stdout, err = run_cli("report", RUN, "--robot", robot, "--out", out)
+    assert code == 0, err
+    page = Page(out.read_text(encoding="utf-8"))
+    errors = _run_json(run_cli, "evaluate", RUN, "--robot", robot)
+    assert page.cells["ate_rmse"][0] == pytest.approx(errors["ate_rmse"], rel=1e-12)
+    assert "coverage.0.95" not in page.cells  # no covariance of the file's to score
+    assert any("has no [noise] table" in chunk for chunk in page.text)
+    assert "fitted.coverage.0.5" in page.cells

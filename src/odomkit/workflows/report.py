@@ -135,7 +135,9 @@ def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptio
     """The evaluate workflow's figures: each log's raw scores and the pooled JSON keys."""
     from odomkit.workflows.evaluate import score_logs, summarise
 
-    scored = score_logs([log], robot, [options], log_options=log_options, window=window, method=method)
+    # A robot file without [noise] is scored for its errors alone (window None then).
+    scored = score_logs([log], robot, [options], log_options=log_options, window=window, method=method,
+                        errors_only=True)
     for note in dict.fromkeys(w for s in scored for w in s.warnings):
         warnings.warn(note, stacklevel=2)
     return scored, summarise(scored, (1.0,))
@@ -343,12 +345,14 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
         blocks.append(Paragraph(f"The fitted noise could not be scored: {unscored}", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
     n = ev_fit["windows"]
+    # The robot file's noise beside the fitted, where it has one (ev's coverage null: none).
+    guess = {} if ev.get("coverage") is None else {"robot file's noise": ev["coverage"]}
     # The two noises may score different ends: a position-only truth's fitted noise can leave
     # out starts whose heading its fixes no longer support (odomkit.truth.MAX_HEADING_SIGMA).
-    scored = (f"{n} window ends" if ev["windows"] == n else
+    scored = (f"{n} window ends" if not guess or ev["windows"] == n else
               f"the window ends ({ev['windows']} with the robot file's noise, {n} with the fitted noise: "
               "a start heading the truth's fitted noise cannot support is left out)")
-    blocks.append(coverage_table([("robot file's noise", ev["coverage"], ""),
+    blocks.append(coverage_table([*((k, v, "") for k, v in guess.items()),
                                   ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")], scored))
     if n == 0:  # nothing to draw a fraction of
         blocks.append(Paragraph("The fitted noise scores no window end: the truth's fitted noise is too "
@@ -356,7 +360,7 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
                                 "test it.", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
     fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
-        ax[0], {"robot file's noise": ev["coverage"], "fitted noise (in-sample)": ev_fit["coverage"]},
+        ax[0], {**guess, "fitted noise (in-sample)": ev_fit["coverage"]},
         n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
         "against the observed fraction of window ends inside.",
         "Reliability diagram, guessed and fitted noise", size=(5.6, 4.6))
@@ -531,8 +535,14 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         window, note = _auto_window(run)
         if note:
             warnings.warn(note, stacklevel=2)
-    scored, ev = _scored(log, robot, options, log_options, window, method)
-    sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures)]
+    # A robot file without [noise] predicts no covariance: its errors alone, and the honesty
+    # test of the noise fitted below.
+    file_noise = bool(read_robot(robot)[1])
+    scored, ev = _scored(log, robot, options, log_options, window if file_noise else None, method)
+    sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures) if file_noise else
+                Section("honesty", "How honest: the windowed test of the covariance", (Paragraph(
+                    "The robot file has no [noise] table, so it predicts no covariance to test; the noise "
+                    "fitted to this log is tested under 'The fitted noise' (in-sample).", "warning"),))]
     step.advance()
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="odomkit-report-") as tmp:
@@ -546,7 +556,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             problems)
         after = run_after = None
         if cal is not None:
-            after = _scored(log, cal_path, options, log_options, window, method)[1]
+            after = _scored(log, cal_path, options, log_options, window if file_noise else None, method)[1]
             start = run.track.poses[0]  # where the track before calibration started
             run_after = run_track(log, cal_path, method=method, log_options=log_options,  # type: ignore[arg-type]
                                   truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])))
@@ -599,9 +609,10 @@ def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, An
     if ev is not None:
         rows += [
             ("final position error", number(ev["final_position_error"], "m", key="final_position_error")),
-            ("ATE", number(ev["ate_rmse"], "m", key="ate_rmse")),
-            ("inside the 95 % ellipse (robot file's noise; ideal 0.95)",
-             number(ev["coverage"]["0.95"], key="coverage.0.95", decimals=2))]
+            ("ATE", number(ev["ate_rmse"], "m", key="ate_rmse"))]
+        if ev.get("coverage") is not None:
+            rows.append(("inside the 95 % ellipse (robot file's noise; ideal 0.95)",
+                         number(ev["coverage"]["0.95"], key="coverage.0.95", decimals=2)))
     if cal is not None and after is not None:
         rows.append(("ATE after calibration", number(after["ate_rmse"], "m", key="after.ate_rmse")))
     if fit is not None and ev_fit is not None:
