@@ -16,6 +16,7 @@ the fraction of headings inside the interval of each probability (:func:`heading
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -353,14 +354,7 @@ def heading_coverage(errors: ArrayLike, variances: ArrayLike,
     >>> heading_coverage([0.5, 1.0, 3.0], [1.0, 1.0, 1.0], (0.5, 0.95))  # z 0.674, 1.96
     {'0.5': 0.3333333333333333, '0.95': 0.6666666666666666}
     """
-    values = heading_nees(errors, variances)
-    values = values[np.isfinite(values)]
-    out: dict[str, float | None] = {}
-    for p in levels:
-        if not 0 < p < 1:
-            raise ModelError(f"coverage levels must be in (0, 1), got {p}")
-        out[f"{p:g}"] = float(np.mean(values <= _chi2_1dof(p))) if values.size else None
-    return out
+    return _inside(heading_nees(errors, variances), levels, _chi2_1dof)
 
 
 def coverage(errors_xy: ArrayLike, cov_xy: ArrayLike,
@@ -389,13 +383,19 @@ def coverage(errors_xy: ArrayLike, cov_xy: ArrayLike,
     >>> coverage([[0.5, 0.0], [3.0, 0.0]], np.broadcast_to(np.eye(2), (2, 2, 2)), (0.5, 0.99))
     {'0.5': 0.5, '0.99': 1.0}
     """
-    values = nees(validate.shape(errors_xy, "errors", ("n", 2)), cov_xy)
+    return _inside(nees(validate.shape(errors_xy, "errors", ("n", 2)), cov_xy), levels, _chi2_2dof)
+
+
+def _inside(values: NDArray[np.float64], levels: tuple[float, ...],
+            quantile: Callable[[float], float]) -> dict[str, float | None]:
+    """The fraction of the finite NEES ``values`` (n,) at or under ``quantile(p)`` (the χ²
+    quantile of their dof) for each level p, keyed ``{:g}``; None where no value is finite."""
     values = values[np.isfinite(values)]
     out: dict[str, float | None] = {}
     for p in levels:
         if not 0 < p < 1:
             raise ModelError(f"coverage levels must be in (0, 1), got {p}")
-        out[f"{p:g}"] = float(np.mean(values <= _chi2_2dof(p))) if values.size else None
+        out[f"{p:g}"] = float(np.mean(values <= quantile(p))) if values.size else None
     return out
 
 
