@@ -537,7 +537,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             warnings.warn(note, stacklevel=2)
     # A robot file without [noise] predicts no covariance: its errors alone, and the honesty
     # test of the noise fitted below.
-    file_noise = bool(read_robot(robot)[1])
+    file_models = read_robot(robot)[1]
+    file_noise = bool(file_models)
     scored, ev = _scored(log, robot, options, log_options, window if file_noise else None, method)
     sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures) if file_noise else
                 Section("honesty", "How honest: the windowed test of the covariance", (Paragraph(
@@ -576,7 +577,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         ev_fit = None if scored_fit is None else scored_fit[1]
         for note in [] if fit is None else fit["warnings"]:  # the CLI prints them; here they join the page's
             warnings.warn(f"the noise fit: {note}", stacklevel=2)
-        guessed = {k: float(v) for m in read_robot(robot)[1] for k, v in vars(m).items()
+        guessed = {k: float(v) for m in file_models for k, v in vars(m).items()
                    if fit is not None and k in fit["parameters"]}
         # The truth's own noise is no noise model: the robot file keeps it in [truth] (sigma,
         # heading_sigma, time_sigma), which fit-noise fits as truth_sigma, ... and writes back there.
