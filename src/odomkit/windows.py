@@ -206,10 +206,12 @@ def split_windows(
     along = t if spec.unit == "s" else s
     for first, last in truth_stretches(along[rows], spec.length):
         cand = rows[first] + np.flatnonzero(at[rows[first]:rows[last] + 1])  # the stretch's end rows
+        if cand.size < 2:
+            continue
         axis = along[cand]
         i = 0  # positions in ``cand``
         while True:
-            j = int(np.searchsorted(axis, axis[i] + spec.length, side="left")) if cand.size else 0
+            j = int(np.searchsorted(axis, axis[i] + spec.length, side="left"))
             # searchsorted may land on a repeated value below the target; never before i+1.
             j = max(j, i + 1)
             if j >= cand.size or axis[j] < axis[i] + spec.length:
