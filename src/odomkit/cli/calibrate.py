@@ -93,10 +93,9 @@ def calibrate_command(
     """Calibrate wheel scales and wheel base, or a tricycle's or car's speed scale, steering
     offset and wheel base (exact least squares or UMBmark) from logs with ground truth."""
     from odomkit.workflows.calibration import calibrate_files
-    from odomkit.workflows.truth import truth_options_per_log
+    from odomkit.workflows.truth import truth_options_per_log, with_truth_topic
 
-    options = log_opts
-    base = truth_base
+    options, base = with_truth_topic(log_opts, truth_base, bool(truth))
     per_run = truth_options_per_log(base, list(truth), len(runs)) if truth else None
     with reported_warnings() as warned:
         # Flags that do not apply to the method are refused by the workflow, not dropped.

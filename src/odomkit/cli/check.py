@@ -55,9 +55,9 @@ def check_command(
     sign-flipped channels, turning both ways, distance, what each parameter can be fitted from;
     and say what to record next. Exit status 1 when a check fails."""
     from odomkit.workflows.check import check_file
+    from odomkit.workflows.truth import with_truth_topic
 
-    options = log_opts
-    topts = replace(truth_base, path=truth)
+    options, topts = with_truth_topic(log_opts, replace(truth_base, path=truth), truth is not None)
     # Reading the log and the truth may warn (repeated truth times, cumulative-looking
     # counters): one "odomkit: warning:" line each, and in the JSON, as every command does.
     with reported_warnings() as warned:

@@ -75,14 +75,13 @@ def evaluate_command(
     the windowed honesty test of the robot file's noise on logs."""
     from odomkit.evaluate import ALIGNMENTS
     from odomkit.workflows.evaluate import evaluate_logs, evaluate_tracks
-    from odomkit.workflows.truth import truth_options_per_log
+    from odomkit.workflows.truth import truth_options_per_log, with_truth_topic
 
     if align not in ALIGNMENTS:
         raise InputError(f"--align must be one of {', '.join(ALIGNMENTS)}, got {align!r}")
     distances = _distances(rpe)
-    base = truth_base
+    options, base = with_truth_topic(log_opts, truth_base, bool(truth))
     per_file = truth_options_per_log(base, list(truth or []), len(files))
-    options = log_opts
     if robot is None:
         if window:
             raise InputError("--window re-runs dead reckoning, so it needs --robot (and FILES that are logs)")

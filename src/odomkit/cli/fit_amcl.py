@@ -65,12 +65,11 @@ def fit_amcl_command(
     from AMCL's own differential or omni model between its update thresholds."""
     from odomkit.errors import InputError
     from odomkit.workflows.fit_amcl import fit_amcl_files
-    from odomkit.workflows.truth import truth_options_per_log
+    from odomkit.workflows.truth import truth_options_per_log, with_truth_topic
 
     if not 0 < level < 1:
         raise InputError(f"--level must be in (0, 1), got {level}")
-    options = log_opts
-    base = truth_base
+    options, base = with_truth_topic(log_opts, truth_base, bool(truth))
     per_file = truth_options_per_log(base, list(truth or []), len(odometry))
     with reported_warnings() as warned:
         out = fit_amcl_files(odometry, per_file, robot_path=robot, log_options=options, model=model,

@@ -91,7 +91,7 @@ def fit_noise_command(
     profile-likelihood intervals and warnings where the data cannot identify them."""
     from odomkit.errors import InputError
     from odomkit.workflows.fit_noise import fit_noise_files, parse_kinds
-    from odomkit.workflows.truth import truth_options_per_log
+    from odomkit.workflows.truth import truth_options_per_log, with_truth_topic
 
     if not 0 < level < 1:
         raise InputError(f"--level must be in (0, 1), got {level}")
@@ -100,8 +100,7 @@ def fit_noise_command(
     if workers is not None and workers < 1:
         raise InputError(f"--workers must be a positive integer, got {workers}")
     paths = _logs(logs, log)
-    options = log_opts
-    base = truth_base
+    options, base = with_truth_topic(log_opts, truth_base, bool(truth))
     per_log = truth_options_per_log(base, list(truth or []), len(paths))
     fixed = [f.strip() for f in (fix or "").split(",") if f.strip()]
     with reported_warnings() as warned, progress_bar(json_out) as progress:

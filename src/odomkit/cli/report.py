@@ -65,9 +65,11 @@ def report(
     from odomkit.workflows.report import run_report
 
     fitted = parse_kinds(kinds)
-    options = log_opts
+    from odomkit.workflows.truth import with_truth_topic
+
+    options, topts = with_truth_topic(log_opts, replace(truth_base, path=truth), truth is not None)
     with reported_warnings() as warned, progress_bar(json_out) as progress:
-        result = run_report(log, robot, out, truth=replace(truth_base, path=truth),
+        result = run_report(log, robot, out, truth=topts,
                             log_options=options, window=window, kinds=fitted, method=method,
                             pose0=parse_pose(initial_pose), overwrite=force, progress=progress)
     result = with_warnings(result, warned)

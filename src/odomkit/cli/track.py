@@ -87,14 +87,15 @@ def track(
 ) -> None:
     """Dead-reckon LOG with the robot file (and the covariance of every pose when it has a noise table)."""
     from odomkit.workflows.track import run_track
+    from odomkit.workflows.truth import with_truth_topic
 
-    options = log_opts
+    options, topts = with_truth_topic(log_opts, replace(truth_base, path=truth), truth is not None)
     with reported_warnings() as warned, progress_bar(json) as progress:
         result = run_track(
             log, robot, method=method,  # type: ignore[arg-type]
             log_options=options, pose0=parse_pose(initial_pose, theta0_deg),
             cov0=parse_initial_cov(initial_cov),
-            truth=replace(truth_base, path=truth),
+            truth=topts,
             with_covariance=covariance, engine=engine, out=out, tum=tum, kitti=kitti, overwrite=force,
             bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
             progress=progress, plot=plot,

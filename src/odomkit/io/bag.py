@@ -53,6 +53,11 @@ horizontal σ per axis, √((c_ee + c_nn)/2), is kept as ``meta["truth_position_
 [m], and a command whose truth σ is not given says so (``--truth-sigma`` takes it; it is
 never set from the bag silently).
 
+**Truth in a bag of its own** (``--truth mocap.bag --truth-topic /pose``:
+:func:`read_bag_truth`): the same topic types, kept at their own stamps as a TUM file's poses
+are (nothing is interpolated at a log's rows), so that a truth recorded apart from the log
+reads as its text file would.
+
 **What a rate means over a step** (row k's rate holds from row k to row k+1, as in
 :mod:`odomkit.log`): a command (Twist, TwistStamped) holds from its stamp to the next one
 (step k uses message k); an Odometry twist is the controller's estimate over an interval
@@ -84,7 +89,7 @@ from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.truth import Truth
 
 __all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_topics", "is_bag", "read_bag", "read_bag_odometry",
-           "require_rosbags", "TRUTH_TYPES"]
+           "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
 
 #: The message types odomkit reads, by their ROS 2 names (rosbags names ROS 1 types alike).
 MESSAGE_TYPES = {
@@ -350,17 +355,84 @@ def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source:
     return stream
 
 
-def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
-                  progress: Progress = NO_PROGRESS) -> _Stream:
-    """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
+def _pose_truth(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
+                progress: Progress = NO_PROGRESS) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """A pose topic's times [ns] (M,) and poses (M, 3): x, y [m] and the unwrapped yaw [rad]."""
     messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
                            topic, source, progress)
     kind = TRUTH_TYPES[msgtype]
     poses = [m.pose if kind == "PoseStamped" else m.pose.pose for m in messages]
     xyt = _finite(np.array([[p.position.x, p.position.y, _yaw(p.orientation)] for p in poses], dtype=float),
                   "pose", topic, source)
+    xyt[:, 2] = unwrap_angle(xyt[:, 2])
+    return ns, xyt
+
+
+def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
+                  progress: Progress = NO_PROGRESS) -> _Stream:
+    """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
+    ns, xyt = _pose_truth(reader, topic, msgtype, receive_time, source, progress)
     return _Stream(topic, ns, [("gt_x", "absolute", xyt[:, 0]), ("gt_y", "absolute", xyt[:, 1]),
-                               ("gt_theta", "absolute", unwrap_angle(xyt[:, 2]))])
+                               ("gt_theta", "absolute", xyt[:, 2])])
+
+
+def _first_at_each_time(ns: NDArray[np.int64], topic: str, source: str) -> NDArray[np.bool_]:
+    """Which messages to keep: the first at each stamp (a truth's clock must increase), with
+    a warning counting the others."""
+    repeat = np.concatenate(([False], np.diff(ns) == 0))
+    if repeat.any():
+        warnings.warn(f"{source}: {topic}: {int(repeat.sum())} fixes repeat an earlier stamp and were "
+                      "dropped (the first fix at each time is kept)", stacklevel=4)
+    return ~repeat
+
+
+def read_bag_truth(path: str | Path, topic: str | None = None,
+                   receive_time: bool = False) -> tuple[Truth, float | None]:
+    """A bag's ground-truth topic as truth on its own clock (``--truth BAG``, a truth that was
+    recorded apart from the log, e.g. a motion capture's own bag).
+
+    Unlike a log bag's ``--truth-topic`` pose topic, which is interpolated at the log's rows,
+    the poses are kept at their own stamps, as a TUM file's are, and ``evaluate`` and the
+    windows interpolate them. A NavSatFix topic is read as in :func:`read_bag` (east and
+    north of the first fix).
+
+    Parameters
+    ----------
+    path : a ROS 1 ``.bag``, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file
+    topic : a :data:`TRUTH_TYPES` topic; None: the bag's only one
+    receive_time : use the time the bag received each message instead of header stamps
+
+    Returns
+    -------
+    truth : Truth
+        Times [s] strictly increasing (a message repeating a stamp is dropped, with a
+        warning); the heading (unwrapped yaw) for a pose topic, None for GPS fixes.
+    stated_sigma : float or None
+        The median horizontal σ per axis [m] that every GPS fix states, else None.
+
+    Raises
+    ------
+    InputError
+        Not a bag, no such topic (listing the truth topics there are), several truth topics
+        and none named, fewer than two messages, stamps that go backwards.
+    """
+    path = Path(path)
+    source = str(path)
+    with _open(path) as reader:
+        with _bag_errors(source):
+            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        if topic is None:
+            found = sorted(n for n, t in available.items() if t in TRUTH_TYPES)
+            if len(found) != 1:
+                raise InputError(f"name the truth topic with --truth-topic; "
+                                 f"{_topic_list(available, TRUTH_TYPES)}", source=source)
+            topic = found[0]
+        name = _find_topic(available, topic, source, TRUTH_TYPES)
+        if TRUTH_TYPES[available[name]] == "NavSatFix":
+            return _fix_truth(reader, name, receive_time, source)
+        ns, xyt = _pose_truth(reader, name, available[name], receive_time, source)
+    keep = _first_at_each_time(ns, name, source)
+    return Truth(_seconds(ns[keep]), xyt[keep, :2], xyt[keep, 2], 0.0, f"{source}:{name}"), None
 
 
 def _fix_truth(reader: Any, topic: str, receive_time: bool, source: str,
@@ -388,12 +460,10 @@ def _fix_truth(reader: Any, topic: str, receive_time: bool, source: str,
                              f"expected degrees within ±{limit:g}", source=source)
     alt = np.array([m.altitude for m in kept], dtype=float)
     ns = ns[fixed]
-    repeat = np.concatenate(([False], np.diff(ns) == 0))
-    if repeat.any():
-        warnings.warn(f"{source}: {topic}: {int(repeat.sum())} fixes repeat an earlier stamp and were "
-                      "dropped (the first fix at each time is kept)", stacklevel=3)
-        kept = [m for m, r in zip(kept, repeat, strict=True) if not r]
-        geo, alt, ns = geo[~repeat], alt[~repeat], ns[~repeat]
+    first = _first_at_each_time(ns, topic, source)
+    if not first.all():
+        kept = [m for m, k in zip(kept, first, strict=True) if k]
+        geo, alt, ns = geo[first], alt[first], ns[first]
     name = f"{source}:{topic}"
     # NaN altitude: "not known" (sensor_msgs/NavSatFix); then no fix's height is used.
     xy, _ = project_latlon(geo[:, 0], geo[:, 1], alt if np.all(np.isfinite(alt)) else None, source=name)

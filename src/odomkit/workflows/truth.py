@@ -14,8 +14,10 @@ from odomkit.errors import InputError
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.truth import Truth
+    from odomkit.workflows.logs import LogOptions
 
-__all__ = ["clock_from_robot", "load_truth", "resolved_truth", "TruthOptions", "truth_options_per_log"]
+__all__ = ["clock_from_robot", "load_truth", "resolved_truth", "TruthOptions", "truth_options_per_log",
+           "with_truth_topic"]
 
 
 @dataclass(frozen=True)
@@ -32,7 +34,10 @@ class TruthOptions:
     (``--truth-time-offset``; None: not given, the robot file's ``[truth] time_offset`` or
     zero, and ``calibrate --truth`` fits it). ``record`` reads only the lines of a file of
     tagged records that this word leads, the tag dropped (``--truth-record``;
-    :func:`odomkit.io.text.select_record`).
+    :func:`odomkit.io.text.select_record`). A ``path`` that is a ROS bag is read by
+    :func:`odomkit.io.bag.read_bag_truth`: ``topic`` names its truth topic (``--truth-topic``
+    given with ``--truth``; None: the bag's only one) and ``bag_time`` times its messages by
+    when the bag received them (``--bag-time``).
     """
 
     path: Path | None = None
@@ -45,6 +50,8 @@ class TruthOptions:
     time_sigma: float | None = None
     time_offset: float | None = None
     record: str | None = None
+    topic: str | None = None
+    bag_time: bool = False
 
     def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
         """These options with each truth noise and the clock offset not given taken from
@@ -86,13 +93,22 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
 
     sigma, heading_sigma = options.sigma or 0.0, options.heading_sigma or 0.0
     time_sigma = options.time_sigma or 0.0
-    found = (read_truth(options.path, options.format, options.columns, options.time_unit, sigma,
-                        record=options.record)
-             if options.path is not None else None if log is None else truth_from_log(log))
+    stated: object = None
+    found: Truth | None
+    if options.path is not None and _is_bag(options.path):
+        found, stated = _bag_truth(options)
+    elif options.path is not None:
+        if options.topic is not None:
+            raise InputError(f"--truth-topic names a topic of a ROS bag; the --truth file {options.path} "
+                             "is not a bag (.bag, .db3, .mcap or a ROS 2 bag folder)")
+        found = read_truth(options.path, options.format, options.columns, options.time_unit, sigma,
+                           record=options.record)
+    else:
+        found = None if log is None else truth_from_log(log)
+        stated = None if log is None else log.meta.get("truth_position_sigma")
     if found is None:
         return None
     truth: Truth = found
-    stated = None if options.path is not None or log is None else log.meta.get("truth_position_sigma")
     if isinstance(stated, float) and not sigma:  # a bag's GPS fixes state their σ (io/bag.py)
         warnings.warn(f"{truth.source}: the fixes state their position covariance, median horizontal "
                       f"sigma {stated:.3g} m per axis, which odomkit does not use on its own: "
@@ -102,6 +118,42 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
+
+
+def _is_bag(path: Path) -> bool:
+    from odomkit.io.bag import is_bag
+
+    return is_bag(path)
+
+
+def _bag_truth(options: TruthOptions) -> tuple[Truth, float | None]:
+    """The truth topic of the ``--truth`` bag and the σ its GPS fixes state; the options of a
+    text truth file are refused by name."""
+    from odomkit.io.bag import read_bag_truth
+
+    assert options.path is not None
+    text_only = [flag for flag, given in (("--truth-format", options.format != "auto"),
+                                          ("--truth-columns", options.columns is not None),
+                                          ("--truth-time-unit", options.time_unit != "s"),
+                                          ("--truth-record", options.record is not None)) if given]
+    if text_only:
+        raise InputError(f"{', '.join(text_only)} applies to a text truth file; {options.path} is a "
+                         "ROS bag (name its truth topic with --truth-topic)")
+    return read_bag_truth(options.path, options.topic, options.bag_time)
+
+
+def with_truth_topic(log: LogOptions, truth: TruthOptions,
+                     truth_given: bool) -> tuple[LogOptions, TruthOptions]:
+    """Where ``--truth-topic`` belongs: to the ``--truth`` bag where a truth file is given
+    (``truth_given``), else to the log bag (its own ground truth). ``--bag-time`` times both.
+
+    Returns the log and truth options with ``truth_topic`` moved to ``TruthOptions.topic``
+    in the first case, unchanged in the second.
+    """
+    if not truth_given:
+        return log, truth
+    return (replace(log, truth_topic=None),
+            replace(truth, topic=log.truth_topic, bag_time=log.bag_time))
 
 
 def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
