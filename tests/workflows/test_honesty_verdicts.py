@@ -105,9 +105,49 @@ def test_nees_inside_its_bounds_but_coverage_optimistic_says_to_trust_coverage()
     s = _scored(honest)
     got = verdicts(summarise([s], (1.0,)), [s], windowed=True)
     assert got["nees_verdict"] == "optimistic" and got["coverage_overall"] == "consistent"
-    assert "pull the mean up (largest 150" in got["verdict_note"]
+    # An end at 150 is not "a few large ends" but one an honest covariance never gives
+    # (chance 100·e^-75): the note says so and does not send the user to coverage.
+    assert "the largest end (NEES 150" in got["verdict_note"] and "heavier tail" in got["verdict_note"]
+    assert "trust coverage" not in got["verdict_note"]
+    # Large but plausible ends (two of 30 at 14.5: the largest has a chance of 0.021 over 30
+    # ends) keep the advice to trust coverage.
+    plausible = list(-2 * np.log1p(-(np.arange(28) + 0.5) / 28)) + [14.5] * 2
+    s = _scored(plausible)
+    got = verdicts(summarise([s], (1.0,)), [s], windowed=True)
+    assert got["nees_verdict"] == "optimistic" and got["coverage_overall"] == "consistent"
+    assert "trust coverage" in got["verdict_note"] and "pull the mean up (largest 14.5" in got["verdict_note"]
     # Track rows (not independent): no verdict at all.
     assert set(verdicts(summarise([s], (1.0,)), [s], windowed=False).values()) == {None}
+
+
+def test_a_few_ends_with_one_far_outside_are_not_called_consistent():
+    """A user study's held-out 60 s test: 3 window ends, one at NEES 28.2 (chance ~2e-6 for an
+    honest covariance). Coverage over 3 ends calls it consistent; the note must not send the
+    user to coverage, and must say that 3 ends can hardly tell."""
+    s = _scored([0.5, 1.2, 28.2])
+    got = verdicts(summarise([s], (1.0,)), [s], windowed=True)
+    assert got["nees_verdict"] == "optimistic" and got["coverage_overall"] != "optimistic"
+    note = got["verdict_note"]
+    assert "trust coverage" not in note and "with only 3 ends" in note and "NEES 28.2" in note
+    chance = 1 - (1 - np.exp(-28.2 / 2)) ** 3
+    assert f"a chance of {chance:.1g} over 3 ends" in note
+
+
+@pytest.mark.parametrize(("n", "q"), [(1, 4.0), (5, 7.0), (40, 12.0)])
+def test_the_chance_of_the_largest_end_matches_monte_carlo(n, q):
+    """P(max of n χ²₂ ≥ q) by simulation (200 000 sets of n Gaussian 2-D errors), within 4
+    of its standard errors."""
+    from odomkit.workflows._scoring import _largest_end_chance
+
+    rng = np.random.default_rng(3)
+    sets = 200_000
+    largest = np.zeros(sets)
+    for _ in range(n):
+        largest = np.maximum(largest, (rng.standard_normal((sets, 2)) ** 2).sum(axis=1))
+    seen = float(np.mean(largest >= q))
+    values = np.r_[np.zeros(n - 1), q]
+    want = _largest_end_chance(values)
+    assert abs(seen - want) <= 4 * np.sqrt(want * (1 - want) / sets)
 
 
 def _simulate(make, tmp_path, k_true, k_model, seconds=300.0, seed=11, truth_noise=0.0):

@@ -342,6 +342,19 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
                     "(heavy tails: more ends than predicted near the centre and beyond the outer "
                     f"ellipses), which the NEES mean ({by_nees}) averages away: trust coverage, level by "
                     "level; no scaling of the covariance mends it")
+        elif by_nees == "optimistic" and _largest_end_chance(values) < _EXTREME:
+            # Coverage counts an end in or out of the 99 % ellipse at most: an end far beyond
+            # it (which an honest Gaussian covariance almost never gives) is evidence that
+            # coverage cannot weigh, however few or many ends there are.
+            big, mid = float(values.max()), float(np.median(values))
+            few = (f"with only {n} ends coverage can hardly tell a model apart; " if n < FEW_WINDOW_ENDS
+                   else "")
+            note = (f"the NEES mean says optimistic but coverage says {overall}: {few}the largest end "
+                    f"(NEES {big:.3g}, median {mid:.3g}) lies far beyond the 99 % ellipse, a chance of "
+                    f"{_largest_end_chance(values):.1g} over {n} ends for an honest covariance, which "
+                    "coverage (in or out at 50-99 %) cannot see: the errors have a heavier tail than the "
+                    "covariance (an outlier window, or an error the model lacks); look at that end in "
+                    "--json's per_log window_ends")
         else:
             big, mid = float(values.max()), float(np.median(values))
             why = (f"more ends fall outside the ellipses than an honest covariance's would, while the mean "
@@ -357,6 +370,19 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
     return {"coverage_bounds": {k: list(coverage_range(n, float(k))) for k in cover},
             "coverage_verdict": levels, "coverage_overall": overall, "nees_verdict": by_nees,
             "verdict_note": note, **_heading_verdicts(summary, scored, windowed)}
+
+
+#: A largest window end whose chance under an honest covariance is below this is an outlier
+#: that the NEES mean rightly weighs and coverage cannot (:func:`verdicts`).
+_EXTREME = 0.01
+
+
+def _largest_end_chance(values: NDArray[np.float64]) -> float:
+    """The chance that the largest of n position NEES values (each χ² with 2 dof for an
+    honest covariance, whose tail is exp(−q/2)) reaches the largest seen:
+    1 − (1 − exp(−q_max/2))ⁿ, computed without cancellation."""
+    q = float(values.max())
+    return float(-np.expm1(values.size * np.log1p(-np.exp(-q / 2))))
 
 
 def _heading_verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) -> dict[str, Any]:
