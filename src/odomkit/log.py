@@ -30,8 +30,8 @@ from numpy.typing import NDArray
 from odomkit import validate
 from odomkit.errors import InputError
 
-__all__ = ["ABSOLUTE_CHANNELS", "INCREMENT_CHANNELS", "KNOWN_CHANNELS", "OdometryLog", "RATE_CHANNELS",
-           "SPEED_CHANNELS", "WHEEL_PAIRS", "wheel_channels"]
+__all__ = ["ABSOLUTE_CHANNELS", "clock_text", "INCREMENT_CHANNELS", "KNOWN_CHANNELS", "OdometryLog",
+           "RATE_CHANNELS", "SPEED_CHANNELS", "WHEEL_PAIRS", "wheel_channels"]
 
 INCREMENT_CHANNELS = frozenset({"ticks_left", "ticks_right", "ticks", "dist_left", "dist_right", "dist"})
 RATE_CHANNELS = frozenset({"speed", "speed_left", "speed_right", "yaw_rate"})
@@ -42,6 +42,19 @@ SPEED_CHANNELS = frozenset({"speed", "speed_left", "speed_right"})
 #: The forms a differential drive's wheels are logged in, each a (left, right) pair: tick
 #: increments, metre increments, wheel speeds [m/s].
 WHEEL_PAIRS = (("ticks_left", "ticks_right"), ("dist_left", "dist_right"), ("speed_left", "speed_right"))
+
+
+def clock_text(t: float) -> str:
+    """A log or truth time [s] for a message: six significant digits for a clock that starts
+    near zero (``12.3457``), milliseconds for an epoch clock (``1432235497.989``; ``.6g``
+    would print ``1.43224e+09`` for every time of a ROS bag's day).
+
+    Examples
+    --------
+    >>> clock_text(12.345678), clock_text(1432235497.98895)
+    ('12.3457', '1432235497.989')
+    """
+    return f"{t:.3f}" if abs(t) >= 1e6 else f"{t:.6g}"
 
 
 def wheel_channels(names: Iterable[str], source: str | None = None) -> tuple[str, str] | None:

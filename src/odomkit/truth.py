@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit import validate
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
-from odomkit.log import OdometryLog
+from odomkit.log import OdometryLog, clock_text
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
@@ -207,7 +207,8 @@ def no_overlap(truth: Truth, times: ArrayLike) -> str:
     """One line on a truth that covers fewer than two of ``times`` (the log's rows): both
     spans, and the options that move or widen the truth's."""
     t = np.asarray(times, dtype=float).reshape(-1)
-    spans = f"the truth ({truth.t[0]:.6g}..{truth.t[-1]:.6g} s) and the log ({t[0]:.6g}..{t[-1]:.6g} s)"
+    spans = (f"the truth ({clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s) and the log "
+             f"({clock_text(t[0])}..{clock_text(t[-1])} s)")
     if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
         return f"{spans} do not overlap in time; check --truth-time-unit and --truth-time-offset"
     return (f"{spans} overlap, but the log's rows there fall in gaps between fixes longer than "
@@ -629,8 +630,9 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
     sample = truth_at(truth, [time], max_gap)
     if not sample.valid[0]:
         where = "inside a gap of" if sample.in_gaps else "outside"
-        raise InputError(f"the start time {time:.6g} s is {where} the truth "
-                         f"({truth.t[0]:.6g}..{truth.t[-1]:.6g} s): there is no truth pose to start from; "
+        raise InputError(f"the start time {clock_text(time)} s is {where} the truth "
+                         f"({clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s): there is no truth pose "
+                         "to start from; "
                          "give --initial-pose", source=truth.source)
     pose = sample.poses[0].copy()
     cov = np.diag([truth.sigma**2, truth.sigma**2, truth.heading_sigma**2])
@@ -638,8 +640,8 @@ def start_pose(truth: Truth, time: float, max_gap: float | None = 0.5, *, revers
         fit = (heading_from_positions(truth, time, span) if odometry is None
                else start_heading(truth, time, *odometry))
         if fit is None:
-            raise InputError(f"the truth has no heading, and its positions around {time:.6g} s do not "
-                             "give one (too few fixes, fixes off a smooth path by more than 3 "
+            raise InputError(f"the truth has no heading, and its positions around {clock_text(time)} s "
+                             "do not give one (too few fixes, fixes off a smooth path by more than 3 "
                              "--truth-sigma, or the robot hardly moves); give --initial-pose",
                              source=truth.source)
         pose[2] = fit[0] + (math.pi if reverse and odometry is None else 0.0)

@@ -25,6 +25,7 @@ from numpy.typing import ArrayLike, NDArray
 from odomkit import validate
 from odomkit.errors import InputError
 from odomkit.kinematics import BodySteps
+from odomkit.log import clock_text
 
 if TYPE_CHECKING:
     from odomkit.truth import Truth
@@ -382,7 +383,8 @@ def run_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike 
         return row, *found
     end = "" if not hint else f"; {hint}"
     raise InputError(f"the truth has no heading, and its positions give none at any of the log's rows with "
-                     f"truth ({t[rows[0]]:.6g}..{t[rows[-1]]:.6g} s; the fixes are too few, stray from a "
+                     f"truth ({clock_text(t[rows[0]])}..{clock_text(t[rows[-1]])} s; the fixes are too few, "
+                     "stray from a "
                      "smooth path by more than 3 --truth-sigma, or the robot hardly moves), so there is no "
                      f"pose to start from{end}", source=truth.source)
 
@@ -395,5 +397,5 @@ def late_start_note(source: str, what: str, t: ArrayLike, row: int, first_valid:
     why = ("the first log time inside the truth" if row == first_valid else
            "the first time the position-only truth gives a heading (before it the fixes around the start "
            "are too few or on one side only, stray from a smooth path, or the robot stands still)")
-    return (f"{source}: {what} starts at {t[row]:.6g} s, {why}; the {row} row(s) before it "
+    return (f"{source}: {what} starts at {clock_text(t[row])} s, {why}; the {row} row(s) before it "
             f"({t[row] - t[0]:.4g} s) are left out")

@@ -227,7 +227,13 @@ def test_evaluate_shows_the_fitted_start_heading_and_warns_where_the_whole_run_h
         2 * sigma * np.sqrt(np.mean(distance**2)) > 0.5 * out["ate_rmse"]
     assert expected  # 2 cm fixes, a robot of 2 mm^½ noise: the heading's share is large here
     assert len(said) == 1 and f"moves the end by ±{end:.3g} m" in said[0]
-    assert "--align se2" in said[0]
+    assert "--align se2" in said[0] and "--window for the honesty test" in said[0]
+    # Asked for the windowed test already, it is not advised again (a user study).
+    with pytest.warns(UserWarning):
+        windowed = evaluate_logs([log], robot, [TruthOptions(tmp_path / "xy.csv")], log_options=opts,
+                                 window="10s")
+    again = [w for w in windowed["warnings"] if "start heading" in w]
+    assert len(again) == 1 and "--align se2" in again[0] and "--window" not in again[0]
     code, text, _ = run_cli("evaluate", log, "--robot", robot, "--columns", SIM_COLUMNS, "--truth",
                             tmp_path / "xy.csv")
     assert code == 0 and f"start heading {out['start_heading']:.4g} ± {sigma:.2g} rad" in text

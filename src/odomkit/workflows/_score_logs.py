@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.errors import InputError
+from odomkit.log import clock_text
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.workflows._scoring import Scored, require_truth, score_rows
 
@@ -159,7 +160,8 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
                     start_heading=float(pose0[2]), start_heading_sigma=float(np.sqrt(max(cov0[2, 2], 0.0))),
                     start_heading_fitted=fitted)
     if fitted and align != "se2":
-        note = start_heading_note(whole, samples.poses[first:][samples.valid[first:]], pose0)
+        note = start_heading_note(whole, samples.poses[first:][samples.valid[first:]], pose0,
+                                  windowed=any(spec is not None for spec in specs))
         if note:
             whole = replace(whole, warnings=[*whole.warnings, f"{log.source}: {note}"])
     if noise is None:  # the errors alone (score_logs' errors_only)
@@ -185,7 +187,7 @@ START_HEADING_SHARE = 0.5
 
 
 def start_heading_note(whole: Scored, truth_xy: NDArray[np.float64],
-                       pose0: NDArray[np.float64]) -> str | None:
+                       pose0: NDArray[np.float64], windowed: bool = False) -> str | None:
     """The warning where a whole run's final error or ATE hangs on the start heading fitted
     to position-only truth (:data:`START_HEADING_SHARE`), or None.
 
@@ -198,9 +200,11 @@ def start_heading_note(whole: Scored, truth_xy: NDArray[np.float64],
     whole : the whole run scored (its ``position_errors`` (n,) [m] and ``start_heading*``)
     truth_xy : the truth at the scored rows, shape (n, 2+) [m]
     pose0 : the start pose (3,) [m, m, rad]
+    windowed : the windowed test is run too (then it is not advised)
     """
-    sigma = whole.start_heading_sigma
-    if sigma is None or sigma <= 0 or truth_xy.shape[0] == 0 or whole.position_errors.size == 0:
+    sigma, start = whole.start_heading_sigma, whole.start_time
+    if (sigma is None or sigma <= 0 or start is None or truth_xy.shape[0] == 0
+            or whole.position_errors.size == 0):
         return None
     distance = np.hypot(truth_xy[:, 0] - pose0[0], truth_xy[:, 1] - pose0[1])
     end, rms = 2 * sigma * float(distance[-1]), 2 * sigma * float(np.sqrt(np.mean(distance**2)))
@@ -209,11 +213,11 @@ def start_heading_note(whole: Scored, truth_xy: NDArray[np.float64],
     if end <= START_HEADING_SHARE * final and rms <= START_HEADING_SHARE * ate:
         return None
     return (f"the whole run starts from a heading fitted to the position-only truth, "
-            f"{whole.start_heading:.4g} ± {sigma:.2g} rad at {whole.start_time:.6g} s, and that heading's "
-            f"own uncertainty alone moves the end by ±{end:.3g} m (2σ; final error {final:.3g} m) and the "
-            f"track by ±{rms:.3g} m RMS (ATE {ate:.3g} m): the final error and ATE measure the start "
-            "heading as much as the odometry; use --align se2, or truth with heading, or --window for the "
-            "honesty test")
+            f"{whole.start_heading:.4g} ± {sigma:.2g} rad at {clock_text(start)} s, and that "
+            f"heading's own uncertainty alone moves the end by ±{end:.3g} m (2σ; final error {final:.3g} m) "
+            f"and the track by ±{rms:.3g} m RMS (ATE {ate:.3g} m): the final error and ATE measure the start "
+            "heading as much as the odometry; use --align se2, or truth with heading"
+            + ("" if windowed else ", or --window for the honesty test"))
 
 
 def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth, samples: TruthSamples,
