@@ -64,6 +64,32 @@ def test_windowed_text_lists_each_logs_ends_when_there_are_several(run_cli):
     assert code == 0 and not any(x.startswith(f"  {RUN}: ") for x in out.splitlines())
 
 
+def test_each_logs_line_gives_its_heading_where_the_truth_has_one(run_cli, tmp_path):
+    """The per-log lines of several logs give the heading's coverage, NEES mean and verdict
+    beside the position's (the per_log figures of the JSON), and nothing of a heading where
+    the truth has positions only."""
+    second = builtin_data_path("230620202042_run-02.csv")
+    args = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s")
+    code, out, _ = run_cli(*args)
+    _, js, _ = run_cli(*args, "--json")
+    assert code == 0
+    for one in json.loads(js)["per_log"]:
+        line = next(x for x in out.splitlines() if x.startswith(f"  {one['log']}: "))
+        c = one["coverage_heading"]
+        assert (f"heading inside 95 % / 50 %: {c['0.95']:.2f} / {c['0.5']:.2f}, NEES mean "
+                f"{one['nees_heading_mean']:.3g}, coverage {one['coverage_heading_overall']}") in line, line
+        assert line.index(f"NEES mean {one['nees_position_mean']:.3g}") < line.index("heading")
+    data = np.loadtxt(second, delimiter=",")
+    gt2 = tmp_path / "gt2.csv"
+    np.savetxt(gt2, data[:, :3], delimiter=",", header="t,x,y", comments="")
+    position_only = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s",
+                     "--truth", _gt(tmp_path, heading=False), "--truth", gt2)
+    code, out, _ = run_cli(*position_only)
+    lines = [x for x in out.splitlines() if x.startswith("  ")]
+    assert code == 0 and len(lines) == 2
+    assert all("ends, inside 95 %" in x and "heading" not in x for x in lines), lines
+
+
 def test_evaluate_json_keys(run_cli, tmp_path):
     code, out, _ = run_cli("evaluate", RUN, builtin_data_path("230620202042_run-02.csv"), "--robot", ROBOT,
                            "--window", "10s", "--rpe", "0.5,1", "--json")

@@ -197,6 +197,65 @@ def test_numbers_are_odomkit_evaluates(with_truth, run_cli):
     assert page.cells["windows"][0] == expected["windows"] > 3
 
 
+#: What evaluate's NEES verdict words say of the mean against its bounds, on the page.
+_SIDE = {"optimistic": "above its bounds", "pessimistic": "below its bounds",
+         "consistent": "within its bounds"}
+
+
+def _said(page: Page) -> str:
+    return " ".join(" ".join(page.text).split())
+
+
+def test_heading_numbers_and_verdicts_are_odomkit_evaluates(with_truth, run_cli):
+    """Where the truth has a heading (the built-in run's OptiTrack), the honesty section scores
+    it beside the position: its NEES mean, bounds and median, its coverage of the intervals,
+    and both verdicts, all as ``odomkit evaluate --json`` gives them; the position's verdicts
+    are evaluate's keys too, not the page's own reading of the bounds."""
+    _, page, _ = with_truth
+    expected = _run_json(run_cli, "evaluate", RUN, "--robot", ROBOT, "--window", "10s")
+    assert expected["nees_heading_mean"] is not None  # the truth has a heading
+    for label, key in (("heading NEES mean (ideal 1)", "nees_heading_mean"),
+                       ("heading NEES median (ideal 0.455)", "nees_heading_median")):
+        assert page.rows[label] == pytest.approx(expected[key], rel=1e-12), label
+        assert page.cells[key][0] == pytest.approx(expected[key], rel=1e-12), key
+    for level, fraction in expected["coverage_heading"].items():
+        assert page.cells[f"coverage_heading.{level}"][0] == pytest.approx(fraction, abs=1e-12), level
+    lo, hi = expected["nees_heading_bounds"]
+    text = _said(page)
+    assert f"{lo:.3g} … {hi:.3g}" in text
+    for name, mean, nees_word, cover_word in (
+            ("position", "nees_position_mean", "nees_verdict", "coverage_overall"),
+            ("heading", "nees_heading_mean", "nees_heading_verdict", "coverage_heading_overall")):
+        assert expected[nees_word] is not None and expected[cover_word] is not None
+        assert (f"The mean {name} NEES {expected[mean]:.3g} is {_SIDE[expected[nees_word]]}" in text
+                and f"({expected[nees_word]})" in text), name
+        assert f"The {name} coverage is {expected[cover_word]}:" in text, name
+    assert ("NEES and coverage disagree" in text) == (expected["verdict_note"] is not None)
+
+
+def test_a_position_only_truth_gets_no_heading_figures(run_cli, tmp_path):
+    """Truth with positions alone (t,x,y from the built-in run's gt columns): the page scores
+    the position (its verdicts evaluate's) and says nothing of a heading NEES or coverage."""
+    data = np.loadtxt(RUN2, delimiter=",")
+    log = tmp_path / "log.csv"
+    np.savetxt(log, data[:, [0, 4, 5]], delimiter=",", header="t,ticks_left,ticks_right", comments="",
+               fmt=["%.17g", "%d", "%d"])
+    gt = tmp_path / "gt.csv"
+    np.savetxt(gt, data[:, :3], delimiter=",", header="t,x,y", comments="")
+    out = tmp_path / "r.html"
+    _run_json(run_cli, "report", log, *COLUMNS, "--robot", ROBOT, "--truth", gt, "--out", out)
+    page = Page(out.read_text(encoding="utf-8"))
+    expected = _run_json(run_cli, "evaluate", log, *COLUMNS, "--robot", ROBOT, "--truth", gt,
+                         "--window", "10s")
+    assert expected["nees_heading_mean"] is None and expected["coverage_heading"] is None
+    assert page.cells["nees_position_mean"][0] == pytest.approx(expected["nees_position_mean"], rel=1e-12)
+    text = _said(page)
+    assert f"The position coverage is {expected['coverage_overall']}:" in text
+    assert not [key for key in page.cells if "heading" in key]
+    for phrase in ("heading NEES", "heading coverage", "heading interval", "heading variance"):
+        assert phrase not in text, phrase
+
+
 def test_numbers_after_calibration_are_evaluate_on_the_calibrated_robot(with_truth, run_cli, tmp_path):
     _, page, _ = with_truth
     calibrated = tmp_path / "cal.toml"
@@ -221,6 +280,9 @@ def test_fitted_noise_is_fit_noises(with_truth, run_cli, tmp_path):
         assert page.cells[f"noise.fitted.{key}"][0] == pytest.approx(value, rel=1e-9)
     fitted = _run_json(run_cli, "evaluate", RUN, "--robot", tmp_path / "fit.toml", "--window", "10s")
     assert page.cells["fitted.coverage.0.5"][0] == pytest.approx(fitted["coverage"]["0.5"], abs=1e-12)
+    # the heading's beside it (the truth has one), as evaluate scores the fitted noise
+    for level, fraction in fitted["coverage_heading"].items():
+        assert page.cells[f"fitted.coverage_heading.{level}"][0] == pytest.approx(fraction, abs=1e-12)
 
 
 def test_the_ros_snippets_are_there(with_truth):

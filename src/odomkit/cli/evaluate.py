@@ -196,7 +196,20 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
             said = f", coverage {one['coverage_overall']}" if one.get("coverage_overall") else ""
             print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
                   f"{_fmt(c['0.5'], '.2f')}, NEES mean {_nees_texts(one['nees_position_mean'], *bounds)[0]}"
-                  f"{said}")
+                  f"{said}{_log_heading_text(one)}")
+
+
+def _log_heading_text(one: dict[str, Any]) -> str:
+    """The heading's part of one log's line, as the position's before it: its coverage of the
+    95 and 50 % intervals, its NEES mean and coverage verdict; nothing where the truth has no
+    heading."""
+    if one.get("nees_heading_mean") is None:
+        return ""
+    c = one["coverage_heading"]
+    bounds = one.get("nees_heading_bounds") or (one["nees_heading_mean"],) * 2
+    said = f", coverage {one['coverage_heading_overall']}" if one.get("coverage_heading_overall") else ""
+    return (f"; heading inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / {_fmt(c['0.5'], '.2f')}, NEES mean "
+            f"{_nees_texts(one['nees_heading_mean'], *bounds)[0]}{said}")
 
 
 def _heading_text(out: dict[str, Any], what: str, verdicts: bool) -> str:

@@ -270,7 +270,7 @@ def _honesty(summary: dict[str, Any], figures: ReportFigures) -> Section:
         "bounds.")]
     for window in held["windows"]:
         n = models["guessed"][window]["windows"]
-        blocks.append(coverage_table([(NAMES[k], models[k][window]["coverage"], f"{k}.{window}.")
+        blocks.append(coverage_table([(NAMES[k], models[k][window]["coverage"], f"{k}.{window}.coverage")
                                       for k in NAMES], f"{n} held-out {_lengths(window)} window ends"))
     rows: tuple[tuple[str | Cell, ...], ...] = tuple(
         (NAMES[k], *(number(models[k][w]["nees_position_mean"], "", 3, key=f"{k}.{w}.nees_position_mean")

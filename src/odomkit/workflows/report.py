@@ -101,17 +101,21 @@ def write_page(path: str | Path, page: str, overwrite: bool) -> Path:
     return write_new_text(path, page, overwrite)
 
 
-def coverage_table(rows: Sequence[tuple[str, dict[str, Any], str]], scored: str) -> Table:
-    """Predicted probability against the observed fraction inside, one column per noise.
+def coverage_table(rows: Sequence[tuple[str, dict[str, Any], str]], scored: str,
+                   inside: str = "the predicted position ellipse") -> Table:
+    """Predicted probability against the observed fraction inside, one column per noise
+    (and per position or heading).
 
-    ``rows`` holds (label, coverage dict of the evaluate workflow, key prefix); ``scored``
-    names what was counted (e.g. "9 window ends")."""
+    ``rows`` holds (label, coverage dict of the evaluate workflow, key): each cell's key is
+    ``f"{key}.{level}"`` (``"coverage"``, ``"fitted.coverage_heading"``, as evaluate's JSON
+    names the figure); ``scored`` names what was counted (e.g. "9 window ends"), ``inside``
+    what it was counted inside."""
     header = ("predicted probability", *(f"inside, {label}" for label, _, _ in rows))
     body: tuple[tuple[str | Cell, ...], ...] = tuple(
         (f"{float(level):.0%}",
-         *(number(cov[level], key=f"{prefix}coverage.{level}", decimals=2) for _, cov, prefix in rows))
+         *(number(cov[level], key=f"{key}.{level}", decimals=2) for _, cov, key in rows))
         for level in LEVELS)
-    return Table(header, body, f"Fraction of {scored} inside the predicted position ellipse")
+    return Table(header, body, f"Fraction of {scored} inside {inside}")
 
 
 # ----------------------------------------------------------------------------------- the steps
@@ -132,15 +136,18 @@ def _auto_window(run: TrackRun) -> tuple[str | None, str | None]:
 
 def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptions | None,
             window: str | None, method: str) -> tuple[list[Scored], dict[str, Any]]:
-    """The evaluate workflow's figures: each log's raw scores and the pooled JSON keys."""
-    from odomkit.workflows.evaluate import score_logs, summarise
+    """The evaluate workflow's figures: each log's raw scores and the JSON keys ``odomkit
+    evaluate`` prints for them, verdicts included (the same function makes both)."""
+    from odomkit.windows import parse_window
+    from odomkit.workflows._scoring import pooled_report
+    from odomkit.workflows.evaluate import score_logs
 
     # A robot file without [noise] is scored for its errors alone (window None then).
     scored = score_logs([log], robot, [options], log_options=log_options, window=window, method=method,
                         errors_only=True)
     for note in dict.fromkeys(w for s in scored for w in s.warnings):
         warnings.warn(note, stacklevel=2)
-    return scored, summarise(scored, (1.0,))
+    return scored, pooled_report(scored, (1.0,), None if window is None else str(parse_window(window)))
 
 
 #: calibrate's advice for a car whose halves disagree names its flag, which report lacks.
@@ -241,16 +248,81 @@ def _window_text(window: str | None) -> str:
     return f"{spec.length:g} {'s' if spec.unit == 's' else 'm of travel'} windows"
 
 
+#: evaluate's NEES verdicts (``nees_verdict``, ``nees_heading_verdict``) in words: where the
+#: mean stands against its bounds, and what that says of the ``{what}``.
+_NEES_SAYS = {"consistent": "within its bounds: the {what} is honest here",
+              "optimistic": "above its bounds: the {what} is too small (optimistic)",
+              "pessimistic": "below its bounds: the {what} is too large (pessimistic)"}
+#: evaluate's coverage verdicts (``coverage_overall``, ``coverage_heading_overall``) in words.
+_COVERAGE_SAYS = {
+    "consistent": "at every level the fraction inside lies where an honest {what}'s falls",
+    "optimistic": "fewer window ends fall inside than an honest {what}'s would at some level (more at none), "
+                  "so the {what} is too small",
+    "pessimistic": "more window ends fall inside than an honest {what}'s would at some level (fewer at "
+                   "none), so the {what} is too large",
+    "mixed": "fewer window ends fall inside than an honest {what}'s would at some levels and more at others: "
+             "heavy tails, which no scaling of the {what} mends"}
+
+
+def _has_heading(ev: dict[str, Any] | None) -> bool:
+    """Whether evaluate scored the heading (the truth has one; its keys are None otherwise)."""
+    return ev is not None and ev.get("nees_heading_mean") is not None
+
+
+def _verdicts(ev: dict[str, Any], who: str = "") -> list[Paragraph]:
+    """evaluate's verdicts of the position and (where scored) the heading as sentences: the
+    NEES mean against its bounds and the coverage, each as evaluate's keys say (None for no
+    verdict: one window, no independent samples), and ``verdict_note`` where they differ.
+    ``who`` starts each sentence (e.g. "With the fitted noise (in-sample), ")."""
+    out = []
+    for name, what, mean_key, nees_key, cover_key in (
+            ("position", "covariance", "nees_position_mean", "nees_verdict", "coverage_overall"),
+            ("heading", "heading variance", "nees_heading_mean", "nees_heading_verdict",
+             "coverage_heading_overall")):
+        said = []
+        if ev.get(nees_key) is not None:
+            said.append(f"{who}the mean {name} NEES {ev[mean_key]:.3g} is "
+                        f"{_NEES_SAYS[ev[nees_key]].format(what=what)}.")
+        if ev.get(cover_key) is not None:
+            said.append(f"The {name} coverage is {ev[cover_key]}: "
+                        f"{_COVERAGE_SAYS[ev[cover_key]].format(what=what)}.")
+        if name == "position" and ev.get("verdict_note"):
+            said.append(f"NEES and coverage disagree (odomkit evaluate's note): {ev['verdict_note']}.")
+        if said:
+            text = " ".join(said)
+            out.append(Paragraph(text[:1].upper() + text[1:], "note"))
+    return out
+
+
+def _coverage_rows(ev: dict[str, Any], label: str, key: str = "") -> list[tuple[str, dict[str, Any], str]]:
+    """The position's and (where scored) the heading's coverage columns of one noise, keyed
+    ``{key}coverage`` and ``{key}coverage_heading`` as evaluate's JSON names them."""
+    rows = [(label, ev["coverage"], f"{key}coverage")]
+    if _has_heading(ev):
+        rows.append((f"{label}, heading", ev["coverage_heading"], f"{key}coverage_heading"))
+    return rows
+
+
+#: What the coverage tables count inside: the position's ellipse, and with heading columns also
+#: the heading's interval.
+_INSIDE_POSITION = "the predicted position ellipse"
+_INSIDE_BOTH = f"{_INSIDE_POSITION} (heading columns: the predicted heading interval)"
+
+
 def _honesty_section(scored: list[Scored], ev: dict[str, Any], window: str | None,
                      figures: ReportFigures) -> Section:
     from odomkit.evaluate import nees
 
     n = ev["windows"]
+    heading = _has_heading(ev)
     blocks: list[Any] = [Paragraph(
         f"The log is cut into {_window_text(window)}; each is dead-reckoned "
         "again from the truth at its start and scored at its end, so the window ends are independent "
         "samples. An honest covariance puts about 50 / 90 / 95 / 99 % of them inside its 50 / 90 / 95 / "
-        "99 % ellipses, and its mean NEES (normalised error squared, 2 for a position) inside the bounds.")]
+        "99 % ellipses, and its mean NEES (normalised error squared, 2 for a position) inside the bounds."
+        + (" The truth has a heading, so the heading is scored alike: its error against the predicted "
+           "heading variance, an interval instead of an ellipse and a mean NEES of 1 (one degree of "
+           "freedom)." if heading else ""))]
     lo_hi = ev["nees_bounds"]
     rows: list[tuple[str | Cell, ...]] = [
         ("windows scored", Cell(str(n), "windows", float(n))),
@@ -259,24 +331,31 @@ def _honesty_section(scored: list[Scored], ev: dict[str, Any], window: str | Non
         ("NEES median (ideal 1.39)", number(ev["nees_position_median"], "", 3, key="nees_position_median")),
     ]
     blocks.append(Table(("", "value"), tuple(rows), "Position NEES of the window ends"))
-    blocks.append(coverage_table([("robot file's noise", ev["coverage"], "")], f"{n} window ends"))
-    mean = ev["nees_position_mean"]
-    if mean is not None and lo_hi is not None:
-        verdict = ("within its bounds: the covariance is honest here" if lo_hi[0] <= mean <= lo_hi[1] else
-                   "above its bounds: the covariance is too small (overconfident)" if mean > lo_hi[1] else
-                   "below its bounds: the covariance is too large (pessimistic)")
-        blocks.append(Paragraph(f"The mean NEES {mean:.3g} is {verdict}.", "note"))
+    if heading:
+        h_lo_hi = ev["nees_heading_bounds"]
+        blocks.append(Table(("", "value"), (
+            ("heading NEES mean (ideal 1)", number(ev["nees_heading_mean"], "", 3, key="nees_heading_mean")),
+            ("95 % bounds of the heading mean",
+             Cell("n/a" if h_lo_hi is None else f"{h_lo_hi[0]:.3g} … {h_lo_hi[1]:.3g}")),
+            ("heading NEES median (ideal 0.455)",
+             number(ev["nees_heading_median"], "", 3, key="nees_heading_median"))),
+            "Heading NEES of the window ends (χ² with 1 degree of freedom)"))
+    blocks.append(coverage_table(_coverage_rows(ev, "robot file's noise"), f"{n} window ends",
+                                 _INSIDE_BOTH if heading else _INSIDE_POSITION))
+    blocks += _verdicts(ev)
     t = np.concatenate([s.honesty_t for s in scored])
     e = np.concatenate([s.honesty_errors for s in scored])
     c = np.concatenate([s.honesty_cov for s in scored])
     if t.size == e.shape[0] and t.size:
+        covers = {label: cover for label, cover, _ in _coverage_rows(ev, "robot file's noise")}
         fig = figures.draw(("draw_nees", "draw_reliability"), lambda plot, ax: (
             plot.draw_nees(ax[0], t, nees(e, c)),
-            plot.draw_reliability(ax[1], {"robot file's noise": ev["coverage"]}, n_scored=n)),
-            "Left: the NEES of each window end against the band that holds 95 % of them for an honest "
-            "covariance. Right: predicted probability against the observed fraction inside (on the "
-            "diagonal when honest; below it when overconfident).", "NEES per window and reliability diagram",
-            panels=(1, 2), size=(10.5, 5.0))
+            plot.draw_reliability(ax[1], covers, n_scored=n)),
+            "Left: the position NEES of each window end against the band that holds 95 % of them for an "
+            "honest covariance. Right: predicted probability against the observed fraction inside (on the "
+            "diagonal when honest; below it when overconfident)"
+            + (", for the position's ellipses and the heading's intervals." if heading else "."),
+            "NEES per window and reliability diagram", panels=(1, 2), size=(10.5, 5.0))
         blocks += [f for f in (fig,) if f is not None]
     return Section("honesty", "How honest: the windowed test of the covariance", tuple(blocks))
 
@@ -346,21 +425,25 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
         return Section("noise", "The fitted noise", tuple(blocks))
     n = ev_fit["windows"]
     # The robot file's noise beside the fitted, where it has one (ev's coverage null: none).
-    guess = {} if ev.get("coverage") is None else {"robot file's noise": ev["coverage"]}
+    guess = [] if ev.get("coverage") is None else _coverage_rows(ev, "robot file's noise")
+    fitted = _coverage_rows(ev_fit, "fitted noise (in-sample)", "fitted.")
     # The two noises may score different ends: a position-only truth's fitted noise can leave
     # out starts whose heading its fixes no longer support (odomkit.truth.MAX_HEADING_SIGMA).
     scored = (f"{n} window ends" if not guess or ev["windows"] == n else
               f"the window ends ({ev['windows']} with the robot file's noise, {n} with the fitted noise: "
               "a start heading the truth's fitted noise cannot support is left out)")
-    blocks.append(coverage_table([*((k, v, "") for k, v in guess.items()),
-                                  ("fitted noise (in-sample)", ev_fit["coverage"], "fitted.")], scored))
+    # The position's columns first, then the heading's (where the truth has one).
+    columns = [*guess[:1], *fitted[:1], *guess[1:], *fitted[1:]]
+    heading = len(guess) > 1 or len(fitted) > 1
+    blocks.append(coverage_table(columns, scored, _INSIDE_BOTH if heading else _INSIDE_POSITION))
     if n == 0:  # nothing to draw a fraction of
         blocks.append(Paragraph("The fitted noise scores no window end: the truth's fitted noise is too "
                                 "large for its fixes to give any window a start heading, so this log cannot "
                                 "test it.", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
+    blocks += _verdicts(ev_fit, "with the fitted noise (in-sample), ")
     fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
-        ax[0], {**guess, "fitted noise (in-sample)": ev_fit["coverage"]},
+        ax[0], {label: cover for label, cover, _ in columns},
         n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
         "against the observed fraction of window ends inside.",
         "Reliability diagram, guessed and fitted noise", size=(5.6, 4.6))
@@ -614,11 +697,18 @@ def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, An
         if ev.get("coverage") is not None:
             rows.append(("inside the 95 % ellipse (robot file's noise; ideal 0.95)",
                          number(ev["coverage"]["0.95"], key="coverage.0.95", decimals=2)))
+        if _has_heading(ev):
+            rows.append(("heading inside its 95 % interval (robot file's noise; ideal 0.95)",
+                         number(ev["coverage_heading"]["0.95"], key="coverage_heading.0.95", decimals=2)))
     if cal is not None and after is not None:
         rows.append(("ATE after calibration", number(after["ate_rmse"], "m", key="after.ate_rmse")))
     if fit is not None and ev_fit is not None:
         rows.append(("inside the 95 % ellipse, fitted noise (in-sample)",
                      number(ev_fit["coverage"]["0.95"], key="fitted.coverage.0.95", decimals=2)))
+        if _has_heading(ev_fit):
+            rows.append(("heading inside its 95 % interval, fitted noise (in-sample)",
+                         number(ev_fit["coverage_heading"]["0.95"], key="fitted.coverage_heading.0.95",
+                                decimals=2)))
     return Section("summary", "At a glance", (
         Paragraph("The headline numbers; each section below explains one of them and shows where it comes "
                   "from."),
