@@ -169,3 +169,23 @@ def test_too_few_fixes_and_bad_fixes_are_one_line(run_cli, tmp_path, bag_writer,
     assert "/fix: 1 of 3 NavSatFix messages have a fix (status >= 0); truth needs two or more" in err
     err = error("far", [fix(0), fix(1, lat=-95.0), fix(2)])
     assert "/fix: message 2 has latitude -95.0; expected degrees within ±90" in err
+
+
+def test_report_calibrates_from_the_gps_topic_and_names_it(run_cli, gps_bag, tmp_path):
+    """A bag's GPS topic is the report's truth as it is calibrate's: the page calibrates from
+    its fixes (it said "No calibration: --from does not apply with --truth", a flag never
+    given) and names that topic as the truth (it said "the log's own gt_* columns")."""
+    out = tmp_path / "r.html"
+    code, _, err = run_cli("report", gps_bag["bags"]["mcap"], "--robot", gps_bag["dir"] / "rad.toml",
+                           "--topic", "/joint_states", "--truth-topic", "/fix", "--truth-sigma", "0.003",
+                           "--out", out)
+    assert code == 0, err
+    page = out.read_text()
+    assert "--from does not apply" not in page and "No calibration" not in page
+    assert f"truth: {gps_bag['bags']['mcap']}:/fix" in page and "gt_* columns" not in page
+    code, text, err = run_cli("calibrate", gps_bag["bags"]["mcap"], "--robot", gps_bag["dir"] / "rad.toml",
+                              "--topic", "/joint_states", "--truth-topic", "/fix", "--truth-sigma", "0.003",
+                              "--json")
+    assert code == 0, err
+    for name, value in json.loads(text)["parameters"].items():  # the page shows calibrate's values
+        assert f"{value:.6g}" in page, name

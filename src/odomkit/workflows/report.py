@@ -34,6 +34,7 @@ from odomkit.workflows.truth import TruthOptions
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
+    from odomkit.truth import Truth
     from odomkit.workflows.evaluate import Scored
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.track import TrackRun
@@ -589,7 +590,9 @@ def run_report(
             sections = [summary_section, *sections, *rest]
         notes += [n for n in figures.notes if n not in notes]
     title = f"odomkit report: {log_path.name}"
-    truth_text = options.path or ("the log's own gt_* columns" if run.truth is not None else "none")
+    fixes = _own_fixes(run)
+    truth_text = (options.path or (fixes.source if fixes is not None else None)
+                  or ("the log's own gt_* columns" if run.truth is not None else "none"))
     subtitle = [f"Log: {log_path} · robot: {robot_path} · truth: {truth_text}",
                 f"{summary['samples']} poses over {summary['duration']:.4g} s, "
                 f"{summary['path_length']:.4g} m travelled"]
@@ -600,6 +603,15 @@ def run_report(
     for text in notes:
         warnings.warn(text, stacklevel=2)
     return {"report": str(written), "sections": [s.key for s in sections], "warnings": list(notes)}
+
+
+def _own_fixes(run: TrackRun) -> Truth | None:
+    """The log's own position-only truth on its own clock (a ROS bag's GPS topic,
+    ``--truth-topic /fix``), which is compared fix by fix, not row by row; else None."""
+    from odomkit.truth import Truth
+
+    own = run.log.meta.get("truth")
+    return own if isinstance(own, Truth) else None
 
 
 def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
@@ -633,8 +645,10 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         folder = Path(tmp)
         cal_path, fit_path = folder / "calibrated.toml", folder / "fitted.toml"
         # With the log's own truth (with heading) every pose is compared (exact, trajectory); a
-        # truth file is compared position by position on its own clock.
-        how: dict[str, Any] = ({"truth": [options]} if options.path is not None else {"source": "trajectory"})
+        # truth file, or a bag's GPS topic, is compared position by position on its own clock.
+        how: dict[str, Any] = ({"truth": [options]} if options.path is not None else
+                               {"own_truth": options} if _own_fixes(run) is not None else
+                               {"source": "trajectory"})
         cal = _attempt("the calibration", lambda: calibrate_files(
             [log], robot, out_robot=cal_path, log_options=log_options, cubic_hint=_CUBIC_FROM_REPORT, **how),
             problems)
