@@ -28,4 +28,5 @@ def test_messages_tell_epoch_times_apart():
     assert "starts at 1432235498.289 s" in note and "e+09" not in note
     truth = Truth(EPOCH + 100 + np.arange(5.0), np.zeros((5, 2)))
     said = no_overlap(truth, t)
-    assert "the truth (1432235597.989..1432235601.989 s) and the log (1432235497.989..1432235498.889 s)" in said
+    assert ("the truth (1432235597.989..1432235601.989 s) and the log (1432235497.989..1432235498.889 s)"
+            in said)

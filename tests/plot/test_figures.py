@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -155,9 +156,14 @@ def test_evaluate_shows_the_white_models_alone_beside_white_and_bias(monkeypatch
     both = evaluate_logs(RUNS[:3], _robot_file(tmp_path / "both.toml", True), truth, window="10s",
                          plot=tmp_path / "f.png")
     white = evaluate_logs(RUNS[:3], _robot_file(tmp_path / "white.toml", False), truth, window="10s")
+    # The heading's intervals too, where the truth has a heading (OptiOdom's does).
     assert seen["coverages"] == {"window ends (white + bias)": both["coverage"],
-                                 "window ends (white only)": white["coverage"]}
-    assert seen["n_scored"] == both["windows"] == white["windows"]
+                                 "window ends (white only)": white["coverage"],
+                                 "window ends (white + bias), heading": both["coverage_heading"]}
+    assert both["windows"] == white["windows"]
+    assert seen["n_scored"] == {"window ends (white + bias)": both["windows"],
+                                "window ends (white only)": both["windows"],
+                                "window ends (white + bias), heading": both["windows"]}
     assert both["coverage"] != white["coverage"]  # the bias widens the ellipses
 
 
@@ -174,3 +180,22 @@ def test_fit_noise_refits_white_only_beside_white_and_bias(monkeypatch, tmp_path
     assert seen["coverages"] == {"white + bias (this fit)": both["coverage_in_sample"],
                                  "white only (refitted, bias zero)": white["coverage_in_sample"]}
     assert seen["n_scored"] == both["windows"]
+
+
+def test_evaluate_plots_no_heading_series_for_position_only_truth(monkeypatch, tmp_path):
+    from odomkit.io.optiodom import read_run
+    from odomkit.workflows.evaluate import evaluate_logs
+    from odomkit.workflows.truth import TruthOptions
+
+    log = read_run(RUNS[0])
+    xy = tmp_path / "xy.csv"
+    np.savetxt(xy, np.column_stack((log.t, log.ground_truth[:, :2])), delimiter=",", header="t,x,y",
+               comments="")
+    seen = _capture(monkeypatch, "honesty_figure")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        out = evaluate_logs(RUNS[:1], _robot_file(tmp_path / "white.toml", False), [TruthOptions(xy)],
+                            window="10s", plot=tmp_path / "f.png")
+    assert out["coverage_heading"] is None
+    assert seen["coverages"] == {"window ends": out["coverage"]}
+    assert seen["n_scored"] == {"window ends": out["windows"]}

@@ -220,7 +220,12 @@ def evaluate_logs(
                                min_travel, method)
             covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
                                                           np.concatenate([a.honesty_cov for a in alone]))
-        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, out["windows"], window))}
+        counts = dict.fromkeys(covers, out["windows"])
+        if out.get("coverage_heading") is not None:  # the heading's intervals, where the truth has one
+            covers[f"{name}, heading"] = out["coverage_heading"]
+            counts[f"{name}, heading"] = sum(end["nees_heading"] is not None for one in out["per_log"]
+                                             for end in one.get("window_ends", ()))
+        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, counts, window))}
     return out
 
 
@@ -274,10 +279,10 @@ def _check_plot(plot: str | Path | None, overwrite: bool, inputs: Sequence[str |
 
 
 def _honesty_plot(plot: str | Path, scored: Sequence[Scored], coverages: dict[str, dict[str, float | None]],
-                  windows: int | None, length: str | None = None) -> Path:
+                  windows: dict[str, int] | None, length: str | None = None) -> Path:
     """``evaluate --plot``: each run against truth, the coverage and the NEES of the scored
-    samples (window ends when ``windows`` is given, else track rows; ``length`` the window
-    length, named in the figure's note)."""
+    samples (window ends when ``windows``, the ends behind each coverage series, is given,
+    else track rows; ``length`` the window length, named in the figure's note)."""
     from odomkit.evaluate import nees
     from odomkit.workflows.figures import honesty_figure
 
