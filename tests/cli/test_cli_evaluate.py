@@ -104,7 +104,7 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     # And the heading's, where the truth has heading (OptiOdom runs have).
     keys |= {"nees_heading_mean", "nees_heading_median", "nees_heading_bounds", "coverage_heading",
              "coverage_heading_bounds", "coverage_heading_verdict", "coverage_heading_overall",
-             "nees_heading_verdict"}
+             "nees_heading_verdict", "verdict_heading_note"}
     assert set(got) == keys | {"window", "per_log", "warnings"} and got["window"] == "10 s"
     assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
     assert set(got["coverage_bounds"]) == set(got["coverage_verdict"]) == set(got["coverage"])

@@ -574,6 +574,7 @@ NULL_KEYS: dict[str, str] = {
     "coverage_heading_verdict": "evaluate: no --window or truth without heading, no verdict",
     "coverage_heading_overall": "evaluate: no --window or truth without heading, no verdict",
     "nees_heading_verdict": "evaluate: no --window or truth without heading, no verdict",
+    "verdict_heading_note": "evaluate: the heading's NEES and coverage agree, or no heading verdict",
     # evaluate: a window end's heading error and NEES, where the truth has no heading (or the
     # predicted heading variance is zero)
     "heading_error": "evaluate: a window end without truth heading",

@@ -133,21 +133,43 @@ def test_a_few_ends_with_one_far_outside_are_not_called_consistent():
     assert f"a chance of {chance:.1g} over 3 ends" in note
 
 
-@pytest.mark.parametrize(("n", "q"), [(1, 4.0), (5, 7.0), (40, 12.0)])
-def test_the_chance_of_the_largest_end_matches_monte_carlo(n, q):
-    """P(max of n χ²₂ ≥ q) by simulation (200 000 sets of n Gaussian 2-D errors), within 4
-    of its standard errors."""
+@pytest.mark.parametrize(("n", "q", "dof"), [(1, 4.0, 2), (5, 7.0, 2), (40, 12.0, 2), (1, 3.0, 1),
+                                             (8, 6.0, 1), (40, 9.0, 1)])
+def test_the_chance_of_the_largest_end_matches_monte_carlo(n, q, dof):
+    """P(max of n χ² ≥ q) by simulation (200 000 sets of n Gaussian errors in ``dof``
+    dimensions: a position's 2, a heading's 1), within 4 of its standard errors."""
     from odomkit.workflows._scoring import _largest_end_chance
 
     rng = np.random.default_rng(3)
     sets = 200_000
     largest = np.zeros(sets)
     for _ in range(n):
-        largest = np.maximum(largest, (rng.standard_normal((sets, 2)) ** 2).sum(axis=1))
+        largest = np.maximum(largest, (rng.standard_normal((sets, dof)) ** 2).sum(axis=1))
     seen = float(np.mean(largest >= q))
     values = np.r_[np.zeros(n - 1), q]
-    want = _largest_end_chance(values)
+    want = _largest_end_chance(values, dof)
     assert abs(seen - want) <= 4 * np.sqrt(want * (1 - want) / sets)
+
+
+def test_the_heading_gets_its_own_disagreement_note():
+    """The heading's NEES and coverage verdicts disagree as the position's do (a user asked why
+    run 01's heading NEES said optimistic while its coverage said consistent): the same note,
+    for a 1-dof interval. One end 6σ off among 8 honest ones (chance ~2e-8)."""
+    from dataclasses import replace as _replace
+
+    honest = [0.1, 0.3, 0.5, 0.8, 1.0, 1.3, 1.8, 2.5]
+    q = np.array(honest + [36.0])
+    s = _scored([1.0] * q.size)
+    # 10 mrad σ: errors of a few σ stay far inside ±π (heading errors are wrapped).
+    s = _replace(s, heading_errors=0.01 * np.sqrt(q), heading_var=np.full(q.size, 1e-4))
+    got = verdicts(summarise([s], (1.0,)), [s], windowed=True)
+    assert got["nees_heading_verdict"] == "optimistic" and got["coverage_heading_overall"] != "optimistic"
+    note = got["verdict_heading_note"]
+    assert "NEES 36" in note and "99 % interval" in note and "with only 9 ends" in note
+    assert "trust coverage" not in note
+    # Where both agree there is no note; position-only truth has none either.
+    assert verdicts(summarise([_scored([1.0] * 9)], (1.0,)), [_scored([1.0] * 9)],
+                    windowed=True)["verdict_heading_note"] is None
 
 
 def _simulate(make, tmp_path, k_true, k_model, seconds=300.0, seed=11, truth_noise=0.0):

@@ -230,7 +230,10 @@ def test_heading_numbers_and_verdicts_are_odomkit_evaluates(with_truth, run_cli)
         assert (f"The mean {name} NEES {expected[mean]:.3g} is {_SIDE[expected[nees_word]]}" in text
                 and f"({expected[nees_word]})" in text), name
         assert f"The {name} coverage is {expected[cover_word]}:" in text, name
-    assert ("NEES and coverage disagree" in text) == (expected["verdict_note"] is not None)
+    for key in ("verdict_note", "verdict_heading_note"):  # evaluate's notes, where it has them
+        assert (expected[key] is None) or expected[key][:60] in text, key
+    assert ("NEES and coverage disagree" in text) == (expected["verdict_note"] is not None
+                                                      or expected["verdict_heading_note"] is not None)
 
 
 def test_a_position_only_truth_gets_no_heading_figures(run_cli, tmp_path):

@@ -184,6 +184,8 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
             print(f"NEES and coverage disagree: {out['verdict_note']}")
         if out.get("nees_heading_mean") is not None:
             print(_heading_text(out, what, verdicts=windowed and not whole_runs))
+        if out.get("verdict_heading_note"):
+            print(f"heading NEES and coverage disagree: {out['verdict_heading_note']}")
     elif windowed and not whole_runs and out.get("window"):
         print(f"honesty test: {out['window']} windows: no window end scored (see the warnings)")
     if windowed and not whole_runs and len(out["per_log"]) > 1:

@@ -8,6 +8,7 @@ Internal to :mod:`odomkit.workflows` (the public names are re-exported by
 
 from __future__ import annotations
 
+import math
 import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -333,43 +334,52 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
     levels = coverage_verdicts(cover, n)
     overall = overall_verdict(levels)
     by_nees = nees_verdict(summary["nees_position_mean"], summary["nees_bounds"])
-    note = None
-    if overall is not None and by_nees is not None and overall != by_nees:
-        if overall == "mixed":
-            low = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "optimistic"]
-            high = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "pessimistic"]
-            note = (f"coverage is optimistic at {', '.join(low)} and pessimistic at {', '.join(high)} "
-                    "(heavy tails: more ends than predicted near the centre and beyond the outer "
-                    f"ellipses), which the NEES mean ({by_nees}) averages away: trust coverage, level by "
-                    "level; no scaling of the covariance mends it")
-        elif by_nees == "optimistic" and _largest_end_chance(values) < _EXTREME:
-            # Coverage counts an end in or out of the 99 % ellipse at most: an end far beyond
-            # it (which an honest Gaussian covariance almost never gives) is evidence that
-            # coverage cannot weigh, however few or many ends there are.
-            big, mid = float(values.max()), float(np.median(values))
-            few = (f"with only {n} ends coverage can hardly tell a model apart; " if n < FEW_WINDOW_ENDS
-                   else "")
-            note = (f"the NEES mean says optimistic but coverage says {overall}: {few}the largest end "
-                    f"(NEES {big:.3g}, median {mid:.3g}) lies far beyond the 99 % ellipse, a chance of "
-                    f"{_largest_end_chance(values):.1g} over {n} ends for an honest covariance, which "
-                    "coverage (in or out at 50-99 %) cannot see: the errors have a heavier tail than the "
-                    "covariance (an outlier window, or an error the model lacks); look at that end in "
-                    "--json's per_log window_ends")
-        else:
-            big, mid = float(values.max()), float(np.median(values))
-            why = (f"more ends fall outside the ellipses than an honest covariance's would, while the mean "
-                   f"averages them with many small ones (median {mid:.3g})" if overall == "optimistic" else
-                   f"a few large ends pull the mean up (largest {big:.3g}, median {mid:.3g})"
-                   if by_nees == "optimistic" else
-                   f"more ends fall inside the ellipses than an honest covariance's would, while a few large "
-                   f"ones hold the mean up (largest {big:.3g}, median {mid:.3g})" if overall == "pessimistic"
-                   else f"the mean weighs each end by its size (largest {big:.3g}, median {mid:.3g})")
-            note = (f"the NEES mean says {by_nees} but coverage says {overall}: trust coverage, which "
-                    f"counts each window end once, in or out; {why}; each end is in --json's per_log "
-                    "window_ends")
+    note = _disagreement_note(levels, overall, by_nees, values, dof=2)
     return {"coverage_bounds": {k: list(coverage_range(n, float(k))) for k in cover},
             "coverage_verdict": levels, "coverage_overall": overall, "nees_verdict": by_nees,
             "verdict_note": note, **_heading_verdicts(summary, scored, windowed)}
+
+
+def _disagreement_note(levels: dict[str, str | None], overall: str | None, by_nees: str | None,
+                       values: NDArray[np.float64], dof: int) -> str | None:
+    """Which verdict to trust where the NEES mean's (``by_nees``) and coverage's
+    (``overall``, ``levels``) differ, and why; None where they agree. ``values`` are the
+    window ends' NEES (n,), χ² with ``dof`` degrees of freedom for an honest covariance
+    (2: a position's ellipse, 1: a heading's interval)."""
+    if overall is None or by_nees is None or overall == by_nees:
+        return None
+    shape = "ellipse" if dof == 2 else "interval"
+    n = int(values.size)
+    big, mid = float(values.max()), float(np.median(values))
+    if overall == "mixed":
+        low = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "optimistic"]
+        high = [f"{100 * float(k):g} %" for k, v in levels.items() if v == "pessimistic"]
+        return (f"coverage is optimistic at {', '.join(low)} and pessimistic at {', '.join(high)} "
+                "(heavy tails: more ends than predicted near the centre and beyond the outer "
+                f"{shape}s), which the NEES mean ({by_nees}) averages away: trust coverage, level by "
+                "level; no scaling of the covariance mends it")
+    chance = _largest_end_chance(values, dof)
+    if by_nees == "optimistic" and chance < _EXTREME:
+        # Coverage counts an end in or out of the 99 % ellipse at most: an end far beyond
+        # it (which an honest Gaussian covariance almost never gives) is evidence that
+        # coverage cannot weigh, however few or many ends there are.
+        few = f"with only {n} ends coverage can hardly tell a model apart; " if n < FEW_WINDOW_ENDS else ""
+        return (f"the NEES mean says optimistic but coverage says {overall}: {few}the largest end "
+                f"(NEES {big:.3g}, median {mid:.3g}) lies far beyond the 99 % {shape}, a chance of "
+                f"{chance:.1g} over {n} ends for an honest covariance, which "
+                "coverage (in or out at 50-99 %) cannot see: the errors have a heavier tail than the "
+                "covariance (an outlier window, or an error the model lacks); look at that end in "
+                "--json's per_log window_ends")
+    why = (f"more ends fall outside the {shape}s than an honest covariance's would, while the mean "
+           f"averages them with many small ones (median {mid:.3g})" if overall == "optimistic" else
+           f"a few large ends pull the mean up (largest {big:.3g}, median {mid:.3g})"
+           if by_nees == "optimistic" else
+           f"more ends fall inside the {shape}s than an honest covariance's would, while a few large "
+           f"ones hold the mean up (largest {big:.3g}, median {mid:.3g})" if overall == "pessimistic"
+           else f"the mean weighs each end by its size (largest {big:.3g}, median {mid:.3g})")
+    return (f"the NEES mean says {by_nees} but coverage says {overall}: trust coverage, which "
+            f"counts each window end once, in or out; {why}; each end is in --json's per_log "
+            "window_ends")
 
 
 #: A largest window end whose chance under an honest covariance is below this is an outlier
@@ -377,33 +387,40 @@ def verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) 
 _EXTREME = 0.01
 
 
-def _largest_end_chance(values: NDArray[np.float64]) -> float:
-    """The chance that the largest of n position NEES values (each χ² with 2 dof for an
-    honest covariance, whose tail is exp(−q/2)) reaches the largest seen:
-    1 − (1 − exp(−q_max/2))ⁿ, computed without cancellation."""
+def _largest_end_chance(values: NDArray[np.float64], dof: int = 2) -> float:
+    """The chance that the largest of n NEES values (each χ² with ``dof`` = 2 (a position,
+    tail exp(−q/2)) or 1 (a heading, tail erfc(√(q/2))) for an honest covariance) reaches
+    the largest seen: 1 − (1 − tail(q_max))ⁿ, computed without cancellation."""
+    from scipy.special import erfc
+
     q = float(values.max())
-    return float(-np.expm1(values.size * np.log1p(-np.exp(-q / 2))))
+    tail = math.exp(-q / 2) if dof == 2 else float(erfc(math.sqrt(q / 2)))
+    return float(-np.expm1(values.size * np.log1p(-tail)))
 
 
 def _heading_verdicts(summary: dict[str, Any], scored: Sequence[Scored], windowed: bool) -> dict[str, Any]:
     """The heading's verdicts, as :func:`verdicts` gives the position's: ``coverage_heading_bounds``
     (the binomial ranges over the ends that have a heading NEES), ``coverage_heading_verdict``,
     ``coverage_heading_overall`` and ``nees_heading_verdict`` (the mean against
-    ``nees_heading_bounds``, 1 dof). None without window ends (``windowed``) or where the
-    truth has no heading."""
+    ``nees_heading_bounds``, 1 dof) and ``verdict_heading_note`` (which to trust where they
+    differ, as ``verdict_note`` says for the position). None without window ends
+    (``windowed``) or where the truth has no heading."""
     from odomkit import evaluate as ev
 
     cover = summary.get("coverage_heading")
     if not windowed or cover is None or summary.get("nees_heading_mean") is None:
         return {"coverage_heading_bounds": None, "coverage_heading_verdict": None,
-                "coverage_heading_overall": None, "nees_heading_verdict": None}
+                "coverage_heading_overall": None, "nees_heading_verdict": None, "verdict_heading_note": None}
     values = ev.heading_nees(*_headings(scored))
-    n = int(np.count_nonzero(np.isfinite(values)))
+    values = values[np.isfinite(values)]
+    n = int(values.size)
     levels = ev.coverage_verdicts(cover, n)
+    overall = ev.overall_verdict(levels)
     by_nees = ev.nees_verdict(summary["nees_heading_mean"], summary["nees_heading_bounds"])
     return {"coverage_heading_bounds": {k: list(ev.coverage_range(n, float(k))) for k in cover},
-            "coverage_heading_verdict": levels, "coverage_heading_overall": ev.overall_verdict(levels),
-            "nees_heading_verdict": by_nees}
+            "coverage_heading_verdict": levels, "coverage_heading_overall": overall,
+            "nees_heading_verdict": by_nees,
+            "verdict_heading_note": _disagreement_note(levels, overall, by_nees, values, dof=1)}
 
 
 def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:

@@ -273,13 +273,15 @@ def _has_heading(ev: dict[str, Any] | None) -> bool:
 def _verdicts(ev: dict[str, Any], who: str = "") -> list[Paragraph]:
     """evaluate's verdicts of the position and (where scored) the heading as sentences: the
     NEES mean against its bounds and the coverage, each as evaluate's keys say (None for no
-    verdict: one window, no independent samples), and ``verdict_note`` where they differ.
+    verdict: one window, no independent samples), and ``verdict_note`` (``verdict_heading_note``)
+    where they differ.
     ``who`` starts each sentence (e.g. "With the fitted noise (in-sample), ")."""
     out = []
-    for name, what, mean_key, nees_key, cover_key in (
-            ("position", "covariance", "nees_position_mean", "nees_verdict", "coverage_overall"),
+    for name, what, mean_key, nees_key, cover_key, note_key in (
+            ("position", "covariance", "nees_position_mean", "nees_verdict", "coverage_overall",
+             "verdict_note"),
             ("heading", "heading variance", "nees_heading_mean", "nees_heading_verdict",
-             "coverage_heading_overall")):
+             "coverage_heading_overall", "verdict_heading_note")):
         said = []
         if ev.get(nees_key) is not None:
             said.append(f"{who}the mean {name} NEES {ev[mean_key]:.3g} is "
@@ -287,8 +289,8 @@ def _verdicts(ev: dict[str, Any], who: str = "") -> list[Paragraph]:
         if ev.get(cover_key) is not None:
             said.append(f"The {name} coverage is {ev[cover_key]}: "
                         f"{_COVERAGE_SAYS[ev[cover_key]].format(what=what)}.")
-        if name == "position" and ev.get("verdict_note"):
-            said.append(f"NEES and coverage disagree (odomkit evaluate's note): {ev['verdict_note']}.")
+        if ev.get(note_key):
+            said.append(f"NEES and coverage disagree (odomkit evaluate's note): {ev[note_key]}.")
         if said:
             text = " ".join(said)
             out.append(Paragraph(text[:1].upper() + text[1:], "note"))
