@@ -159,7 +159,7 @@ def test_what_is_not_there_is_named_with_what_is(tmp_path, bag_writer, stamp):
     path = bag_writer(tmp_path / "b", "ros1", msgs)
     text = errors(lambda: read_bag(path, ["/odom"]))
     assert "no topic /odom in the bag; topics odomkit reads: /cmd_vel (Twist), /joint_states (JointState); " \
-           "1 other topic" in text
+           "other topics: /scan (sensor_msgs/msg/LaserScan)" in text
     assert "needs --topic" in errors(lambda: read_bag(path))  # two readable topics: which?
     assert "its joints are wheel_right_joint, arm, wheel_left_joint" in errors(
         lambda: read_bag(path, ["/joint_states"], ["wheel_left", "wheel_right_joint"]))

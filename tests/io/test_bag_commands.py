@@ -173,7 +173,8 @@ def one_line_error(run_cli, *args):
 def test_bad_bags_are_one_line_exit_2(run_cli, bags, bag_writer, stamp, tmp_path):
     robot = bags["dir"] / "rad.toml"
     err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--topic", "/odom")
-    assert "no topic /odom in the bag; topics odomkit reads: /joint_states (JointState); 1 other" in err
+    assert ("no topic /odom in the bag; topics odomkit reads: /joint_states (JointState); other topics: "
+            "/mocap (geometry_msgs/msg/PoseStamped)" in err)
     err = one_line_error(run_cli, "track", bags["ros1"], "--robot", robot, "--joints", "left,right")
     assert "no joint named 'left'; its joints are wheel_left_joint, wheel_right_joint" in err
     back = [("/js", "sensor_msgs/msg/JointState", T0 + k * 10**8,

@@ -1,5 +1,8 @@
 """ROS bags in: ROS 1 ``.bag``, ROS 2 ``.db3`` and ``.mcap`` (a ROS 2 bag is its folder),
 read through ``rosbags`` (the ``ros`` extra; no ROS install), imported only when a bag is read.
+A ROS 1 bag is also known by its first line (``#ROSBAG V2.0``) and an MCAP file by its magic
+bytes, whatever they are called (``run``, ``RUN.BAG``); a gzip-compressed bag is refused in
+one line saying to decompress it.
 
 **Messages and the channels they give** (:mod:`odomkit.log`):
 
@@ -37,12 +40,18 @@ log's rows; every other topic is resampled at those times, and a channel given b
 topics is taken from the one named last (so ``/imu``'s gyro replaces ``/odom``'s yaw
 rate). Rows outside another topic's span are left out, with a warning. A rate is resampled
 as the mean of its signal over each step (exact for the signal below), a wheel angle or a
-heading by linear interpolation.
+heading by linear interpolation. Where the replaced channel and its replacement disagree
+grossly (:func:`_check_replaced`: the one moves more than twice as far as the other, or they
+turn opposite ways), a warning names both topics and both figures: a sensor that does not
+measure what the robot did (an IMU not mounted level, a skid-steer odometry's yaw gain). An
+Imu topic whose mean linear acceleration puts gravity off its z axis (mounted on its side)
+warns that its ``angular_velocity.z`` is not the robot's yaw rate.
 
 **Ground truth** (``--truth-topic /mocap``): a pose topic (Odometry, PoseStamped,
 PoseWithCovarianceStamped) becomes the log's ground truth, as a text log's ``gt_*`` columns
-do: ``track``, ``calibrate``, ``fit-noise`` and ``evaluate`` use it where a truth file is
-not given. A GPS topic (``sensor_msgs/NavSatFix``, ``--truth-topic /fix``) is position-only
+do (never one of the log's own topics: the odometry scored against itself is refused):
+``track``, ``calibrate``, ``fit-noise`` and ``evaluate`` use it where a truth file is not
+given. A GPS topic (``sensor_msgs/NavSatFix``, ``--truth-topic /fix``) is position-only
 truth on its own clock instead, as a truth file of latitude/longitude is
 (:func:`odomkit.io.truth.project_latlon`: east and north of the first fix [m]): kept at its
 fixes (``meta["truth"]``, which :func:`odomkit.truth.truth_from_log` returns), not
@@ -71,10 +80,13 @@ smooth signal: step k uses the mean of both ends (trapezoid rule, second order).
 
 from __future__ import annotations
 
+import gzip
 import math
+import tempfile
 import warnings
+import zlib
 from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -108,6 +120,10 @@ TRUTH_TYPES = {
     "sensor_msgs/msg/NavSatFix": "NavSatFix",
 }
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
+#: The first bytes of a ROS 1 bag (its version line) and of an MCAP file (its magic), and the
+#: suffix rosbags needs to open each: it picks its reader by the name alone.
+_MAGIC = {"ros1": (b"#ROSBAG V2.0", ".bag"), "mcap": (b"\x89MCAP0\r\n", ".mcap")}
+_GZIP_MAGIC = b"\x1f\x8b"  # RFC 1952, section 2.3.1
 #: Messages between two reports to a ``progress`` (one report per message would cost about as much
 #: as decoding the message).
 _REPORT_EVERY = 1000
@@ -126,7 +142,10 @@ def require_rosbags() -> Any:
 
 
 def is_bag(path: str | Path) -> bool:
-    """A ``.bag``, ``.db3`` or ``.mcap`` name, or a folder with a ROS 2 ``metadata.yaml``.
+    """A ``.bag``, ``.db3`` or ``.mcap`` name, a folder with a ROS 2 ``metadata.yaml``, or a
+    file whose first bytes are a ROS 1 bag's or an MCAP file's, whatever it is called. A
+    gzip-compressed bag (``.bag.gz``, or gzip whose content is a bag) is one too, so that
+    reading it says to decompress it (:func:`read_bag`).
 
     Examples
     --------
@@ -134,7 +153,37 @@ def is_bag(path: str | Path) -> bool:
     (True, True, False)
     """
     path = Path(path)
-    return path.suffix.lower() in _BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file())
+    if path.suffix.lower() in _BAG_SUFFIXES or _gzip_bag_name(path):
+        return True
+    if path.is_dir():
+        return (path / "metadata.yaml").is_file()
+    return _sniff(path) is not None
+
+
+def _gzip_bag_name(path: Path) -> bool:
+    return path.name.lower().endswith(tuple(s + ".gz" for s in _BAG_SUFFIXES))
+
+
+def _magic_kind(head: bytes) -> str | None:
+    return next((kind for kind, (magic, _) in _MAGIC.items() if head.startswith(magic)), None)
+
+
+def _sniff(path: Path) -> str | None:
+    """What a file's first bytes say it is: ``"ros1"``, ``"mcap"``, ``"gzip"`` (a gzip file
+    whose content begins as one of those), or None (anything else, a folder, no such file)."""
+    length = max(len(magic) for magic, _ in _MAGIC.values())
+    try:
+        if not path.is_file():  # a regular file only: reading a pipe's first bytes would eat them
+            return None
+        with path.open("rb") as file:
+            head = file.read(length)
+            if not head.startswith(_GZIP_MAGIC):
+                return _magic_kind(head)
+            file.seek(0)
+            with gzip.GzipFile(fileobj=file) as inner:
+                return "gzip" if _magic_kind(inner.read(length)) else None
+    except (OSError, EOFError, zlib.error):  # a folder, unreadable, a damaged gzip: no bag here
+        return None
 
 
 @contextmanager
@@ -154,25 +203,52 @@ def _bag_errors(source: str) -> Iterator[None]:
 @contextmanager
 def _open(path: Path) -> Iterator[Any]:
     """An open rosbags ``AnyReader`` on ``path`` (a storage file inside a ROS 2 bag folder
-    opens the folder)."""
-    rosbags = require_rosbags()
+    opens the folder; a ROS 1 bag or MCAP file by another name opens through a link named
+    as rosbags needs, :func:`_named_as`)."""
     source = str(path)
     if not path.exists():
         raise InputError("no such file or folder", source=source)
+    kind = _sniff(path) if path.is_file() else None
+    if kind == "gzip" or (path.is_file() and _gzip_bag_name(path)):
+        # rosbags reads a bag in place (it seeks through its index): no reading through gzip.
+        plain = path.name[:-3] if path.name.lower().endswith(".gz") else "decompressed.bag"
+        how = f"gunzip -k {path.name}" if plain != "decompressed.bag" else f"zcat {path.name} > {plain}"
+        raise InputError(f"is a gzip-compressed ROS bag; decompress it first ({how}) and give {plain}",
+                         source=source)
+    rosbags = require_rosbags()
     storage_file = path.is_file() and path.suffix.lower() in (".db3", ".mcap")
     if storage_file and (path.parent / "metadata.yaml").is_file():
         path = path.parent
     stores = rosbags.typesys
-    with _bag_errors(source):
-        # The default types serve a ROS 2 bag without message definitions (db3 before Iron);
-        # the messages odomkit reads are the same in every ROS 2 release.
-        reader = rosbags.highlevel.AnyReader(
-            [path], default_typestore=stores.get_typestore(stores.Stores.ROS2_HUMBLE))
-        reader.open()
-    try:
+    with ExitStack() as stack:
+        suffix = _MAGIC[kind][1] if kind in _MAGIC else None
+        if suffix is not None and path.suffix != suffix:
+            path = stack.enter_context(_named_as(path, suffix, source))
+        with _bag_errors(source):
+            # The default types serve a ROS 2 bag without message definitions (db3 before Iron);
+            # the messages odomkit reads are the same in every ROS 2 release.
+            reader = rosbags.highlevel.AnyReader(
+                [path], default_typestore=stores.get_typestore(stores.Stores.ROS2_HUMBLE))
+            reader.open()
+        stack.callback(reader.close)
         yield reader
-    finally:
-        reader.close()
+
+
+@contextmanager
+def _named_as(path: Path, suffix: str, source: str) -> Iterator[Path]:
+    """A symbolic link to ``path`` ending in ``suffix``, in a temporary folder removed after:
+    rosbags chooses its reader by the suffix alone (``AnyReader`` takes any name but ``.bag``
+    for ROS 2, whose reader then wants ``.db3`` or ``.mcap``), so ``run`` or ``RUN.BAG``
+    would not open though its first bytes say what it is."""
+    with tempfile.TemporaryDirectory(prefix="odomkit-bag-") as folder:
+        link = Path(folder) / f"bag{suffix}"
+        try:
+            link.symlink_to(path.resolve())
+        except OSError:  # no symbolic links here (Windows without the right): say what to do
+            what = "a ROS 1 bag" if suffix == ".bag" else "an MCAP file"
+            raise InputError(f"is {what} (by its first bytes), which rosbags opens only by a "
+                             f"{suffix} name: rename it to {path.stem}{suffix}", source=source) from None
+        yield link
 
 
 def bag_topics(path: str | Path) -> dict[str, str]:
@@ -181,12 +257,22 @@ def bag_topics(path: str | Path) -> dict[str, str]:
         return {name: str(info.msgtype) for name, info in reader.topics.items()}
 
 
+#: The other topics an error names, with their types (a bag may hold hundreds).
+_OTHERS_NAMED = 10
+
+
 def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -> str:
+    """The topics of ``types`` there are, then the others with their types (the first
+    :data:`_OTHERS_NAMED`): a topic read under a name odomkit does not expect is seen at once."""
     readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if t in types]
-    others = len(topics) - len(readable)
+    others = [f"{n} ({t})" for n, t in sorted(topics.items()) if t not in types]
     what = "topics odomkit reads" if types is MESSAGE_TYPES else "truth topics"
     text = f"{what}: " + (", ".join(readable) if readable else "none")
-    return text + (f"; {others} other topic(s)" if others else "")
+    if not others:
+        return text
+    more = len(others) - _OTHERS_NAMED
+    return (text + "; other topics: " + ", ".join(others[:_OTHERS_NAMED])
+            + (f" and {more} more" if more > 0 else ""))
 
 
 def _find_topic(topics: dict[str, str], wanted: str, source: str,
@@ -203,14 +289,26 @@ def _find_topic(topics: dict[str, str], wanted: str, source: str,
 
 def _choose_topics(topics: dict[str, str], wanted: Sequence[str], source: str,
                    truth_topic: str | None = None) -> list[str]:
+    """The log's topics: those ``wanted`` (``--topic``), else the bag's one readable topic
+    other than ``truth_topic`` (the name as found in the bag). The truth topic is never one
+    of them: the odometry would be scored against itself (a user study's final error of
+    0.16 m, with no warning, was the odometry's own pose against its own twist)."""
+    rest = {n: t for n, t in topics.items() if n != truth_topic}
+    itself = (f"the odometry would be scored against itself; the truth must come from another "
+              f"source (motion capture, GPS): {_topic_list(rest, TRUTH_TYPES)}")
     if wanted:
         chosen = [_find_topic(topics, w, source) for w in wanted]
         if len(set(chosen)) != len(chosen):
             raise InputError(f"--topic names a topic twice: {', '.join(wanted)}", source=source)
+        if truth_topic in chosen:
+            raise InputError(f"--truth-topic {truth_topic} is also a --topic: {itself}", source=source)
         return chosen
     readable = sorted(n for n, t in topics.items() if t in MESSAGE_TYPES and n != truth_topic)
     if len(readable) == 1:
         return readable
+    if not readable and topics.get(truth_topic or "") in MESSAGE_TYPES:
+        raise InputError(f"the bag's one topic odomkit reads as a log, {truth_topic}, is the --truth-topic: "
+                         f"{itself}", source=source)
     raise InputError(f"a bag log needs --topic; {_topic_list(topics)}", source=source)
 
 
@@ -349,10 +447,46 @@ def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source:
                    topic, source)
     stream = _Stream(topic, ns, [("yaw_rate", "linear", rate)])
     # sensor_msgs/Imu: orientation_covariance[0] = -1 means "no orientation estimate".
-    if all(float(m.orientation_covariance[0]) != -1.0 for m in messages):
+    oriented = all(float(m.orientation_covariance[0]) != -1.0 for m in messages)
+    if oriented:
         heading = _finite(np.array([_yaw(m.orientation) for m in messages]), "orientation", topic, source)
         stream.signals.append(("heading", "absolute", unwrap_angle(heading)))
+    accel = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
+                      for m in messages], dtype=float)
+    _check_level(accel, oriented, topic, source)
     return stream
+
+
+#: An Imu's mean linear acceleration is gravity (the robot's own accelerations average out)
+#: where its size lies in this range [m/s²]; outside it (0: an IMU that does not fill it in,
+#: or reports it without gravity) nothing is said.
+_GRAVITY_RANGE = (5.0, 15.0)
+#: Gravity "mostly along z": the mean's z part at least this fraction of its size (a tilt
+#: of up to 37°; a level robot on a slope of 20° keeps 0.94).
+_LEVEL = 0.8
+
+
+def _check_level(accel: NDArray[np.float64], oriented: bool, topic: str, source: str) -> None:
+    """Warn where an IMU's gravity is not along its z axis: mounted on its side, its
+    ``angular_velocity.z`` is a rotation about a horizontal axis, not the robot's yaw rate.
+
+    ``accel`` (M, 3) [m/s²]: the messages' linear acceleration (x, y, z). Gravity on −z is
+    not warned about: some drivers report a level IMU's specific force with that sign."""
+    finite = accel[np.isfinite(accel).all(axis=1)]
+    if not finite.size:
+        return
+    mean = finite.mean(axis=0)
+    size = float(np.linalg.norm(mean))
+    if not (_GRAVITY_RANGE[0] <= size <= _GRAVITY_RANGE[1]) or abs(mean[2]) >= _LEVEL * size:
+        return
+    axis = int(np.argmax(np.abs(mean)))
+    sign = "+" if mean[axis] > 0 else "-"
+    name = "xyz"[axis]
+    heading = ", nor its orientation's yaw the heading" if oriented else ""
+    warnings.warn(f"{source}: {topic}: gravity is along its {sign}{name} axis (mean linear acceleration "
+                  f"({mean[0]:.2f}, {mean[1]:.2f}, {mean[2]:.2f}) m/s²), not z: the IMU is not mounted "
+                  f"level, so its angular_velocity.z is not the robot's yaw rate{heading} (about "
+                  f"{sign}angular_velocity.{name} is); publish it in a level frame", stacklevel=4)
 
 
 def _pose_truth(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
@@ -568,13 +702,83 @@ def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], di
     # Resampled on times from one origin: epoch seconds as floats are only good to 0.24 µs.
     rows = (primary.ns[first:last + 1] - origin) / 1e9
     channels: dict[str, NDArray[np.float64]] = {}
+    given_by: dict[str, str] = {}
     for stream in streams:  # later topics replace earlier ones' channels
         own = stream is primary
         s = rows if own else (stream.ns - origin) / 1e9
         for name, kind, values in stream.signals:
             v = values[first:last + 1] if own else values
-            channels[name] = _channel(s, name, kind, v, rows, own)
+            channel = _channel(s, name, kind, v, rows, own)
+            if name in channels:
+                _check_replaced(name, kind, rows, (given_by[name], channels[name]),
+                                (stream.topic, channel), source)
+            channels[name], given_by[name] = channel, stream.topic
     return _seconds(primary.ns[first:last + 1]), channels
+
+
+#: The windows [s] over which a replaced channel and its replacement are summed before the
+#: absolute values are taken: a gyro's white noise averages out within each (0.02 rad/s at
+#: 100 Hz: 0.002 rad a window), and a turn lasts longer than one.
+_WINDOW = 1.0
+#: Where the one moves more than this many times as far as the other, one of them is wrong:
+#: an honest pair differs by a skid-steer odometry's yaw gain (10–20 %) or a wheel scale.
+_FACTOR = 2.0
+#: Besides, the difference must exceed this much plus :data:`_DRIFT` per second [rad, or m
+#: for speed]: a robot going straight ahead, whose odometry turns 0 rad, and a gyro's
+#: uncorrected bias up to 0.01 rad/s (0.6°/s, a cheap MEMS gyro; the robot file's
+#: ``gyro_bias`` corrects it later) must not warn.
+_SLACK = 1.0
+_DRIFT = 0.01
+
+
+def _check_replaced(name: str, kind: str, rows: NDArray[np.float64], old: tuple[str, NDArray[np.float64]],
+                    new: tuple[str, NDArray[np.float64]], source: str) -> None:
+    """Warn where channel ``name`` of topic ``new`` (which replaces it) and of topic ``old``
+    disagree grossly over the rows they share (``rows`` (N,) [s] from the first).
+
+    Both are summed over :data:`_WINDOW` windows into the motion of each (Δθ [rad], or the
+    distance [m] for ``speed``); a warning where Σ|Δ| of the one exceeds :data:`_FACTOR`
+    times the other's by more than :data:`_SLACK` + :data:`_DRIFT`·duration, or where both
+    move that much and their windows go opposite ways (correlation below −½: a gyro upside
+    down). A user study's Jackal bag: the odometry's twist turns 47 rad in 61 s, its level IMU 9."""
+    if rows.size < 2 or rows[-1] <= rows[0]:
+        return
+    dt = np.diff(rows)
+
+    def motion(values: NDArray[np.float64]) -> NDArray[np.float64]:
+        if name in INCREMENT_CHANNELS:
+            steps = values[1:]
+        elif kind == "absolute":
+            steps = np.diff(values)
+        else:
+            steps = values[:-1] * dt
+        window = np.floor(rows[:-1] / _WINDOW).astype(np.int64)
+        return np.bincount(window, weights=steps).astype(float)  # weighted: float64 already
+
+    def net(steps: NDArray[np.float64]) -> str:
+        return f"{round(float(steps.sum()), 3) + 0.0:+.3g}"  # +0, not -0 or +1e-16
+
+    (old_topic, old_values), (new_topic, new_values) = old, new
+    a, b = motion(old_values), motion(new_values)
+    total_a, total_b = float(np.abs(a).sum()), float(np.abs(b).sum())
+    duration = float(rows[-1] - rows[0])
+    slack = _SLACK + _DRIFT * duration
+    low, high = sorted((total_a, total_b))
+    unit, verb = ("m", "travels") if name == "speed" else ("rad", "turns")
+    figures = (f"over the {duration:.4g} s they share, {old_topic} {verb} {total_a:.3g} {unit} in all "
+               f"(Σ|Δ| over {_WINDOW:g} s windows; net {net(a)}) and {new_topic} {total_b:.3g} {unit} "
+               f"(net {net(b)})")
+    said = (f"{source}: {name} from {new_topic} replaces {old_topic}'s (the topic named last is used), "
+            "but they disagree")
+    causes = ("a command the robot did not follow, a wrong wheel radius, a topic of another robot"
+              if name == "speed" else
+              "an IMU not mounted level, a wrong wheel separation or yaw gain, a topic of another frame")
+    hint = f"one of them is not the robot's motion ({causes})"
+    if high - low > slack and high > _FACTOR * low:
+        ratio = f"{high / low:.1f}" if low > 0 else "∞"
+        warnings.warn(f"{said} by a factor {ratio}: {figures}; {hint}", stacklevel=4)
+    elif low > slack and float(a @ b) < -0.5 * math.sqrt(float(a @ a) * float(b @ b)):
+        warnings.warn(f"{said}: they move opposite ways ({figures}); {hint}", stacklevel=4)
 
 
 def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
@@ -584,8 +788,10 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
 
     Parameters
     ----------
-    path : a ROS 1 ``.bag``, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file
+    path : a ROS 1 ``.bag``, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file (a ROS 1
+        bag or MCAP file by another name too: known by its first bytes)
     topics : topic names, the first giving the rows; empty: the bag's one readable topic
+        (other than ``truth_topic``)
     joints : JointState joint names, ``(left, right)`` or one; empty: the joints whose
         names contain "left" and "right", or the only joint
     receive_time : use the time the bag received each message instead of header stamps
@@ -606,8 +812,16 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     Raises
     ------
     InputError
-        Not a bag, no such topic or joint (listing the ones there are), stamps that go
-        backwards or are zero, values that are not finite, rosbags not installed.
+        Not a bag (or a gzip-compressed one), no such topic or joint (listing the ones there
+        are), a truth topic that is one of the log's topics, stamps that go backwards or are
+        zero, values that are not finite, rosbags not installed.
+
+    Warns
+    -----
+    UserWarning
+        Rows left out (outside another topic's span); an Imu whose gravity is not along its
+        z axis; a channel given by two topics whose two versions disagree grossly
+        (:func:`_check_replaced`).
     """
     path = Path(path)
     source = str(path)

@@ -52,7 +52,6 @@ _APPLIES = {
 _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
           "period": "--period", "time_unit": "--time-unit", "topic": "--topic", "joints": "--joints",
           "bag_time": "--bag-time", "truth_topic": "--truth-topic", "record": "--record"}
-_BAG_SUFFIXES = (".bag", ".db3", ".mcap")  # odomkit.io.bag.is_bag, without importing it
 
 
 def require_log_file(path: Path) -> None:
@@ -78,8 +77,12 @@ def require_log_file(path: Path) -> None:
 
 
 def detect_format(path: Path) -> str:
-    """Guess a log format from its file name (a ``.gz`` suffix is looked through); a
-    ``.bag``/``.db3``/``.mcap`` file or a folder with a ``metadata.yaml`` is a ROS bag.
+    """Guess a log format from its file name (a ``.gz`` suffix is looked through); a ROS bag
+    (:func:`odomkit.io.bag.is_bag`) is a ``.bag``/``.db3``/``.mcap`` file, a folder with a
+    ``metadata.yaml``, or a file whose first bytes are a ROS 1 bag's or an MCAP file's
+    whatever its name (``run``, ``RUN.BAG``). A gzip-compressed bag (``run.bag.gz``, or gzip
+    holding a bag) is a bag too, whose reader says to decompress it: read as a text log it
+    would only be told that ``--topic`` does not apply.
 
     Examples
     --------
@@ -88,7 +91,9 @@ def detect_format(path: Path) -> str:
     >>> detect_format(Path("230620202042_run-01.csv.gz"))
     'optiodom'
     """
-    if path.suffix.lower() in _BAG_SUFFIXES or (path.is_dir() and (path / "metadata.yaml").is_file()):
+    from odomkit.io.bag import is_bag  # here, not at the top: importing this module stays light
+
+    if is_bag(path):
         return "bag"
     name = path.name.lower().removesuffix(".gz")
     if name.startswith("snowhite"):
