@@ -308,6 +308,8 @@ def test_a_span_of_a_log_is_that_part_of_it_and_halves_share_no_row(run_cli, tmp
     seconds = load_log(RUNS[0], robot, LogOptions(span="2:6"))
     inside = (whole.t >= whole.t[0] + 2) & (whole.t < whole.t[0] + 6)
     np.testing.assert_array_equal(seconds.t, whole.t[inside])
+    # Seconds may carry their unit, as --window's do.
+    np.testing.assert_array_equal(load_log(RUNS[0], robot, LogOptions(span="2s:6s")).t, whole.t[inside])
 
     part = tmp_path / "part.csv"
     rows = np.flatnonzero(inside)
@@ -327,6 +329,8 @@ def test_a_span_of_a_log_is_that_part_of_it_and_halves_share_no_row(run_cli, tmp
     ("1:2:3", "--span takes START:END"),
     ("50", "--span takes START:END"),
     ("x:", "'x' is neither"),
+    ("5ss:", "'5ss' is neither"),
+    ("5%s:", "'5%s' is neither"),
     ("-5:", "'-5' is neither"),
     (":150%", "'150%' is neither"),
     ("9:3", "--span 9:3: its end must come after its start"),

@@ -196,21 +196,23 @@ def parse_span(text: str) -> tuple[_SpanEnd | None, _SpanEnd | None]:
 
     Examples
     --------
-    >>> parse_span(":50%"), parse_span("120:600")
-    ((None, (50.0, True)), ((120.0, False), (600.0, False)))
+    >>> parse_span(":50%"), parse_span("120:600"), parse_span("30s:200s")
+    ((None, (50.0, True)), ((120.0, False), (600.0, False)), ((30.0, False), (200.0, False)))
     """
     def end(part: str) -> _SpanEnd | None:
         part = part.strip()
         if not part:
             return None
         percent = part.endswith("%")
+        # Seconds may carry their unit, as --window's do (30s).
+        number = part.removesuffix("%") if percent else part.removesuffix("s")
         try:
-            value = float(part.removesuffix("%"))
+            value = float(number)
         except ValueError:
             value = math.nan
         if not math.isfinite(value) or value < 0 or (percent and value > 100):
             raise InputError(f"--span takes START:END, seconds from the log's first row or percent of its "
-                             f"duration (:50%, 50%:, 120:600); {part!r} is neither")
+                             f"duration (:50%, 50%:, 120:600, 120s:600s); {part!r} is neither")
         return value, percent
 
     if not isinstance(text, str) or text.count(":") != 1:
