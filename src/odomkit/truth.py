@@ -76,6 +76,12 @@ class Truth:
         by the velocity times δ, so it adds (v·σ)² along the track where the robot moves and
         nothing where it stands; the heading's share ω·δ counts only where a start heading
         is fitted to position-only truth (:func:`odomkit.window_errors._pose_rates` says why).
+    stated_sigma : float
+        The position σ per axis [m] the truth's own file states (a GPS fix's covariance, a
+        bag's NavSatFix) where ``sigma`` was not given (0: none stated). No fit uses it
+        unasked (``--truth-sigma`` takes it into ``sigma``); a check may judge against it,
+        and says so (:func:`odomkit.calibrate.check_ratios.check_truth_motion`): the
+        scatter of a GPS's fixes about a smooth path misses its error correlated in time.
     """
 
     t: NDArray[np.float64]
@@ -85,6 +91,7 @@ class Truth:
     source: str = "<memory>"
     heading_sigma: float = 0.0
     time_sigma: float = 0.0
+    stated_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         error = partial(InputError, source=self.source)
@@ -102,6 +109,7 @@ class Truth:
         validate.non_negative(self.sigma, "truth sigma", unit="m", error=error)
         validate.non_negative(self.heading_sigma, "truth heading sigma", unit="rad", error=error)
         validate.non_negative(self.time_sigma, "truth time sigma", unit="s", error=error)
+        validate.non_negative(self.stated_sigma, "truth stated sigma", unit="m", error=error)
 
     def __len__(self) -> int:
         return int(self.t.shape[0])

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import math
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -165,3 +166,16 @@ def test_options_of_the_other_kind_of_truth_are_refused(run_cli, truth_bags, arg
     code, out, err = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "10s", "--truth", truth, *args)
     assert code == 2 and out == ""
     assert said in err and "Traceback" not in err and len(err.strip().splitlines()) == 1
+
+
+def test_the_log_bag_named_again_as_truth_with_its_own_topic_is_refused(run_cli, truth_bags):
+    """--truth THE_LOG.bag --truth-topic /odom, where /odom is the log's own topic: the
+    odometry would be scored against itself (a Husky bag said "final position error 0.16 m")."""
+    bag = truth_bags["bags"]["ros1"]
+    robot = Path(__file__).parents[2] / "examples" / "unicycle.toml"
+    args = ("track", bag, "--robot", robot, "--topic", "/odom", "--truth", bag)
+    code, out, err = run_cli(*args, "--truth-topic", "/odom")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1
+    assert "is the log's own topic /odom: the odometry would be scored against itself" in err
+    code, _, err = run_cli(*args, "--truth-topic", "/mocap")  # another topic of the same bag is truth
+    assert code == 0, err

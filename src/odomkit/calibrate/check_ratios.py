@@ -38,11 +38,11 @@ from numpy.typing import NDArray
 from odomkit import units
 from odomkit.calibrate.check_finding import Finding, Status
 from odomkit.log import SPEED_CHANNELS, OdometryLog
-from odomkit.robot import Car, DiffDrive, Robot, Tricycle
+from odomkit.robot import Car, CompassOdometry, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
-__all__ = ["check_truth_motion", "motion_problems", "MotionRatios", "motion_ratios", "RATIO_FAIL",
-           "TRAVEL_WARN", "TURN_WARN", "unit_mixup"]
+__all__ = ["check_truth_motion", "judging_noise", "motion_problems", "MotionRatios", "motion_ratios",
+           "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "unit_mixup"]
 
 #: A stretch's truth chord counts where it exceeds this many times the chord's own noise
 #: (σ√2 for two fixes of σ per axis): a 7 % error on one stretch's ratio at worst, and a
@@ -92,6 +92,15 @@ TURN_WARN = 1.25
 #: Off by more than this factor either way is no calibration error: a unit or a missing
 #: robot-file entry (the check fails).
 RATIO_FAIL = 2.0
+#: A ratio within this many of its standard errors of 1 is not told apart from 1: no warning
+#: and no failure, whatever its size (a few noisy turns of a GPS's long chords gave 1.8 ± 1.1).
+COVERS_ONE = 2.0
+#: A turning gain (odometry over truth) under this in size is no scale error either: the
+#: odometry hardly turns where the truth does (an IMU on its side read about the wrong axis),
+#: or, below its negative, turns the other way (a sign flipped; a flipped sign turning g
+#: times as much gives −g, :func:`motion_ratios`). A unit's factor is named before it (radians
+#: read as degrees turn 0.0175×).
+NO_TURN = 0.1
 
 # (factor, what it is, what to do): odometry over truth near a unit factor (within 4 %).
 _TRAVEL_UNITS = (
@@ -149,6 +158,25 @@ class MotionRatios:
     odometry_turned: float
 
 
+def judging_noise(truth: Truth, noise: float | None = None) -> tuple[float, float | None]:
+    """The truth's position noise [m per axis] the ratios are judged with, and the scatter it
+    replaced where the σ the truth's file states (``truth.stated_sigma``: a bag's GPS fixes'
+    covariance, not given as ``--truth-sigma``) is the larger (else None).
+
+    ``noise`` (default :func:`odomkit.truth.truth_noise`: the σ given, or the fixes' scatter
+    about a smooth path where larger) is the estimate. A GPS's error is correlated in time:
+    consecutive fixes wander together, so their scatter about a smooth path understates it
+    (a Husky's 2.5 Hz fixes stating 0.8 m scattered 0.1 m) and the ratio check, judging chords
+    and turns of a few seconds against that, counts the wander as the odometry's error (it
+    turned 0.25× as much as the truth over 2.4 s stretches, 0.97× over the 19 s that 0.8 m
+    asks for). The stated σ only judges here; no fit uses it unasked.
+    """
+    estimate = truth_noise(truth) if noise is None else noise
+    if truth.stated_sigma > estimate:
+        return float(truth.stated_sigma), estimate
+    return estimate, None
+
+
 def _ratio(odometry: NDArray[np.float64], truth: NDArray[np.float64]) -> tuple[float, float]:
     """Σ odometry / Σ truth (both ≥ 0) and its standard error: the ratio estimator's, from the
     residuals odometry − ratio·truth (a linearised delta method)."""
@@ -191,12 +219,13 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
     log : the odometry log, dead-reckoned with ``robot`` from the origin
     robot : the robot the log is read with
     truth : Truth, with or without heading; its noise is the larger of its stated σ and its
-        fixes' own scatter (:func:`odomkit.truth.scatter_sigma`)
+        fixes' own scatter (:func:`odomkit.truth.scatter_sigma`), and of the σ its file
+        states where none was given (:func:`judging_noise`)
     max_gap : a stretch holding a gap between fixes longer than this [s] is left out; a
         sparse truth (a 1 Hz GPS) is allowed twice its median spacing
         (:func:`odomkit.truth.longest_gap`, :func:`odomkit.truth.truth_at`'s rule)
     noise : the truth's noise [m per axis] where the caller has it (default
-        :func:`odomkit.truth.truth_noise`)
+        :func:`odomkit.truth.truth_noise`); the σ the truth's file states is still the floor
 
     Returns
     -------
@@ -224,7 +253,7 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
     mid_heading = 0.5 * (odo_heading[:-1] + odo_heading[1:])
     heading_sum = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(mid_heading * np.abs(steps.dd)))))
     heading = None if truth.theta is None else np.unwrap(truth.theta[inside])
-    noise = truth_noise(truth) if noise is None else noise
+    noise = judging_noise(truth, noise)[0]
     gap = longest_gap(truth, max_gap)
     least_chord = max(MIN_CHORD, CHORD_SIGMAS * math.sqrt(2.0) * noise)
 
@@ -322,7 +351,17 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
         # hold, cannot pick pairs on its own (a pair chosen by one side's wobble biases the
         # ratio that side's way).
         turning = beyond_noise & ((np.abs(truth_turn) >= MIN_TURN) | (np.abs(odo_turn) >= ODOMETRY_TURN))
-    way_turned = np.sign(odo_turn + truth_turn)[turning]
+    # Each turn counted the way it went: the truth's way where the truth turns clearly (beyond
+    # MIN_TURN and its noise), else the way of the two turns' sum (a truth that barely turns
+    # against an odometry that spins). Not the sum's way alone: an odometry that turns the
+    # other way about as much as the truth (a flipped sign, −g × the truth's turns with g
+    # near 1) leaves that sum to the noise, and the ratio of sums signed at random came out
+    # anywhere (−1.4 ± 1.8) or not at all (a negative sum of the truth's turns); signed by the
+    # truth, it is −g.
+    truth_clear = (np.abs(truth_turn) >= TURN_SIGMAS * turn_noise) & (np.abs(truth_turn) >= MIN_TURN)
+    way_turned = np.where(truth_clear, np.sign(truth_turn), np.sign(odo_turn + truth_turn))[turning]
+    if np.sum(way_turned * truth_turn[turning]) < 0:  # every sign turned round: the same ratio
+        way_turned = -way_turned
     turn, turn_se = _ratio(way_turned * odo_turn[turning], way_turned * truth_turn[turning])
     return MotionRatios(travel, travel_se, int(np.count_nonzero(is_straight)), turn, turn_se,
                         int(np.count_nonzero(turning)), span, float(np.sum(np.abs(truth_turn[turning]))),
@@ -330,6 +369,8 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
 
 
 def _unit(ratio: float, units: tuple[tuple[float, str, str], ...]) -> tuple[str, str] | None:
+    if not ratio > 0:  # no unit turns a track round or stops it
+        return None
     for factor, what, fix in units:
         if abs(math.log(ratio / factor)) <= _UNIT_TOLERANCE:
             return what, fix
@@ -346,20 +387,37 @@ def unit_mixup(travel: float, turn: float) -> str | None:
     return None
 
 
-def _status(ratio: float, warn: float) -> Status:
+def _status(ratio: float, warn: float, se: float = math.nan) -> Status:
+    if abs(ratio - 1) <= COVERS_ONE * se:  # no evidence against 1 (NaN: none either way)
+        return "ok"
+    if not ratio > 0:  # the other way, or not at all: no scale error (and no logarithm)
+        return "fail"
     off = abs(math.log(ratio))
     return "fail" if off > math.log(RATIO_FAIL) else "warn" if off > math.log(warn) else "ok"
 
 
-def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool) -> Finding:
+def _covers_one(ratio: float, warn: float, se: float) -> str:
+    """What an ``ok`` says where the ratio alone would not be ok: it is within
+    :data:`COVERS_ONE` standard errors of 1."""
+    if _status(ratio, warn) == "ok":
+        return ""
+    return f": within {COVERS_ONE:g} standard errors of 1, not told apart from it"
+
+
+def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool, judged: str = "") -> Finding:
     said = (f"the odometry travels {r.travel:.3g} ± {r.travel_se:.2g} × the truth's distance "
-            f"over {r.travel_stretches} straight stretches of {r.span:.3g} s")
-    status = _status(r.travel, TRAVEL_WARN)
+            f"over {r.travel_stretches} straight stretches of {r.span:.3g} s{judged}")
+    status = _status(r.travel, TRAVEL_WARN, r.travel_se)
     if status == "ok":
-        return Finding("travel_ratio", "ok", said, value=r.travel)
+        return Finding("travel_ratio", "ok", said + _covers_one(r.travel, TRAVEL_WARN, r.travel_se),
+                       value=r.travel)
     unit = _unit(r.travel, _TRAVEL_UNITS)
     if unit is not None:
         return Finding("travel_ratio", status, f"{said}: {unit[0]}?", unit[1], r.travel)
+    if not r.travel > 0:  # Σ distance rolled is never negative: it rolled nothing
+        return Finding("travel_ratio", status, f"{said}: the odometry does not move where the truth does",
+                       "check that the log's distance or speed channel is the robot's (the topic, column or "
+                       "field read)", r.travel)
     if isinstance(robot, DiffDrive):
         entry = ("the wheel speeds' unit (m/s) and c_left, c_right" if speed_fed
                  else "m_per_tick (the wheels' radius and ticks per revolution)")
@@ -371,23 +429,28 @@ def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool) -> Finding:
                    f"check {entry} in the robot file and the log's distance unit", r.travel)
 
 
-def _turn_finding(r: MotionRatios, robot: Robot) -> Finding:
+def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "") -> Finding:
     per_metre = r.turn / r.travel if math.isfinite(r.travel) and r.travel > 0 else math.nan
     said = (f"the odometry turns {r.turn:.3g} ± {r.turn_se:.2g} × as much as the truth "
             f"({r.odometry_turned:.3g} rad against {r.truth_turned:.3g} rad over {r.turns} turns"
-            + (f"; {per_metre:.3g} × per metre driven)" if math.isfinite(per_metre) else ")"))
+            + (f"; {per_metre:.3g} × per metre driven)" if math.isfinite(per_metre) else ")") + judged)
     # A wheeled base turns by the distance its wheels roll (a car and a tricycle by the
     # steering angle per metre), so a distance's scale scales its turning alike: only the
     # turning per metre speaks of the steering or the wheel base. A gyro's or a compass's
     # turning is its own, whatever the speed.
     by_distance = isinstance(robot, (DiffDrive, Car, Tricycle))
-    gain = per_metre if by_distance and math.isfinite(per_metre) else r.turn
-    status = _status(gain, TURN_WARN)
+    metred = by_distance and math.isfinite(per_metre)
+    gain = per_metre if metred else r.turn
+    # The turning per metre's standard error: both ratios' errors, taken as independent.
+    gain_se = math.hypot(r.turn_se, per_metre * r.travel_se) / r.travel if metred else r.turn_se
+    status = _status(gain, TURN_WARN, gain_se)
     if status == "ok":
-        return Finding("turn_ratio", "ok", said, value=gain)
+        return Finding("turn_ratio", "ok", said + _covers_one(gain, TURN_WARN, gain_se), value=gain)
     unit = _unit(gain, _TURN_UNITS)
     if unit is not None:
         return Finding("turn_ratio", status, f"{said}: {unit[0]}?", unit[1], gain)
+    if gain < NO_TURN:
+        return _no_turn_finding(said, gain, robot)
     if isinstance(robot, DiffDrive):
         advice = (f"check wheel_base in the robot file: the turning per metre says about "
                   f"{robot.wheel_base * gain:.3g} m (the file has {robot.wheel_base:.3g} m)")
@@ -403,6 +466,41 @@ def _turn_finding(r: MotionRatios, robot: Robot) -> Finding:
     return Finding("turn_ratio", status, said, advice, gain)
 
 
+def _no_turn_finding(said: str, gain: float, robot: Robot) -> Finding:
+    """The ``turn_ratio`` failure where the odometry turns the other way to the truth
+    (``gain`` ≤ −:data:`NO_TURN`) or hardly at all: a sign or the source of the turning is
+    wrong, which no calibration fixes (a scale of −1 or of 1/``gain`` is no robot's)."""
+    if gain <= -NO_TURN:
+        what = "it turns the opposite way to the truth"
+        if isinstance(robot, DiffDrive):
+            advice = ("a sign flipped: left and right swapped, or one wheel's sign flipped (the channels "
+                      "check names the mapping that fits)")
+        elif isinstance(robot, (Car, Tricycle)):
+            advice = "the steering angle's sign is flipped (positive steers left, counter-clockwise)"
+        elif isinstance(robot, CompassOdometry):
+            advice = ("the heading's sign is flipped (counter-clockwise positive; a compass's bearing turns "
+                      "clockwise)")
+        else:
+            advice = ("the yaw rate's sign is flipped (counter-clockwise positive, about the robot's up "
+                      "axis): an IMU mounted upside down, or the wrong axis")
+    else:
+        what = "it hardly turns where the truth does"
+        if isinstance(robot, DiffDrive):
+            advice = ("check that the left and right channels are two different wheels, and wheel_base in "
+                      "the robot file")
+        elif isinstance(robot, (Car, Tricycle)):
+            advice = ("check that the steering channel is the road wheels' angle (the right column or "
+                      "field) and its unit (radians read as degrees turn 57x too little)")
+        elif isinstance(robot, CompassOdometry):
+            advice = ("check that the heading channel is the robot's heading (the right column or field) "
+                      "and its unit")
+        else:
+            advice = ("the yaw rate read is not the robot's: an IMU not mounted level turns about another "
+                      "axis (its angular_velocity.x or .y is the yaw rate then), or the wrong topic or "
+                      "field; check the unit too (radians read as degrees turn 57x too little)")
+    return Finding("turn_ratio", "fail", f"{said}: {what}", advice, gain)
+
+
 def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
                        max_gap: float | None = 0.5, noise: float | None = None) -> list[Finding]:
     """The ``travel_ratio`` and ``turn_ratio`` findings (none without truth); ``max_gap`` and
@@ -413,15 +511,20 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
     # this check's, which then compares nothing (the ratios come out NaN).
     with np.errstate(all="ignore"):
         r = motion_ratios(log, robot, truth, max_gap, noise)
+        used, estimate = judging_noise(truth, noise)
+    # Said wherever it judged: a check that reads noise no one gave says whose it is.
+    judged = "" if estimate is None else (
+        f" (judged at the {used:.3g} m sigma the fixes state, not their {estimate:.2g} m scatter about a "
+        "smooth path, which misses a GPS's error correlated in time; --truth-sigma sets it)")
     found = []
     if math.isfinite(r.travel):
-        found.append(_travel_finding(r, robot, not SPEED_CHANNELS.isdisjoint(log.channels)))
+        found.append(_travel_finding(r, robot, not SPEED_CHANNELS.isdisjoint(log.channels), judged))
     else:
         found.append(Finding("travel_ratio", "ok", f"only {r.travel_stretches} straight stretch(es) where "
                              "the truth moves beyond its noise: the odometry's travel not compared with the "
                              "truth's"))
     if math.isfinite(r.turn):
-        found.append(_turn_finding(r, robot))
+        found.append(_turn_finding(r, robot, judged))
     else:
         found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
                              "odometry's turning not compared with the truth's"))

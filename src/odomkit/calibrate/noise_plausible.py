@@ -9,6 +9,7 @@ are physical, not statistical: each constant says why.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -16,7 +17,8 @@ import numpy as np
 from odomkit.robot import Robot
 from odomkit.windows import Window
 
-__all__ = ["implausible_values", "PLAUSIBLE_BIAS", "PLAUSIBLE_JITTER", "PLAUSIBLE_TRUTH_CLOCK"]
+__all__ = ["implausible_truth_clock", "implausible_values", "PLAUSIBLE_BIAS", "PLAUSIBLE_CLOCK_FLOOR",
+           "PLAUSIBLE_JITTER", "PLAUSIBLE_TRUTH_CLOCK"]
 
 #: A fitted bias (a parameter drawn once per run) above these is implausible, by field:
 #: (limit, unit, why one vehicle's parameter does not change so much between runs); unit ""
@@ -55,6 +57,13 @@ PLAUSIBLE_JITTER = 0.5
 #: badly (GPS, motion capture: milliseconds to tens of milliseconds). The fit is then putting
 #: along-track error there that the model does not explain.
 PLAUSIBLE_TRUTH_CLOCK = 0.1
+#: The fitted ``truth_time_sigma`` is implausible for a clock above the larger of the truth's
+#: median fix spacing and this [s] (:func:`implausible_truth_clock`): fixes whose stamps were
+#: off independently by a σ as large as their spacing Δ would come out of order in
+#: Φ(−Δ/(σ√2)) ≥ 24 % of consecutive pairs, while a truth's stamps only increase; the floor
+#: leaves room for a dense truth stamped on receipt (a bag's --bag-time: tens of ms of jitter
+#: against a motion capture's 10 ms spacing).
+PLAUSIBLE_CLOCK_FLOOR = 0.5
 _CALIBRATE = "calibrate the robot first (odomkit calibrate)"
 
 
@@ -66,6 +75,39 @@ def _wheel_base(robot: Robot) -> float | None:
         if isinstance(value, int | float) and value > 0:
             return float(value)
     return None
+
+
+def implausible_truth_clock(value: float, spacing: float | None) -> str | None:
+    """A warning where a fitted ``truth_time_sigma`` [s] exceeds the larger of the truth's
+    median fix ``spacing`` [s] and :data:`PLAUSIBLE_CLOCK_FLOOR`, else None.
+
+    No clock stamps its fixes so badly; the fit has put something else there that grows with
+    the speed along the track: the truth's error correlated in time (a GPS's wander, which
+    moves a window's two ends alike only when they are close), a clock offset, or noise the
+    robot's model lacks. A user study's 2.5 Hz GPS (0.4 s apart) fitted 1.5–1.95 s, under
+    :data:`PLAUSIBLE_TRUTH_CLOCK` of its 30 s windows, and nothing was said.
+
+    Examples
+    --------
+    >>> implausible_truth_clock(0.02, 0.01) is None
+    True
+    >>> implausible_truth_clock(1.95, 0.4).split(" (")[0]
+    'truth_time_sigma = 1.95 s is implausible for a clock'
+    """
+    if not math.isfinite(value):
+        return None
+    limit = max(spacing or 0.0, PLAUSIBLE_CLOCK_FLOOR)
+    if value <= limit:
+        return None
+    floor = f"{PLAUSIBLE_CLOCK_FLOOR:g} s"
+    basis = (f"the larger of the truth's median fix spacing, {spacing:.3g} s, and {floor}" if spacing
+             else floor)
+    return (f"truth_time_sigma = {value:.3g} s is implausible for a clock (limit {limit:.3g} s: "
+            f"{basis}): fixes stamped that far off one by one would come out of order, and no receiver or "
+            "motion capture stamps so badly; it likely absorbs something else that grows with the speed "
+            "along the track: the truth's error correlated in time (a GPS's slow wander), a clock offset "
+            "(odomkit calibrate --truth fits it; --truth-time-offset gives it), or noise the robot's model "
+            "lacks; give the truth's time noise (--truth-time-sigma, 0 for well-stamped fixes) and fit again")
 
 
 def implausible_values(fitted: Sequence[tuple[str, str, str, float]], robot: Robot,

@@ -211,7 +211,7 @@ def calibrate_files(
                     steering_cubic=steering_cubic))
             else:
                 summary["halves"] = _each_half_alone(cal, runs[0], truths[0], start, given is None,
-                                                     steering_cubic, cubic_hint)
+                                                     steering_cubic, cubic_hint, nominal=robot)
             new_robot = cal.robot
             summary["truth_time_offset"] = (
                 {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
@@ -474,18 +474,37 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog],
 
 
 def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
-                     clock_fitted: bool, steering_cubic: bool = False, cubic_hint: str = CUBIC_HINT
-                     ) -> list[dict[str, Any]] | None:
-    """One drive's halves calibrated alone and tried on each other (JSON ``halves``), and a
-    warning where the calibration does not hold along the drive
-    (:func:`odomkit.calibrate.stability.halves_disagree`); None where a half cannot be
-    fitted alone."""
-    from odomkit.calibrate.stability import calibrate_halves, halves_disagree
+                     clock_fitted: bool, steering_cubic: bool = False, cubic_hint: str = CUBIC_HINT, *,
+                     nominal: Robot | None = None) -> list[dict[str, Any]] | None:
+    """One drive's halves calibrated alone from ``robot`` and tried on each other, beside the
+    ``nominal`` robot (the robot file's; JSON ``halves``), and a warning where the calibration
+    does not hold along the drive (:func:`odomkit.calibrate.stability.halves_disagree`). None
+    where a half cannot be fitted alone, with a warning that says why: a half whose fit fails
+    (runs to the edge of a range) is itself a sign that the calibration does not hold (a
+    Husky's ``--span :50%`` said nothing, and its calibration made the rest of the drive 4.7×
+    worse than the robot file)."""
+    from odomkit.calibrate.stability import calibrate_halves, halves_disagree, weakly_pinned
 
     if clock_fitted and joint.time_offset is not None:  # the fixes on the log's clock
         truth = replace(truth, t=truth.t - joint.time_offset)
-    halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic)
-    if halves is None:
+    try:
+        halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic, nominal=nominal)
+    except ModelError as exc:
+        weak = weakly_pinned(joint, robot)
+        # Where the whole drive pins a parameter near the edge of its range, a half may reach
+        # that edge by chance: said, but not taken for evidence.
+        what = (f"the whole drive pins {', '.join(weak)} too weakly for a half to be calibrated alone, so "
+                "whether this calibration holds along the drive is not checked; drive more, turning both "
+                "ways" if weak else
+                "a half that cannot be fitted alone, where the whole drive pins every parameter, is itself a "
+                "sign that this calibration may not hold on another drive; try it on a part it was not "
+                "fitted to (--span)")
+        warnings.warn(f"the drive's halves could not be calibrated alone ({exc}): {what}", UserWarning,
+                      stacklevel=2)
+        return None
+    except InputError as exc:
+        warnings.warn(f"the drive's halves were not calibrated alone ({exc}), so whether this calibration "
+                      "holds along the drive is not checked", UserWarning, stacklevel=2)
         return None
     said = halves_disagree(halves)
     if said and isinstance(robot, Car) and not steering_cubic and robot.steering_cubic == 0:

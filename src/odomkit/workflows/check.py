@@ -1,10 +1,13 @@
 """``odomkit check``: read a log (and its truth) and run the data checks of
 :mod:`odomkit.calibrate.check` before calibrating.
 
-A log the readers refuse (NaN values, text in a number column, a wrong ``--columns``) is
-itself a finding, not a crash: the reader's one-line message (file, line, column) becomes a
-``fail`` and the other checks are skipped. The readers' warnings (rows out of time order,
-a cumulative counter read as increments) become ``warn`` findings.
+A text log the readers refuse (NaN values, text in a number column, a wrong ``--columns``)
+is itself a finding, not a crash: the reader's one-line message (file, line, column) becomes a
+``fail`` and the other checks are skipped. A ROS bag the bag reader refuses (no ``--topic``
+among several, a topic that is not there, a joint not named) is the command line's error, as
+in every other command: one line, exit status 2 (its rows are no one's to fix). The readers'
+warnings (rows out of time order, a cumulative counter read as increments) become ``warn``
+findings.
 """
 
 from __future__ import annotations
@@ -50,7 +53,7 @@ def check_file(
     from odomkit.calibrate.check import check_log, next_steps
     from odomkit.calibrate.check_finding import Finding
     from odomkit.io.robotfile import read_robot
-    from odomkit.workflows.logs import LogOptions, load_log, require_log_file
+    from odomkit.workflows.logs import LogOptions, detect_format, load_log, require_log_file
     from odomkit.workflows.results import numeric_guard
     from odomkit.workflows.truth import clock_from_robot, load_truth
 
@@ -59,12 +62,16 @@ def check_file(
     path = Path(log_path)
     require_log_file(path)
     robot, _ = read_robot(robot_path)
+    options = log_options or LogOptions()
+    is_bag = (options.format if options.format != "auto" else detect_format(path)) == "bag"
     findings: list[Finding] = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", UserWarning)
         try:
-            log = load_log(path, robot, log_options or LogOptions())
+            log = load_log(path, robot, options)
         except InputError as exc:
+            if is_bag:  # which topics to read, not rows to fix: the one line track gives
+                raise
             log = None
             findings.append(Finding("reading", "fail", str(exc),
                                     "fix the rows or the --columns mapping the message names"))

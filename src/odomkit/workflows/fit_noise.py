@@ -83,6 +83,8 @@ class PreparedLog:
     window_labels: tuple[str, ...] = ()
     # The truth interpolated between sparse knots (odomkit.truth_knots.interpolated_note), or None.
     interpolated: str | None = None
+    # The truth's median fix spacing over the log's span [s], or None (fewer than two fixes there).
+    spacing: float | None = None
 
 
 def prepare_log(task: LogTask) -> PreparedLog:
@@ -115,8 +117,10 @@ def prepare_log(task: LogTask) -> PreparedLog:
         labels = tuple(f"{short} {log.t[w.start]:.6g}-{log.t[w.end]:.6g} s" for w in basis.windows)
         from odomkit.truth_knots import interpolated_note
 
+        inside = truth.t[(truth.t >= log.t[0]) & (truth.t <= log.t[-1])]
+        spacing = float(np.median(np.diff(inside))) if inside.size > 1 else None
         return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off), labels,
-                           interpolated_note(truth))
+                           interpolated_note(truth), spacing)
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.truth.max_gap)
     if int(samples.valid.sum()) < 2:
@@ -353,7 +357,8 @@ def fit_noise_files(
     scatter = _pooled_scatter(used)
     below = _floor_below_scatter(fit.parameters.get("truth_sigma"), scatter,
                                  np.concatenate([b.error[:, :2] for b in bases]))
-    result["warnings"] = notes + list(fit.warnings) + ([below] if below else [])
+    clock = None if "truth_time_sigma" in held else _clock_beyond_spacing(fit, used)
+    result["warnings"] = notes + list(fit.warnings) + [w for w in (below, clock) if w]
     result["truth_scatter_sigma"] = scatter
     result.update({
         "window": None if specs == (None,) else ",".join(str(x) for x in specs),
@@ -368,6 +373,19 @@ def fit_noise_files(
                             overlapping=len(specs) > 1)
         result["outputs"] = {"robot": str(written), "plot": str(drawn)}
     return result
+
+
+def _clock_beyond_spacing(fit: NoiseFit, used: Sequence[PreparedLog]) -> str | None:
+    """:func:`odomkit.calibrate.noise_plausible.implausible_truth_clock` for a fitted
+    ``truth_time_sigma``, against the widest of the logs' truth spacings (the most lenient);
+    nothing where the fit has already called it implausible (a tenth of a window)."""
+    from odomkit.calibrate.noise_plausible import implausible_truth_clock
+
+    value = fit.parameters.get("truth_time_sigma")
+    if value is None or any(w.startswith("truth_time_sigma =") for w in fit.warnings):
+        return None
+    spacings = [p.spacing for p in used if p.spacing is not None]
+    return implausible_truth_clock(float(value), max(spacings) if spacings else None)
 
 
 def _lengths_without_windows(specs: Sequence[WindowSpec | None],

@@ -96,7 +96,7 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     stated: object = None
     found: Truth | None
     if options.path is not None and _is_bag(options.path):
-        found, stated = _bag_truth(options)
+        found, stated = _bag_truth(options, log)
     elif options.path is not None:
         if options.topic is not None:
             raise InputError(f"--truth-topic names a topic of a ROS bag; the --truth file {options.path} "
@@ -111,8 +111,12 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     truth: Truth = found
     if isinstance(stated, float) and not sigma:  # a bag's GPS fixes state their σ (io/bag.py)
         warnings.warn(f"{truth.source}: the fixes state their position covariance, median horizontal "
-                      f"sigma {stated:.3g} m per axis, which odomkit does not use on its own: "
-                      f"--truth-sigma {stated:.3g} takes it", stacklevel=2)
+                      f"sigma {stated:.3g} m per axis, which odomkit does not fit with on its own (check "
+                      f"judges its ratios against it, and says so): --truth-sigma {stated:.3g} takes it",
+                      stacklevel=2)
+        # Kept apart from sigma: no fit uses it unasked, but a check judges against it (a GPS's
+        # error is correlated in time, which its fixes' scatter about a smooth path misses).
+        truth = replace(truth, stated_sigma=stated)
     if options.time_offset:
         truth = replace(truth, t=truth.t - options.time_offset)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
@@ -126,9 +130,10 @@ def _is_bag(path: Path) -> bool:
     return is_bag(path)
 
 
-def _bag_truth(options: TruthOptions) -> tuple[Truth, float | None]:
+def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, float | None]:
     """The truth topic of the ``--truth`` bag and the σ its GPS fixes state; the options of a
-    text truth file are refused by name."""
+    text truth file are refused by name, and so is a topic the log itself was read from
+    (the same bag named twice: the odometry would be scored against itself)."""
     from odomkit.io.bag import read_bag_truth
 
     assert options.path is not None
@@ -139,7 +144,15 @@ def _bag_truth(options: TruthOptions) -> tuple[Truth, float | None]:
     if text_only:
         raise InputError(f"{', '.join(text_only)} applies to a text truth file; {options.path} is a "
                          "ROS bag (name its truth topic with --truth-topic)")
-    return read_bag_truth(options.path, options.topic, options.bag_time)
+    found = read_bag_truth(options.path, options.topic, options.bag_time)
+    topic = found[0].source.rsplit(":", 1)[-1]
+    own = log.meta.get("topics", ()) if log is not None and log.meta.get("format") == "bag" else ()
+    if (log is not None and isinstance(own, list | tuple) and topic in own
+            and Path(log.source).resolve() == Path(options.path).resolve()):
+        raise InputError(f"--truth {options.path} --truth-topic {topic} is the log's own topic {topic}: "
+                         "the odometry would be scored against itself; the truth must come from another "
+                         "source (motion capture, GPS)")
+    return found
 
 
 def with_truth_topic(log: LogOptions, truth: TruthOptions,

@@ -1,0 +1,172 @@
+"""The travel and turning ratios (``odomkit check``) where the odometry turns the wrong way or
+not at all, and against a GPS whose error wanders (a Husky's bag in a user study).
+
+Independent truth: the true path of a simulated base, its log exact, so that the true ratios
+are 1 (or −1 for a flipped sign, 0 for a yaw rate read about another axis); the GPS's error
+is an Ornstein–Uhlenbeck process (σ 0.8 m per axis, correlated over 12 s, as the Husky's
+fixes about its calibrated track: 0.48 m per axis over 2.4 s, 0.84 m over 10 s) plus 5 cm of
+white noise, at 2.5 Hz. Its scatter about a smooth path is then about 0.13 m, and the check,
+judging 2.4 s chords against that, took the wander for turning: the odometry "turned" 0.2–0.5 ×
+as much as the truth and was told to check its yaw rate's unit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from odomkit.calibrate.check import check_log
+from odomkit.calibrate.check_ratios import check_truth_motion, judging_noise, motion_problems
+from odomkit.log import OdometryLog
+from odomkit.robot import Car, GyroOdometry, Unicycle
+from odomkit.track import dead_reckon_log
+from odomkit.truth import Truth, scatter_sigma
+
+
+def husky_drive(seed, duration=400.0, dt=0.1):
+    """A base at about 0.9 m/s that turns gently (knots of the yaw rate every 10 s, each a turn
+    of up to 0.25 rad/s with probability 0.3), as the Husky did, and its true poses."""
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(int(duration / dt))
+    knots = rng.uniform(-0.25, 0.25, t.size // 100 + 2) * (rng.random(t.size // 100 + 2) < 0.3)
+    log = OdometryLog(t, {"speed": 0.9 + 0.2 * np.sin(t / 23.0),
+                          "yaw_rate": np.interp(t, np.arange(knots.size) * 10.0, knots)})
+    return log, dead_reckon_log(log, Unicycle(), pose0=(5.0, -3.0, 0.4)).poses
+
+
+def wandering_gps(log, poses, seed, sigma=0.8, tau=12.0, white=0.05, rate=2.5):
+    """Fixes at ``rate`` Hz whose error is an OU process (``sigma`` per axis, correlation time
+    ``tau`` [s]) plus ``white`` noise: times and positions."""
+    rng = np.random.default_rng(seed + 7)
+    tg = np.arange(0.13, log.t[-1], 1.0 / rate)
+    xy = np.column_stack([np.interp(tg, log.t, poses[:, k]) for k in (0, 1)])
+    keep = math.exp(-1.0 / (rate * tau))
+    error = np.zeros_like(xy)
+    error[0] = rng.normal(0.0, sigma, 2)
+    for i in range(1, tg.size):
+        error[i] = keep * error[i - 1] + math.sqrt(1 - keep**2) * rng.normal(0.0, sigma, 2)
+    return tg, xy + error + rng.normal(0.0, white, xy.shape)
+
+
+def by_check(found):
+    return {f.check: f for f in found}
+
+
+def with_channel(log, name, values):
+    return OdometryLog(log.t, {**log.channels, name: values})
+
+
+def motion_capture(log, poses, every=2, seed=0):
+    """Every ``every``-th pose with 2 mm and 2 mrad of noise, at 2 mm stated."""
+    rng = np.random.default_rng(seed + 50)
+    xy, theta = poses[::every, :2], poses[::every, 2]
+    return Truth(log.t[::every], xy + rng.normal(0.0, 0.002, xy.shape),
+                 theta + rng.normal(0.0, 0.002, theta.shape), 0.002, "mocap")
+
+
+# --- the odometry turns the other way, or not at all -------------------------------------
+
+@pytest.mark.parametrize("heading", [True, False])
+def test_a_flipped_yaw_rate_turns_the_opposite_way_and_names_the_sign(heading):
+    """The yaw rate's sign flipped: the turning gain is −1 (the ratio of sums signed by the
+    larger turn). Before: math.log(−1), "the numerics failed (math domain error)"."""
+    log, poses = husky_drive(1)
+    truth = motion_capture(log, poses, 2 if heading else 4)
+    truth = truth if heading else Truth(truth.t, truth.xy, None, 0.002)
+    flipped = with_channel(log, "yaw_rate", -log.channels["yaw_rate"])
+    turn = by_check(check_truth_motion(flipped, Unicycle(), truth))["turn_ratio"]
+    assert turn.status == "fail" and "opposite way" in turn.message
+    assert turn.value == pytest.approx(-1.0, abs=0.1)
+    assert "sign" in (turn.advice or "") and "yaw rate" in (turn.advice or "")
+    # The whole check runs (the channel check names the flipped sign first, where it can).
+    assert any(f.status == "fail" for f in check_log(flipped, Unicycle(), truth))
+
+
+def test_a_car_whose_steering_sign_is_flipped_turns_the_opposite_way_per_metre():
+    car = Car(2.7)
+    rng = np.random.default_rng(3)
+    t = 0.1 * np.arange(3000)
+    knots = rng.uniform(-0.1, 0.1, 32) * (rng.random(32) < 0.5)
+    log = OdometryLog(t, {"speed": np.full(t.size, 6.0), "steer": np.interp(t, np.arange(32) * 10.0, knots)})
+    poses = dead_reckon_log(log, car, pose0=np.zeros(3)).poses
+    flipped = with_channel(log, "steer", -log.channels["steer"])
+    turn = by_check(check_truth_motion(flipped, car, motion_capture(log, poses)))["turn_ratio"]
+    assert turn.status == "fail" and "opposite way" in turn.message
+    assert turn.value == pytest.approx(-1.0, abs=0.1)
+    assert "steering angle's sign" in (turn.advice or "")
+
+
+@pytest.mark.parametrize("robot", [Unicycle(), GyroOdometry()])
+def test_a_yaw_rate_about_another_axis_hardly_turns_and_names_the_imu(robot):
+    """An IMU on its side: the channel read as the yaw rate is its rotation about a horizontal
+    axis (a pitch wobble of a few mrad/s, nothing to do with the turning). The gain is about 0:
+    no unit's factor, no scale. Before: a gain ≤ 0 stopped the check (math domain error), a
+    small positive one was told to check the yaw rate's unit."""
+    log, poses = husky_drive(2)
+    rng = np.random.default_rng(2)
+    pitch = 0.003 * np.sin(log.t / 1.7) + rng.normal(0.0, 0.002, log.t.size)
+    sideways = with_channel(log, "yaw_rate", pitch)
+    for truth in (motion_capture(log, poses), Truth(log.t[::4], poses[::4, :2], None, 0.002)):
+        turn = by_check(check_truth_motion(sideways, robot, truth))["turn_ratio"]
+        assert turn.status == "fail" and "hardly turns" in turn.message, turn.message
+        assert turn.value is not None and abs(turn.value) < 0.05
+        assert "not mounted level" in (turn.advice or "")
+    # calibrate's and fit-noise's lines say the same, without stopping.
+    [line] = motion_problems(sideways, robot, motion_capture(log, poses))
+    assert "hardly turns" in line
+
+
+def test_a_log_that_does_not_move_fails_its_travel_without_a_logarithm():
+    """A speed channel all zero while the truth drives: the travel ratio is 0 (math.log(0)
+    stopped the check before)."""
+    log, poses = husky_drive(4)
+    still = with_channel(log, "speed", np.zeros(log.t.size))
+    travel = by_check(check_truth_motion(still, Unicycle(), motion_capture(log, poses)))["travel_ratio"]
+    assert travel.status == "fail" and travel.value == 0.0
+    assert "does not move" in travel.message
+
+
+# --- a GPS whose error wanders, stating its σ ----------------------------------------------
+
+@pytest.mark.parametrize("seed", range(6))
+def test_a_wandering_gps_is_judged_at_the_sigma_its_fixes_state(seed):
+    """The log is exact: its ratios are 1. Judged at the fixes' scatter (about 0.13 m) the
+    wander of a 0.8 m GPS over 2.4 s chords reads as turning, and the check fails the turning
+    as a unit mixup; judged at the σ the fixes state (Truth.stated_sigma: a NavSatFix's
+    covariance, not given as --truth-sigma) over the chords that σ asks for, it is ok, and the
+    finding says whose σ judged it."""
+    log, poses = husky_drive(seed)
+    t, xy = wandering_gps(log, poses, seed)
+    plain = Truth(t, xy, None, 0.0, "gps")
+    assert scatter_sigma(plain) == pytest.approx(0.13, abs=0.03)
+    before = by_check(check_truth_motion(log, Unicycle(), plain))["turn_ratio"]
+    assert before.status != "ok" and before.value is not None and before.value < 0.8  # the trap
+    stated = Truth(t, xy, None, 0.0, "gps", stated_sigma=0.8)
+    assert judging_noise(stated)[0] == 0.8 and judging_noise(stated)[1] == pytest.approx(scatter_sigma(plain))
+    found = by_check(check_truth_motion(log, Unicycle(), stated))
+    for check in ("travel_ratio", "turn_ratio"):
+        assert found[check].status == "ok", found[check].message
+        assert "0.8 m sigma the fixes state" in found[check].message
+    # Never used to fit: the stated σ stays out of the truth's own sigma.
+    assert stated.sigma == 0.0
+
+
+def test_a_given_sigma_is_the_sigmas_own_and_no_note_is_made():
+    log, poses = husky_drive(0)
+    t, xy = wandering_gps(log, poses, 0)
+    found = by_check(check_truth_motion(log, Unicycle(), Truth(t, xy, None, 0.8, "gps")))
+    assert found["turn_ratio"].status == "ok" and "fixes state" not in found["turn_ratio"].message
+    assert judging_noise(Truth(t, xy, None, 0.8, "gps")) == (0.8, None)
+
+
+def test_a_ratio_within_two_standard_errors_of_one_is_not_failed():
+    """A few long chords of a noisy GPS give a ratio far from 1 with a standard error as
+    large: no evidence of a unit, so ok, and said why. Seed 1 of the drives above gave a
+    turning of 1.83 ± 1.14 (a warning before)."""
+    log, poses = husky_drive(1)
+    t, xy = wandering_gps(log, poses, 1)
+    turn = by_check(check_truth_motion(log, Unicycle(), Truth(t, xy, None, 0.8, "gps")))["turn_ratio"]
+    assert turn.value is not None and abs(turn.value - 1) > 0.25  # beyond TURN_WARN on its own
+    assert turn.status == "ok" and "within 2 standard errors of 1" in turn.message
