@@ -388,3 +388,27 @@ def test_a_fit_from_a_wheel_base_half_the_true_one_starts_again_where_the_turnin
     # From the file's values alone the fit runs to the edge of its range (or a local minimum).
     assert code == 2 and "edge of the plausible range" in err or (
         code == 0 and abs(json.loads(out)["wheel_base"] / 0.16 - 1) > 0.05), err
+
+
+def test_a_far_yaw_rate_scale_of_a_twist_names_a_skid_steer_base():
+    """A unicycle's yaw rate is usually a base controller's twist: a skid-steer base's turns
+    by tens of per cent (a Husky bag: 1.21), which the warning must not call impossible (it
+    said "no wheel or gyro is that far off"); a gyro's scale that far off still is."""
+    import warnings
+    from dataclasses import replace
+
+    from odomkit.robot import GyroOdometry, Unicycle
+    from odomkit.workflows.calibration import _warn_far_from_file
+
+    def said(robot, **calibrated):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            _warn_far_from_file(robot, replace(robot, **calibrated))
+        return [str(w.message) for w in caught]
+
+    twist = said(Unicycle(), yaw_rate_scale=1.21)
+    assert len(twist) == 1 and "+21 %" in twist[0] and "skid-steer" in twist[0]
+    assert "wheel_separation_multiplier" in twist[0] and "no wheel or gyro is that far off" not in twist[0]
+    gyro = said(GyroOdometry(m_per_tick=0.001), gyro_scale=1.21)
+    assert len(gyro) == 1 and "no wheel or gyro is that far off" in gyro[0]
+    assert said(Unicycle(), yaw_rate_scale=1.1) == []

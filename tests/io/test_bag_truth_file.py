@@ -179,3 +179,17 @@ def test_the_log_bag_named_again_as_truth_with_its_own_topic_is_refused(run_cli,
     assert "is the log's own topic /odom: the odometry would be scored against itself" in err
     code, _, err = run_cli(*args, "--truth-topic", "/mocap")  # another topic of the same bag is truth
     assert code == 0, err
+
+
+@pytest.mark.parametrize("command", ["fit-noise", "evaluate"])
+def test_a_bag_log_without_truth_is_told_of_truth_topic(run_cli, truth_bags, tmp_path, command):
+    """fit-noise and evaluate say the same where a log has no truth, naming --truth-topic for
+    a bag (fit-noise named --truth FILE and gt_* columns only)."""
+    bag = truth_bags["bags"]["ros1"]
+    robot = tmp_path / "r.toml"
+    robot.write_text((Path(__file__).parents[2] / "examples" / "unicycle.toml").read_text())
+    args = (["fit-noise", "--robot", robot, "--log", bag, "--out", tmp_path / "f.toml"]
+            if command == "fit-noise" else ["evaluate", bag, "--robot", robot])
+    code, out, err = run_cli(*args, "--topic", "/odom", "--window", "10s")
+    assert code == 2 and out == "" and "Traceback" not in err
+    assert "no truth: give --truth FILE, or --truth-topic TOPIC for a bag's own" in err

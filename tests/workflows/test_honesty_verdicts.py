@@ -259,6 +259,10 @@ def test_evaluate_shows_the_fitted_start_heading_and_warns_where_the_whole_run_h
     code, text, _ = run_cli("evaluate", log, "--robot", robot, "--columns", SIM_COLUMNS, "--truth",
                             tmp_path / "xy.csv")
     assert code == 0 and f"start heading {out['start_heading']:.4g} ± {sigma:.2g} rad" in text
+    assert "(the whole run starts from it)" in text
+    code, text, _ = run_cli("evaluate", log, "--robot", robot, "--columns", SIM_COLUMNS, "--truth",
+                            tmp_path / "xy.csv", "--align", "se2")
+    assert code == 0 and "--align se2 then turns the track onto the truth" in text  # said, not hidden
     with pytest.warns(UserWarning):
         aligned = evaluate_logs([log], robot, [TruthOptions(tmp_path / "xy.csv")], log_options=opts,
                                 align="se2")

@@ -101,7 +101,7 @@ def evaluate_command(
     if json_out:
         print_json(out)
         return
-    print_report(out, windowed=robot is not None, whole_runs=not window)
+    print_report(out, windowed=robot is not None, whole_runs=not window, aligned=align == "se2")
     for kind, path in out.get("outputs", {}).items():
         print(f"wrote {kind}: {path}")
 
@@ -124,10 +124,13 @@ def _nees_texts(mean: float, lo: float, hi: float) -> tuple[str, str, str]:
     return repr(mean), repr(lo), repr(hi)  # 17 digits tell any two floats apart; not reached
 
 
-def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) -> None:
+def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False,
+                 aligned: bool = False) -> None:
     """The short text report of ``odomkit evaluate``: ``windowed`` for logs dead-reckoned
     from the truth, in ``--window`` windows or (``whole_runs``) one window per log; with
-    several window lengths (``by_window``) a block for each, after the whole runs' errors."""
+    several window lengths (``by_window``) a block for each, after the whole runs' errors.
+    ``aligned``: the whole runs' errors are after an SE(2) alignment (``--align se2``)."""
+    from odomkit.log import clock_text
     from odomkit.workflows.evaluate import CONTAINMENT_NOTE, WHOLE_RUN_NOTE, WINDOWED_NOTE
 
     print(f"{out['rows_evaluated']} rows evaluated, {out['rows_skipped']} skipped (no truth there, or "
@@ -144,8 +147,9 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False) 
             # 3.86 and 18.2 m through start headings 0.107 and 0.165 rad, never shown).
             named = f"{one['log']}: " if len(out["per_log"]) > 1 else ""
             print(f"{named}start heading {one['start_heading']:.4g} ± {one['start_heading_sigma']:.2g} rad "
-                  f"at {one['start_time']:.6g} s, fitted to the position-only truth (the whole run starts "
-                  "from it)")
+                  f"at {clock_text(one['start_time'])} s, fitted to the position-only truth (the whole run "
+                  + ("starts from it; --align se2 then turns the track onto the truth, so the errors above "
+                     "do not hang on it)" if aligned else "starts from it)"))
     for block in out.get("by_window", {}).values() or [out]:
         _print_honesty(block, windowed, whole_runs)
     if out["nees_position_mean"] is None and whole_runs:

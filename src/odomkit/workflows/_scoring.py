@@ -479,6 +479,6 @@ def require_truth(opts: TruthOptions, log: OdometryLog | None) -> Truth:
     found = load_truth(opts, log)
     if found is None:
         source = getattr(log, "source", None)
-        raise InputError("no truth: give --truth, or a log with ground truth (gt_* columns, OptiOdom, "
-                         "Snowhite)", source=source)
+        raise InputError("no truth: give --truth FILE, or --truth-topic TOPIC for a bag's own, or a log "
+                         "with ground truth (gt_* columns, OptiOdom, Snowhite)", source=source)
     return found

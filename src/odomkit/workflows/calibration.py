@@ -286,6 +286,13 @@ _SCALES = {"diff": ("c_left", "c_right"), "tricycle": ("c_scale",), "car": ("c_s
            "unicycle": ("c_scale", "yaw_rate_scale"), "gyro": ("m_per_tick", "gyro_scale")}
 
 
+#: Why a skid-steer or tracked base turns so differently from its geometry (ROS's
+#: diff_drive_controller has a wheel_separation_multiplier for it; Clearpath ships 1.875 for its
+#: Husky and 1.5 for its Jackal).
+_SKID = ("its wheels slide sideways in every turn, so its effective wheel base is often 1.5-2x the "
+         "geometric one: diff_drive_controller's wheel_separation_multiplier")
+
+
 def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
     """A calibrated parameter far from the robot file's: a scale or a differential drive's
     wheel base more than :data:`FAR_FROM_FILE` off, a steered vehicle's length more than
@@ -298,18 +305,23 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
     for name in _SCALES.get(robot.type_name, ()):
         before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
         if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:
+            # A unicycle's yaw rate is often a base controller's twist, computed from its wheels
+            # with a nominal track width: a skid-steer base's turns slip by tens of per cent.
+            why = (f"no gyro is that far off, but the yaw rate of a skid-steer or tracked base's odometry "
+                   f"twist is ({_SKID}); otherwise a unit" if name == "yaw_rate_scale" else
+                   "no wheel or gyro is that far off its own; a unit")
             warnings.warn(f"the calibrated {name} {after:.4g} is {100 * off:+.0f} % from the "
-                          f"robot file's {before:.4g}: no wheel or gyro is that far off its own; a unit or a "
-                          "robot-file entry is wrong, or the fit started too far off and found a local "
-                          f"minimum; {advice}", UserWarning, stacklevel=3)
+                          f"robot file's {before:.4g}: {why} or a robot-file entry is wrong, or the fit "
+                          f"started too far off and found a local minimum; {advice}", UserWarning,
+                          stacklevel=3)
     if isinstance(robot, DiffDrive) and isinstance(new_robot, DiffDrive):
         before, after = robot.effective_wheel_base, new_robot.effective_wheel_base
         if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:
             warnings.warn(f"the calibrated wheel base {after:.4g} m is {100 * off:+.0f} % from "
-                          f"the robot file's {before:.4g} m: wheels slip in turns by a few per cent, not so "
-                          "much; the file's wheel_base is wrong, or the fit started too far off and found a "
-                          f"local minimum; {advice}", UserWarning,
-                          stacklevel=3)
+                          f"the robot file's {before:.4g} m: a two-wheeled base's wheels slip in turns by a "
+                          f"few per cent, not so much, though a skid-steer or tracked base's do ({_SKID}); "
+                          "otherwise the file's wheel_base is wrong, or the fit started too far off and "
+                          f"found a local minimum; {advice}", UserWarning, stacklevel=3)
         return
     if isinstance(robot, Car):
         name, law, gains = "wheel_base", "tan(steer)", "steering_ratio, the road wheels' gain, understeer"

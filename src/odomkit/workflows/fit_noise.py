@@ -93,15 +93,12 @@ def prepare_log(task: LogTask) -> PreparedLog:
     from odomkit.truth import no_overlap, scatter_sigma, truth_at, truth_noise
     from odomkit.window_errors import log_window_basis
     from odomkit.windows import cumulative_travel, why_no_windows
+    from odomkit.workflows._scoring import require_truth
     from odomkit.workflows.logs import load_log
-    from odomkit.workflows.truth import load_truth
 
     name = str(task.path)
     log = load_log(task.path, task.robot, task.log_options)
-    truth = load_truth(task.truth, log)
-    if truth is None:
-        raise InputError("the log has no ground truth: pass --truth FILE for it, or use a log "
-                         "with gt_* columns", source=name)
+    truth = require_truth(task.truth, log)
     # The truth's own noise is fitted with the rest (held where the user gave it).
     basis, skipped = log_window_basis(log, task.robot, task.models, truth, task.specs,
                                       min_travel=task.min_travel, max_gap=task.truth.max_gap,
