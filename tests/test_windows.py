@@ -136,3 +136,16 @@ def test_windows_shorter_than_a_sparse_truths_spacing_run_from_fix_to_fix():
     assert skipped == 0
     assert [(t[w.start], t[w.end]) for w in windows] == [(float(a), float(a + 1)) for a in
                                                           [*range(0, 9), *range(15, 19)]]
+
+
+def test_a_late_start_note_is_known_by_its_words():
+    """The report shows the track's late start once and drops the scorings' own (which say
+    the same of "the whole-run track"): it knows them by the words late_start_note uses."""
+    from odomkit.windows import is_late_start_note, late_start_note
+
+    t = np.arange(10.0)
+    for first_valid in (3, 1):
+        note = late_start_note("a.csv", "the whole-run track", t, 3, first_valid)
+        assert is_late_start_note(note), note
+    assert not is_late_start_note("a.csv: the whole run starts from a heading fitted to the fixes")
+    assert not is_late_start_note("a.csv: no RPE over 1 m (the truth has no heading)")

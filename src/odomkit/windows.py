@@ -36,6 +36,7 @@ __all__ = [
     "Window",
     "WindowSpec",
     "cumulative_travel",
+    "is_late_start_note",
     "late_start_note",
     "parse_window",
     "parse_windows",
@@ -389,13 +390,23 @@ def run_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike 
                      f"pose to start from{end}", source=truth.source)
 
 
+_LATE_START = " starts at "
+_LATE_REASONS = ("the first log time inside the truth", "the first time the position-only truth gives")
+
+
+def is_late_start_note(text: str) -> bool:
+    """Whether ``text`` is a :func:`late_start_note` (a report shows the track's own once, not
+    again for each scoring of the same log)."""
+    return _LATE_START in text and any(reason in text for reason in _LATE_REASONS)
+
+
 def late_start_note(source: str, what: str, t: ArrayLike, row: int, first_valid: int) -> str:
     """One line on a run (``what``: "the track", "the whole-log window") that starts at log
     row ``row`` (:func:`run_start`) rather than at row 0: why (``first_valid``, the first
     row with truth, tells), and how many rows and seconds before it are left out."""
     t = np.asarray(t, dtype=float)
-    why = ("the first log time inside the truth" if row == first_valid else
-           "the first time the position-only truth gives a heading (before it the fixes around the start "
+    why = (_LATE_REASONS[0] if row == first_valid else
+           f"{_LATE_REASONS[1]} a heading (before it the fixes around the start "
            "are too few or on one side only, stray from a smooth path, or the robot stands still)")
-    return (f"{source}: {what} starts at {clock_text(t[row])} s, {why}; the {row} row(s) before it "
+    return (f"{source}: {what}{_LATE_START}{clock_text(t[row])} s, {why}; the {row} row(s) before it "
             f"({t[row] - t[0]:.4g} s) are left out")

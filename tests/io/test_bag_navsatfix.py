@@ -176,11 +176,23 @@ def test_report_calibrates_from_the_gps_topic_and_names_it(run_cli, gps_bag, tmp
     its fixes (it said "No calibration: --from does not apply with --truth", a flag never
     given) and names that topic as the truth (it said "the log's own gt_* columns")."""
     out = tmp_path / "r.html"
-    code, _, err = run_cli("report", gps_bag["bags"]["mcap"], "--robot", gps_bag["dir"] / "rad.toml",
-                           "--topic", "/joint_states", "--truth-topic", "/fix", "--truth-sigma", "0.003",
-                           "--out", out)
+    code, text, err = run_cli("report", gps_bag["bags"]["mcap"], "--robot", gps_bag["dir"] / "rad.toml",
+                              "--topic", "/joint_states", "--truth-topic", "/fix", "--truth-sigma", "0.003",
+                              "--out", out, "--json")
     assert code == 0, err
     page = out.read_text()
+    # Each scoring of the log (robot file, calibrated, fitted noise) says a thing once: what an
+    # earlier one said word for word is not repeated, and the late start is the track's alone.
+    said = json.loads(text)["warnings"]
+    bare = [w.removeprefix("after calibration: ").removeprefix("with the fitted noise: ") for w in said]
+    repeated = [w for w in bare if bare.count(w) > 1 and "starts from a heading fitted" not in w]
+    assert not repeated, repeated
+    assert sum(" starts at " in w and "left out" in w for w in said) <= 1
+    # The start-heading warning of each scoring says which scoring it is (it came twice, with
+    # different numbers and no word of which was which).
+    heading = [w for w in said if "starts from a heading fitted" in w]
+    assert len(heading) >= 2 and not heading[0].startswith(("after", "with"))
+    assert all(w.startswith(("after calibration: ", "with the fitted noise: ")) for w in heading[1:])
     assert "--from does not apply" not in page and "No calibration" not in page
     assert f"truth: {gps_bag['bags']['mcap']}:/fix" in page and "gt_* columns" not in page
     code, text, err = run_cli("calibrate", gps_bag["bags"]["mcap"], "--robot", gps_bag["dir"] / "rad.toml",

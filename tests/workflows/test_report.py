@@ -430,3 +430,4 @@ def test_a_robot_file_without_noise_gets_its_errors_and_the_fitted_noise_tested(
     assert "coverage.0.95" not in page.cells  # no covariance of the file's to score
     assert any("has no [noise] table" in chunk for chunk in page.text)
     assert "fitted.coverage.0.5" in page.cells
+

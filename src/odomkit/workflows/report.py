@@ -136,18 +136,24 @@ def _auto_window(run: TrackRun) -> tuple[str | None, str | None]:
 
 
 def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptions | None,
-            window: str | None, method: str) -> tuple[list[Scored], dict[str, Any]]:
+            window: str | None, method: str, who: str = "",
+            said: Sequence[Scored] = ()) -> tuple[list[Scored], dict[str, Any]]:
     """The evaluate workflow's figures: each log's raw scores and the JSON keys ``odomkit
-    evaluate`` prints for them, verdicts included (the same function makes both)."""
-    from odomkit.windows import parse_window
+    evaluate`` prints for them, verdicts included (the same function makes both). Their
+    warnings join the page's, each led by ``who`` (``"after calibration: "``), except those
+    an earlier scoring of the same log (``said``) gave word for word and the late start of
+    the whole run, which the track's own warning has said already."""
+    from odomkit.windows import is_late_start_note, parse_window
     from odomkit.workflows._scoring import pooled_report
     from odomkit.workflows.evaluate import score_logs
 
     # A robot file without [noise] is scored for its errors alone (window None then).
     scored = score_logs([log], robot, [options], log_options=log_options, window=window, method=method,
                         errors_only=True)
+    known = {w for s in said for w in s.warnings}
     for note in dict.fromkeys(w for s in scored for w in s.warnings):
-        warnings.warn(note, stacklevel=2)
+        if not is_late_start_note(note) and note not in known:
+            warnings.warn(f"{who}{note}", stacklevel=2)
     return scored, pooled_report(scored, (1.0,), None if window is None else str(parse_window(window)))
 
 
@@ -656,7 +662,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             problems)
         after = run_after = None
         if cal is not None:
-            after = _scored(log, cal_path, options, log_options, window if file_noise else None, method)[1]
+            after = _scored(log, cal_path, options, log_options, window if file_noise else None, method,
+                            "after calibration: ", scored)[1]
             start = run.track.poses[0]  # where the track before calibration started
             run_after = run_track(log, cal_path, method=method, log_options=log_options,  # type: ignore[arg-type]
                                   truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])))
@@ -672,7 +679,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         # heading (a car fitted 19 m of GPS noise) is a note, as a failed fit is.
         fit_problem = problems[-1] if len(problems) > before else None
         scored_fit = None if fit is None else _attempt("the fitted noise's honesty test", lambda: _scored(
-            log, fit_path, options, log_options, window, method), problems)
+            log, fit_path, options, log_options, window, method, "with the fitted noise: ", scored), problems)
         ev_fit = None if scored_fit is None else scored_fit[1]
         for note in [] if fit is None else fit["warnings"]:  # the CLI prints them; here they join the page's
             warnings.warn(f"the noise fit: {note}", stacklevel=2)
