@@ -462,6 +462,15 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     found += check_truth_interpolated(truth)
     found += check_truth_motion(log, robot, truth, max_gap)
     found += check_motion(log, robot)
+    failed = [f.check for f in found if f.status == "fail" and f.check in ("travel_ratio", "turn_ratio")]
+    if failed:
+        # The figures rest on the model describing the drive: an odometry that turns or travels
+        # nothing like the truth gave ±1e+11 % (a Husky's IMU read about the wrong axis).
+        what = " and ".join({"travel_ratio": "travel", "turn_ratio": "turning"}[c] for c in failed)
+        found.append(Finding("identifiable", "warn", f"not judged: the odometry's {what} does not match "
+                             "the truth's (above), so what this log would pin cannot be told",
+                             "mend the failures above, then check again"))
+        return found
     found += check_identifiable(log, robot, identifiability_sigma(truth, log, robot, max_gap))
     return found
 
