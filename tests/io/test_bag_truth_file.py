@@ -83,7 +83,7 @@ def test_a_truth_bag_reads_as_the_tum_file_of_the_same_poses(truth_bags, fmt):
 def test_the_truth_topic_must_be_named_where_the_bag_has_several(truth_bags):
     from odomkit.errors import InputError
 
-    with pytest.raises(InputError, match=r"name the truth topic with --truth-topic; truth topics: "
+    with pytest.raises(InputError, match=r"name the topic with --truth-topic; truth topics: "
                                          r"/mocap \(PoseStamped\), /odom \(Odometry\)"):
         read_bag_truth(truth_bags["bags"]["mcap"])
     with pytest.raises(InputError, match=r"no topic /vicon in the bag; truth topics: /mocap"):

@@ -254,8 +254,22 @@ def _named_as(path: Path, suffix: str, source: str) -> Iterator[Path]:
 
 def bag_topics(path: str | Path) -> dict[str, str]:
     """Every topic of a bag and its message type (``{"/odom": "nav_msgs/msg/Odometry"}``)."""
-    with _open(Path(path)) as reader, _bag_errors(str(path)):
+    with _open(Path(path)) as reader:
+        return _topics(reader, str(path))
+
+
+def _topics(reader: Any, source: str) -> dict[str, str]:
+    """The open bag's topics and their message types."""
+    with _bag_errors(source):
         return {name: str(info.msgtype) for name, info in reader.topics.items()}
+
+
+def _the_one(available: dict[str, str], types: dict[str, str], flag: str, source: str) -> str:
+    """The bag's only topic of ``types``; else an error asking for ``flag``, listing them."""
+    found = sorted(n for n, t in available.items() if t in types)
+    if len(found) != 1:
+        raise InputError(f"name the topic with {flag}; {_topic_list(available, types)}", source=source)
+    return found[0]
 
 
 #: The other topics an error names, with their types (a bag may hold hundreds).
@@ -267,7 +281,8 @@ def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -
     :data:`_OTHERS_NAMED`): a topic read under a name odomkit does not expect is seen at once."""
     readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if t in types]
     others = [f"{n} ({t})" for n, t in sorted(topics.items()) if t not in types]
-    what = "topics odomkit reads" if types is MESSAGE_TYPES else "truth topics"
+    what = ("topics odomkit reads" if types is MESSAGE_TYPES else "truth topics" if types is TRUTH_TYPES
+            else f"{'/'.join(types.values())} topics")
     text = f"{what}: " + (", ".join(readable) if readable else "none")
     if not others:
         return text
@@ -554,14 +569,9 @@ def read_bag_truth(path: str | Path, topic: str | None = None,
     path = Path(path)
     source = str(path)
     with _open(path) as reader:
-        with _bag_errors(source):
-            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        available = _topics(reader, source)
         if topic is None:
-            found = sorted(n for n, t in available.items() if t in TRUTH_TYPES)
-            if len(found) != 1:
-                raise InputError(f"name the truth topic with --truth-topic; "
-                                 f"{_topic_list(available, TRUTH_TYPES)}", source=source)
-            topic = found[0]
+            topic = _the_one(available, TRUTH_TYPES, "--truth-topic", source)
         name = _find_topic(available, topic, source, TRUTH_TYPES)
         if TRUTH_TYPES[available[name]] == "NavSatFix":
             return _fix_truth(reader, name, receive_time, source)
@@ -838,8 +848,7 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     path = Path(path)
     source = str(path)
     with _open(path) as reader:
-        with _bag_errors(source):
-            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        available = _topics(reader, source)
         truth = None if not truth_topic else _find_topic(available, truth_topic, source, TRUTH_TYPES)
         chosen = _choose_topics(available, topics, source, truth)
         if joints and not any(MESSAGE_TYPES[available[c]] == "JointState" for c in chosen):
@@ -910,13 +919,9 @@ def read_bag_odometry(path: str | Path, topic: str | None = None, receive_time: 
     path = Path(path)
     source = str(path)
     with _open(path) as reader:
-        with _bag_errors(source):
-            available = {name: str(info.msgtype) for name, info in reader.topics.items()}
+        available = _topics(reader, source)
         if topic is None:
-            odometry = [n for n, t in available.items() if t == "nav_msgs/msg/Odometry"]
-            if len(odometry) != 1:
-                raise InputError(f"name the Odometry topic; {_topic_list(available)}", source=source)
-            topic = odometry[0]
+            topic = _the_one(available, {"nav_msgs/msg/Odometry": "Odometry"}, "--topic", source)
         name = _find_topic(available, topic, source)
         if available[name] != "nav_msgs/msg/Odometry":
             raise InputError(f"topic {name} is {available[name]}, not nav_msgs/msg/Odometry", source=source)
