@@ -126,3 +126,26 @@ def noisy_diff_log():
     """The simulated diff-drive log of known wheel noise the evaluate tests share
     (:func:`_noisy_diff_log`)."""
     return _noisy_diff_log
+
+
+def _husky_drive(seed, duration=400.0, dt=0.1):
+    """A base at about 0.9 m/s that turns gently (knots of the yaw rate every 10 s, each a turn
+    of up to 0.25 rad/s with probability 0.3), as a real Husky bag's did: its unicycle log
+    (speed, yaw_rate) and true poses (N, 3)."""
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Unicycle
+    from odomkit.track import dead_reckon_log
+
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(int(duration / dt))
+    knots = rng.uniform(-0.25, 0.25, t.size // 100 + 2) * (rng.random(t.size // 100 + 2) < 0.3)
+    log = OdometryLog(t, {"speed": 0.9 + 0.2 * np.sin(t / 23.0),
+                          "yaw_rate": np.interp(t, np.arange(knots.size) * 10.0, knots)})
+    return log, dead_reckon_log(log, Unicycle(), pose0=(5.0, -3.0, 0.4)).poses
+
+
+@pytest.fixture(scope="session")
+def husky_drive():
+    """``husky_drive(seed, duration=400, dt=0.1)``: a Husky-like unicycle drive and its true
+    poses (:func:`_husky_drive`)."""
+    return _husky_drive

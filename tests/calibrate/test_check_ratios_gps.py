@@ -25,17 +25,6 @@ from odomkit.track import dead_reckon_log
 from odomkit.truth import Truth, scatter_sigma
 
 
-def husky_drive(seed, duration=400.0, dt=0.1):
-    """A base at about 0.9 m/s that turns gently (knots of the yaw rate every 10 s, each a turn
-    of up to 0.25 rad/s with probability 0.3), as the Husky did, and its true poses."""
-    rng = np.random.default_rng(seed)
-    t = dt * np.arange(int(duration / dt))
-    knots = rng.uniform(-0.25, 0.25, t.size // 100 + 2) * (rng.random(t.size // 100 + 2) < 0.3)
-    log = OdometryLog(t, {"speed": 0.9 + 0.2 * np.sin(t / 23.0),
-                          "yaw_rate": np.interp(t, np.arange(knots.size) * 10.0, knots)})
-    return log, dead_reckon_log(log, Unicycle(), pose0=(5.0, -3.0, 0.4)).poses
-
-
 def wandering_gps(log, poses, seed, sigma=0.8, tau=12.0, white=0.05, rate=2.5):
     """Fixes at ``rate`` Hz whose error is an OU process (``sigma`` per axis, correlation time
     ``tau`` [s]) plus ``white`` noise: times and positions."""
@@ -69,7 +58,7 @@ def motion_capture(log, poses, every=2, seed=0):
 # --- the odometry turns the other way, or not at all -------------------------------------
 
 @pytest.mark.parametrize("heading", [True, False])
-def test_a_flipped_yaw_rate_turns_the_opposite_way_and_names_the_sign(heading):
+def test_a_flipped_yaw_rate_turns_the_opposite_way_and_names_the_sign(heading, husky_drive):
     """The yaw rate's sign flipped: the turning gain is −1 (the ratio of sums signed by the
     larger turn). Before: math.log(−1), "the numerics failed (math domain error)"."""
     log, poses = husky_drive(1)
@@ -99,7 +88,7 @@ def test_a_car_whose_steering_sign_is_flipped_turns_the_opposite_way_per_metre()
 
 
 @pytest.mark.parametrize("robot", [Unicycle(), GyroOdometry()])
-def test_a_yaw_rate_about_another_axis_hardly_turns_and_names_the_imu(robot):
+def test_a_yaw_rate_about_another_axis_hardly_turns_and_names_the_imu(robot, husky_drive):
     """An IMU on its side: the channel read as the yaw rate is its rotation about a horizontal
     axis (a pitch wobble of a few mrad/s, nothing to do with the turning). The gain is about 0:
     no unit's factor, no scale. Before: a gain ≤ 0 stopped the check (math domain error), a
@@ -122,7 +111,7 @@ def test_a_yaw_rate_about_another_axis_hardly_turns_and_names_the_imu(robot):
     assert len(found) == 1 and found[0].message.startswith("not judged: the odometry's turning")
 
 
-def test_a_log_that_does_not_move_fails_its_travel_without_a_logarithm():
+def test_a_log_that_does_not_move_fails_its_travel_without_a_logarithm(husky_drive):
     """A speed channel all zero while the truth drives: the travel ratio is 0 (math.log(0)
     stopped the check before)."""
     log, poses = husky_drive(4)
@@ -135,7 +124,7 @@ def test_a_log_that_does_not_move_fails_its_travel_without_a_logarithm():
 # --- a GPS whose error wanders, stating its σ ----------------------------------------------
 
 @pytest.mark.parametrize("seed", range(6))
-def test_a_wandering_gps_is_judged_at_the_sigma_its_fixes_state(seed):
+def test_a_wandering_gps_is_judged_at_the_sigma_its_fixes_state(seed, husky_drive):
     """The log is exact: its ratios are 1. Judged at the fixes' scatter (about 0.13 m) the
     wander of a 0.8 m GPS over 2.4 s chords reads as turning, and the check fails the turning
     as a unit mixup; judged at the σ the fixes state (Truth.stated_sigma: a NavSatFix's
@@ -157,7 +146,7 @@ def test_a_wandering_gps_is_judged_at_the_sigma_its_fixes_state(seed):
     assert stated.sigma == 0.0
 
 
-def test_a_given_sigma_is_the_sigmas_own_and_no_note_is_made():
+def test_a_given_sigma_is_the_sigmas_own_and_no_note_is_made(husky_drive):
     log, poses = husky_drive(0)
     t, xy = wandering_gps(log, poses, 0)
     found = by_check(check_truth_motion(log, Unicycle(), Truth(t, xy, None, 0.8, "gps")))
@@ -165,7 +154,7 @@ def test_a_given_sigma_is_the_sigmas_own_and_no_note_is_made():
     assert judging_noise(Truth(t, xy, None, 0.8, "gps")) == (0.8, None)
 
 
-def test_a_ratio_within_two_standard_errors_of_one_is_not_failed():
+def test_a_ratio_within_two_standard_errors_of_one_is_not_failed(husky_drive):
     """A few long chords of a noisy GPS give a ratio far from 1 with a standard error as
     large: no evidence of a unit, so ok, and said why. Seed 1 of the drives above gave a
     turning of 1.83 ± 1.14 (a warning before)."""

@@ -17,9 +17,6 @@ import numpy as np
 import pytest
 
 from odomkit.calibrate.noise_plausible import PLAUSIBLE_CLOCK_FLOOR, implausible_truth_clock
-from odomkit.log import OdometryLog
-from odomkit.robot import Unicycle
-from odomkit.track import dead_reckon_log
 
 LAG = 1.5
 SPACING = 0.4
@@ -47,21 +44,10 @@ def test_the_limit_is_the_larger_of_the_fix_spacing_and_half_a_second():
     assert implausible_truth_clock(math.nan, 0.4) is None
 
 
-def _drive(seed=0, duration=400.0, dt=0.1):
-    """A base at about 0.9 m/s turning gently (tests/calibrate/test_check_ratios_gps.py's):
-    its log and true poses."""
-    rng = np.random.default_rng(seed)
-    t = dt * np.arange(int(duration / dt))
-    knots = rng.uniform(-0.25, 0.25, t.size // 100 + 2) * (rng.random(t.size // 100 + 2) < 0.3)
-    log = OdometryLog(t, {"speed": 0.9 + 0.2 * np.sin(t / 23.0),
-                          "yaw_rate": np.interp(t, np.arange(knots.size) * 10.0, knots)})
-    return log, dead_reckon_log(log, Unicycle(), pose0=(5.0, -3.0, 0.4)).poses
-
-
 @pytest.fixture()
-def lagging_gps(tmp_path):
+def lagging_gps(tmp_path, husky_drive):
     """A 400 s drive as a CSV log, and its 2.5 Hz fixes (0.3 m white noise) stamped 1.5 s late."""
-    log, poses = _drive()
+    log, poses = husky_drive(0)
     rng = np.random.default_rng(0)
     t = np.arange(0.13, log.t[-1], SPACING)
     xy = np.column_stack([np.interp(t, log.t, poses[:, k]) for k in (0, 1)])
