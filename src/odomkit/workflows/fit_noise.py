@@ -346,8 +346,9 @@ def fit_noise_files(
                                    "lower bounds": [lo for lo, _ in fit.interval.values()]})
     truth_noise = fit.truth_noise or {}
     truth_table = {key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_SIGMAS}
-    if truths[0].time_offset:
-        truth_table["time_offset"] = float(truths[0].time_offset)
+    offset = truths[0].time_offset or truths[0].file_clock  # kept: the robot file's, or as given
+    if offset:
+        truth_table["time_offset"] = float(offset)
     written = write_robot(out, robot, fit.models, overwrite=overwrite, truth=truth_table,
                           name=read_robot_name(robot_path))
     result = fit.to_dict()

@@ -26,7 +26,7 @@ from odomkit.track import Track, dead_reckon_log
 from odomkit.truth import Truth, no_overlap, truth_at
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
-from odomkit.workflows.truth import TruthOptions, clock_from_robot, load_truth
+from odomkit.workflows.truth import TruthOptions, applied_clock, clock_from_robot, load_truth
 
 __all__ = ["TrackRun", "run_track"]
 
@@ -159,7 +159,7 @@ def run_track(
                                                 hint="give --initial-pose")
             if first > 0:
                 note = late_start_note(log.source, "the track", log.t, first, int(np.argmax(samples.valid)))
-                why = _lead_within_a_period(log.t, found, first, options.time_offset or 0.0, flagged)
+                why = _lead_within_a_period(log.t, found, first, applied_clock(options, log), flagged)
                 warnings.warn(f"{note} of the track and its outputs{why}; give --initial-pose to start at "
                               "the first row", stacklevel=2)
                 log, truth_rows = log.from_row(first), truth_rows[first:]
