@@ -412,3 +412,12 @@ def test_a_far_yaw_rate_scale_of_a_twist_names_a_skid_steer_base():
     gyro = said(GyroOdometry(m_per_tick=0.001), gyro_scale=1.21)
     assert len(gyro) == 1 and "no wheel or gyro is that far off" in gyro[0]
     assert said(Unicycle(), yaw_rate_scale=1.1) == []
+    # Where the drive turns as much as its truth with the file's values, a far scale is no
+    # gain of the robot's: the fit absorbed something else, and the warning says so instead.
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _warn_far_from_file(Unicycle(), Unicycle(yaw_rate_scale=1.21), lambda: (0.97, 0.04))
+        _warn_far_from_file(Unicycle(), Unicycle(yaw_rate_scale=1.21), lambda: (1.2, 0.04))
+    absorbed, skid = (str(w.message) for w in caught)
+    assert "turns 0.97 ± 0.04 x as much as the truth" in absorbed and "skid-steer" not in absorbed
+    assert "skid-steer" in skid

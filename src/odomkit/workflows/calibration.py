@@ -12,6 +12,7 @@ import math
 import warnings
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -163,6 +164,7 @@ def calibrate_files(
         _refuse_trajectory_flags(method, source, exact_kwargs)
         truth = [own_truth or TruthOptions()] * len(runs)
     truth_table = read_truth_table(robot_path)  # kept in --out-robot; its offset refitted with --truth
+    turning: Callable[[], tuple[float, float]] | None = None  # the drive's turning gain, with a truth
     with numeric_guard("the calibration"):
         if method == "umbmark":
             assert side is not None and isinstance(robot, DiffDrive)
@@ -184,6 +186,7 @@ def calibrate_files(
             # truths above are already on the log's clock).
             given = truth[0].time_offset
             gaps = [o.max_gap for o in truth]
+            turning = partial(_turning_gain, runs, truths, robot, gaps)
             def fit_from(start: Any) -> ExactCalibration:
                 return calibrate_positions(runs, truths, start, fit_time_offset=given is None,
                                            steering_cubic=steering_cubic)
@@ -234,7 +237,7 @@ def calibrate_files(
             if side is not None and isinstance(robot, DiffDrive):
                 summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
-    _warn_far_from_file(robot, new_robot)
+    _warn_far_from_file(robot, new_robot, turning)
     robot_fields = robot_to_dict(new_robot)["robot"]
     check_result("the calibration", {
         "the parameters": [v for v in robot_fields.values() if not isinstance(v, str)],
@@ -286,6 +289,24 @@ _SCALES = {"diff": ("c_left", "c_right"), "tricycle": ("c_scale",), "car": ("c_s
            "unicycle": ("c_scale", "yaw_rate_scale"), "gyro": ("m_per_tick", "gyro_scale")}
 
 
+#: The scales that are a turning gain (:func:`_warn_far_from_file` holds them against the drive's).
+_TURNING_SCALES = ("yaw_rate_scale", "gyro_scale")
+
+
+def _turning_gain(runs: Sequence[OdometryLog], truths: Sequence[Truth], robot: Robot,
+                  gaps: Sequence[float | None]) -> tuple[float, float]:
+    """The drive's turning gain, odometry over truth with the robot file's values, and its
+    standard error (:func:`odomkit.calibrate.check_ratios.motion_ratios`; the first run
+    where it is measured; NaN where none is)."""
+    from odomkit.calibrate.check_ratios import motion_ratios
+
+    for log, truth, gap in zip(runs, truths, gaps, strict=True):
+        r = motion_ratios(log, robot, truth, gap)
+        if math.isfinite(r.turn) and math.isfinite(r.turn_se):
+            return float(r.turn), float(r.turn_se)
+    return math.nan, math.nan
+
+
 #: Why a skid-steer or tracked base turns so differently from its geometry (ROS's
 #: diff_drive_controller has a wheel_separation_multiplier for it; Clearpath ships 1.875 for its
 #: Husky and 1.5 for its Jackal).
@@ -293,18 +314,33 @@ _SKID = ("its wheels slide sideways in every turn, so its effective wheel base i
          "geometric one: diff_drive_controller's wheel_separation_multiplier")
 
 
-def _warn_far_from_file(robot: Robot, new_robot: Robot) -> None:
+def _warn_far_from_file(robot: Robot, new_robot: Robot,
+                        turning: Callable[[], tuple[float, float]] | None = None) -> None:
     """A calibrated parameter far from the robot file's: a scale or a differential drive's
     wheel base more than :data:`FAR_FROM_FILE` off, a steered vehicle's length more than
     :data:`BENT_LENGTH`. Either a unit or a robot-file entry is wrong, or the fit started so
     far off that it found a local minimum (a real diff robot whose file halved its wheel
     base: c_right 1.32, wheel base +25 %, and the held-out half worse than uncalibrated, with
-    nothing said); check names which."""
+    nothing said); check names which.
+
+    ``turning`` gives, where there is a truth, the drive's own turning gain (odometry over
+    truth) and its standard error (:func:`_turning_gain`): a yaw-rate scale far off while
+    the drive turns as much as the truth does is no gain of the robot's but something else
+    the fit absorbed (a Husky bag: yaw_rate_scale 1.21 on one half, its turning 0.97 ± 0.08)."""
     advice = ("odomkit check LOG --robot R --truth T compares the odometry's travel and turning "
               "with the truth's and names the entry")
     for name in _SCALES.get(robot.type_name, ()):
         before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
         if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:
+            gain, se = turning() if turning is not None and name in _TURNING_SCALES else (math.nan, math.nan)
+            if abs(gain - 1) <= 2 * se:
+                warnings.warn(f"the calibrated {name} {after:.4g} is {100 * off:+.0f} % from the robot "
+                              f"file's {before:.4g}, but the drive turns {gain:.3g} ± {se:.2g} x as much as "
+                              "the truth does with the file's: no turning gain of the robot's, but something "
+                              "else the fit absorbed (a yaw-rate bias, the truth's clock, a start heading); "
+                              "a calibration from another part of the drive will differ, so check it on one "
+                              "(--span)", UserWarning, stacklevel=3)
+                continue
             # A unicycle's yaw rate is often a base controller's twist, computed from its wheels
             # with a nominal track width: a skid-steer base's turns slip by tens of per cent.
             why = (f"no gyro is that far off, but the yaw rate of a skid-steer or tracked base's odometry "
