@@ -163,3 +163,29 @@ def test_a_ratio_within_two_standard_errors_of_one_is_not_failed(husky_drive):
     turn = by_check(check_truth_motion(log, Unicycle(), Truth(t, xy, None, 0.8, "gps")))["turn_ratio"]
     assert turn.value is not None and abs(turn.value - 1) > 0.25  # beyond TURN_WARN on its own
     assert turn.status == "ok" and "within 2 standard errors of 1" in turn.message
+
+
+def test_calibrates_residual_warning_holds_them_against_the_sigma_the_fixes_state(husky_drive):
+    """calibrate's "residuals are Nx the truth's noise" takes the σ the fixes state where none
+    is given, as check does (a Husky's residuals were "15.38x the truth's scatter (0.1 m)"
+    against fixes stating 0.8 m); given a σ, that one."""
+    import warnings
+
+    from odomkit.calibrate.exact import warn_if_drifting
+
+    log, poses = husky_drive(3)
+    tg, xy = wandering_gps(log, poses, 3)
+    stated = Truth(tg, xy, None, 0.0, "gps", stated_sigma=0.8)
+    assert scatter_sigma(stated) < 0.3  # the scatter about a smooth path misses the wander
+
+    def said(truth, rms):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            warn_if_drifting(rms**2, 2 * len(truth), [truth])
+        return [str(w.message) for w in caught]
+
+    assert said(stated, 0.7) == []  # under the 0.8 m the fixes state
+    [line] = said(stated, 1.54)
+    assert "1.93x the truth's σ its fixes state (0.8 m)" in line
+    [line] = said(Truth(tg, xy, None, 0.0, "gps"), 0.7)  # nothing stated: the scatter, as before
+    assert "scatter about a smooth path" in line

@@ -96,3 +96,22 @@ def test_check_file_reports_reader_warnings_as_findings(tmp_path):
     reading = [f for f in out["findings"] if f["check"] == "reading"]
     assert reading and reading[0]["status"] == "warn" and "cumulative" in reading[0]["message"]
     assert out["truth"] is None
+
+
+def test_a_log_without_truth_is_not_called_fit_to_calibrate_from_alone(run_cli, tmp_path, husky_drive):
+    """Nothing wrong in a log without truth: check said "nothing: the log is fit to calibrate
+    from", but calibrate needs a truth (a Jackal bag's user study); it says so."""
+    import numpy as np
+
+    log, _ = husky_drive(5)
+    path = tmp_path / "v.csv"
+    np.savetxt(path, np.column_stack((log.t, log.channels["speed"], log.channels["yaw_rate"])), delimiter=",",
+               header="t,speed,yaw_rate", comments="")
+    robot = tmp_path / "u.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n')
+    code, out, err = run_cli("check", path, "--robot", robot, "--json")
+    report = json.loads(out)
+    assert code == 0 and report["truth"] is None, err
+    said = ("nothing: the log is fit to calibrate from, once it has a ground truth "
+            "(--truth FILE, --truth-topic for a bag's own, or gt_* columns)")
+    assert report["next"] == [said], report["next"]

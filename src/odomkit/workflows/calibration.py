@@ -327,8 +327,8 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot,
     truth) and its standard error (:func:`_turning_gain`): a yaw-rate scale far off while
     the drive turns as much as the truth does is no gain of the robot's but something else
     the fit absorbed (a Husky bag: yaw_rate_scale 1.21 on one half, its turning 0.97 ± 0.08)."""
-    advice = ("odomkit check LOG --robot R --truth T compares the odometry's travel and turning "
-              "with the truth's and names the entry")
+    advice = ("odomkit check LOG --robot R --truth T (or --truth-topic) compares the odometry's travel and "
+              "turning with the truth's and names the entry")
     for name in _SCALES.get(robot.type_name, ()):
         before, after = float(getattr(robot, name)), float(getattr(new_robot, name))
         if before > 0 and abs(off := after / before - 1) > FAR_FROM_FILE:

@@ -93,6 +93,8 @@ def check_file(
         "log": str(path),
         "ok": not any(f.status == "fail" for f in findings),
         "findings": [f.to_dict() for f in findings],
-        "next": next_steps(findings) or ["nothing: the log is fit to calibrate from"],
+        "next": next_steps(findings) or ["nothing: the log is fit to calibrate from" + (
+            "" if found_truth is not None else
+            ", once it has a ground truth (--truth FILE, --truth-topic for a bag's own, or gt_* columns)")],
         "truth": None if found_truth is None else found_truth.source,
     }

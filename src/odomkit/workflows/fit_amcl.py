@@ -203,7 +203,8 @@ def fit_amcl_files(
             odom = _track_poses(path)
         found = load_truth(opts) if opts.path is not None else odom.own_truth
         if found is None:
-            raise InputError("no truth: give --truth, or odometry that carries it (gt_* columns, an "
+            raise InputError("no truth: give --truth (or --truth-topic for a bag's own), or odometry that "
+                             "carries it (gt_* columns, an "
                              "OptiOdom log with --robot)", source=str(path))
         data, updates, left_out = _updates(odom, found, opts, model, update_min_d, update_min_a)
         parts.append(data)

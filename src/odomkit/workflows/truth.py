@@ -120,8 +120,8 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     truth: Truth = found
     if isinstance(stated, float) and not sigma:  # a bag's GPS fixes state their σ (io/bag.py)
         warnings.warn(f"{truth.source}: the fixes state their position covariance, median horizontal "
-                      f"sigma {stated:.3g} m per axis, which odomkit does not fit with on its own (check "
-                      f"judges its ratios against it, and says so): --truth-sigma {stated:.3g} takes it",
+                      f"sigma {stated:.3g} m per axis, which odomkit fits and scores with only when given: "
+                      f"--truth-sigma {stated:.3g} takes it",
                       stacklevel=2)
         # Kept apart from sigma: no fit uses it unasked, but a check judges against it (a GPS's
         # error is correlated in time, which its fixes' scatter about a smooth path misses).
