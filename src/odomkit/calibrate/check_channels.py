@@ -19,9 +19,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.calibrate.check_finding import Finding
+from odomkit.calibrate.check_ratios import judging_noise
 from odomkit.log import WHEEL_PAIRS, OdometryLog
 from odomkit.robot import DiffDrive, Robot, Tricycle
-from odomkit.truth import Truth, truth_at, truth_noise
+from odomkit.truth import Truth, truth_at
 
 __all__ = ["check_channels"]
 
@@ -250,8 +251,9 @@ def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float
                        given)
     if best < 4 * max(given, floor):
         return Finding("channels", "warn", f"the channels as given match {what} (misfit {given:.3g}), but "
-                       f"the best other mapping, {words}, misfits only {best:.3g}{detail}: {close_why}",
-                       close_advice, given)
+                       f"the best other mapping, {words}, misfits {best:.3g}, "
+                       f"{best / given if given > 0 else math.inf:.2g}x as much, under the 4x that tells "
+                       f"them apart{detail}: {close_why}", close_advice, given)
     return Finding("channels", "ok", f"the channels as given match {what} (misfit {given:.3g}; the best "
                    f"other mapping, {words}, misfits {best:.3g}){detail}", value=given)
 
@@ -355,8 +357,9 @@ def _channels_against_positions(log: OdometryLog, robot: Robot, truth: Truth,
         at_fixes.append(np.column_stack([np.interp(truth.t, log.t, track.poses[:, k]) for k in range(3)]))
         travel = float(np.sum(np.abs(track.steps.dd)))
         forward.append(float(np.sum(track.steps.dd)) / travel if travel > 0 else 0.0)
-    # The fixes' own noise, no less than the stated σ (odomkit.truth.truth_noise).
-    noise = truth_noise(truth)
+    # The fixes' own noise, no less than the σ given, or the σ they state (a GPS's scatter
+    # misses its error correlated in time), as the ratio check takes it.
+    noise = judging_noise(truth)[0]
     stretches, length = _stretches(truth, runs, noise, at_fixes[0][:, 2])
     fixes = [truth.xy[s] for s in stretches]
     spread = sum(_spread(x) for x in fixes)
