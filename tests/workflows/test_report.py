@@ -324,7 +324,8 @@ def test_without_truth_the_report_says_what_truth_would_add(run_cli, tmp_path):
     assert result["sections"] == ["summary", "track", "truth", "ros"]
     page = Page(out.read_text(encoding="utf-8"))
     text = " ".join("".join(page.text).split())
-    assert "This log has no ground truth" in text and "Run it again with --truth FILE" in text
+    assert "This log has no ground truth" in text and "Run it again with --truth FILE." in text
+    assert "the calibration of the wheel sizes and wheel base" in text  # a diff robot's
     assert network_references(page) == []
     track = _run_json(run_cli, "track", log, *COLUMNS, "--robot", ROBOT)
     assert page.cells["path_length"][0] == pytest.approx(track["path_length"], rel=1e-12)

@@ -237,10 +237,10 @@ def _errors_section(ev: dict[str, Any]) -> Section:
     rows = _metric_rows(ev) + [("rows scored / left out (no truth there)",
                                 Cell(f"{ev['rows_evaluated']} / {ev['rows_skipped']}"))]
     return Section("errors", "How wrong: error metrics", (
-        Paragraph("The track dead-reckoned from the truth at the first row, compared with the truth row by "
-                  "row (no alignment). ATE is the RMS position error over the run; RPE the error of the "
-                  "motion over each stretch of 1 m of true travel, which does not grow with the run; drift "
-                  "the final error as a share of the distance travelled."),
+        Paragraph("The track dead-reckoned from the truth at its first usable row, compared with the truth "
+                  "row by row (no alignment). ATE is the RMS position error over the run; RPE the error of "
+                  "the motion over each stretch of 1 m of true travel, which does not grow with the run; "
+                  "drift the final error as a share of the distance travelled."),
         Table(("metric", "value"), tuple(rows), "Against ground truth (odomkit evaluate)"),
     ))
 
@@ -469,14 +469,24 @@ def _ros_section(snippets: list[Code], notes: list[str]) -> Section:
     return Section("ros", "ROS parameters", tuple(blocks))
 
 
-def _without_truth_section() -> Section:
+#: What calibrate fits, by vehicle, in the words of a report without truth.
+_CALIBRATED = {"diff": "the wheel sizes and wheel base", "tricycle": "the speed scale, steering offset and "
+               "wheel-to-axle distance", "car": "the speed scale, steering offset and wheel base",
+               "unicycle": "the speed scale and the yaw rate's bias and scale",
+               "gyro": "the wheel size and the gyro's bias and scale"}
+
+
+def _without_truth_section(robot_type: str = "diff", bag: bool = False) -> Section:
+    calibrated = _CALIBRATED.get(robot_type)
     return Section("truth", "What ground truth would add", (Paragraph(
         "This log has no ground truth (no --truth file and no gt_* columns), so the report shows the track "
         "and the covariance the robot file's noise predicts, and cannot say whether either is right. With "
         "truth (motion capture, a total station, RTK GPS; position only is enough) it would add: the error "
         "metrics (ATE, RPE, drift, final and largest error); the honesty test, which checks the predicted "
-        "covariance against the true errors; the calibration of the wheel sizes and wheel base, before and "
-        "after; the noise fitted to the data; and nav2 AMCL's α's. Run it again with --truth FILE."),))
+        "covariance against the true errors; "
+        + (f"the calibration of {calibrated}, before and after; " if calibrated else "")
+        + "the noise fitted to the data; and nav2 AMCL's α's. Run it again with --truth FILE"
+        + (" (or --truth-topic TOPIC, a pose or GPS topic of the bag)." if bag else ".")),))
 
 
 def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: str,
@@ -589,7 +599,8 @@ def run_report(
         if run.truth is None:
             ros_notes: list[str] = []
             snippets = _snippets(run, robot_path, None, "the robot file", None, ros_notes)
-            sections += [_without_truth_section(), _ros_section(snippets, ros_notes)]
+            kind, bag = run.track.steps.robot.type_name, run.log.meta.get("format") == "bag"
+            sections += [_without_truth_section(kind, bag), _ros_section(snippets, ros_notes)]
             sections.insert(0, _summary_section(run, None, None, None, None, None))
         else:
             with stage(progress, _TRUTH_STEPS, "report: scoring, calibration, noise fit, AMCL") as step:
