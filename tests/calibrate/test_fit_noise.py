@@ -585,3 +585,19 @@ def test_a_floor_fitted_from_one_window_length_that_dominates_is_warned_about(du
         assert f"is {100 * share:.0f} % of the predicted position variance" in note
     # Held (given by the user), the floor is no fitted parameter and nothing is said.
     assert _floor_note([basis], v, params, np.array([0])) is None
+
+
+def test_first_order_note_says_when_shorter_windows_do_not_help():
+    """σθ at the window ends past 0.2 rad: where most of it is the start heading fitted to
+    position-only truth, shorter windows do not shrink it (a Husky bag's 0.85 rad with fixes
+    of 0.8 m was told "use shorter windows"); where it is the odometry's, they do."""
+    from odomkit.calibrate.fit_noise import first_order_note
+
+    end = np.array([0.01, 0.09, 0.16])  # σθ 0.1, 0.3, 0.4 rad
+    from_start = first_order_note(end, np.array([0.0, 0.08, 0.15]))
+    assert from_start is not None and "shorter windows do not shrink that" in from_start
+    assert f"σθ up to {np.sqrt(0.15):.3g} rad at the start" in from_start
+    for start in (None, np.array([0.0, 0.01, 0.02])):
+        said = first_order_note(end, start)
+        assert said is not None and said.endswith("; use shorter windows")
+    assert first_order_note(np.array([0.01, 0.02]), np.array([0.01, 0.02])) is None  # under 0.2 rad

@@ -253,7 +253,9 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     if found.dropped:
         left_out.append((HEADLESS, found.dropped))
     own += [f"{log.source}: {n} {what}" for what, n in left_out]
-    note = first_order_note(found.cov[:, 2, 2])
+    # A start heading's error is carried to the window's end unchanged (∂θ/∂θ₀ = 1): its
+    # variance is the start's share of the end's.
+    note = first_order_note(found.cov[:, 2, 2], found.start_cov[:, 2, 2])
     if note:
         own.append(f"{log.source}: {note}")
     # found.cov holds the truth's noise at both window ends already (odomkit.window_errors),
