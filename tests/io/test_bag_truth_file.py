@@ -193,3 +193,37 @@ def test_a_bag_log_without_truth_is_told_of_truth_topic(run_cli, truth_bags, tmp
     code, out, err = run_cli(*args, "--topic", "/odom", "--window", "10s")
     assert code == 2 and out == "" and "Traceback" not in err
     assert "no truth: give --truth FILE, or --truth-topic TOPIC for a bag's own" in err
+
+
+@pytest.mark.parametrize("fmt", ["db3", "mcap"])
+def test_a_ros2_bag_named_as_its_folder_and_as_its_storage_file_is_one_bag(run_cli, truth_bags, fmt,
+                                                                          monkeypatch):
+    """A ROS 2 bag is its folder; its storage file inside names the same bag. The log read from
+    the folder and its own topic named again as truth through the file scored the odometry
+    against itself ("final position error 0.0000 m", a review's finding), and the file opened
+    through a link to the folder though no link is needed."""
+    import odomkit.io.bag as bag_module
+
+    folder = truth_bags["bags"][fmt]
+    [storage] = folder.glob(f"*.{fmt}")
+
+    def no_link(*args, **kwargs):
+        raise AssertionError("a ROS 2 bag's storage file needs no link")
+
+    monkeypatch.setattr(bag_module, "_named_as", no_link)
+    robot = Path(__file__).parents[2] / "examples" / "unicycle.toml"
+    for log, truth in ((folder, storage), (storage, folder)):
+        code, _, err = run_cli("track", log, "--robot", robot, "--topic", "/odom", "--truth", truth,
+                               "--truth-topic", "/odom")
+        assert code == 2 and "the odometry would be scored against itself" in err, err
+
+
+def test_the_robot_files_clock_for_a_logs_own_truth_survives_resolving_twice():
+    """TruthOptions.resolved puts 0 in time_offset for a log's own truth (its gt_* columns are
+    on its clock) and keeps the robot file's offset apart, for a GPS topic; resolving again
+    must not lose it (a review's finding: the second pass saw the 0 as given)."""
+    once = TruthOptions().resolved({"time_offset": 1.42})
+    assert once.time_offset == 0.0 and once.file_clock == 1.42
+    assert once.resolved({"time_offset": 1.42}).file_clock == 1.42
+    given = TruthOptions(time_offset=0.2).resolved({"time_offset": 1.42})
+    assert given.time_offset == 0.2 and given.file_clock == 0.0  # a flag wins, for either truth

@@ -63,7 +63,8 @@ from odomkit.kinematics import Method
 from odomkit.log import OdometryLog
 from odomkit.truth import Truth
 
-__all__ = ["MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions", "compared_fixes", "runs_disagree"]
+__all__ = ["MAX_STEERING_OFFSET", "MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions",
+           "compared_fixes", "runs_disagree", "scale_range"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -220,7 +221,15 @@ class _Problem:
         return np.asarray(starts, dtype=float).reshape(-1)
 
 
-_MAX_STEERING_OFFSET = 0.5  # rad: beyond this the steering channel is wrong, not offset
+#: [rad] a steering offset beyond this from the robot file's is a wrong steering channel, not an
+#: offset (the calibration's plausible range; :func:`odomkit.calibrate.stability.weakly_pinned`).
+MAX_STEERING_OFFSET = 0.5
+
+
+def scale_range(value: float) -> tuple[float, float]:
+    """The plausible range of a scale or a length from the robot file's ``value``: half to
+    twice it (a factor 2 is a wrong robot file, not a calibration)."""
+    return value / 2, value * 2
 
 
 def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_time_offset: bool
@@ -237,7 +246,7 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
     for j, k in enumerate(free):
         value = float(model.p0[k])
         if model.names[k] == "steering_offset":
-            lower[j], upper[j] = value - _MAX_STEERING_OFFSET, value + _MAX_STEERING_OFFSET
+            lower[j], upper[j] = value - MAX_STEERING_OFFSET, value + MAX_STEERING_OFFSET
         elif model.names[k] == "steering_cubic" and isinstance(model, CarCalibrationModel):
             # k s³ at most the angle s itself at the largest angle driven: a ratio that
             # varies by more than a factor 2 over the logs' range is no rack's.
@@ -245,7 +254,7 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
             if largest > 0:
                 lower[j], upper[j] = -1 / largest**2, 1 / largest**2
         elif model.positive[k]:  # a scale or a length (an offset or bias may be any sign)
-            lower[j], upper[j] = value / 2, value * 2
+            lower[j], upper[j] = scale_range(value)
     return lower, upper
 
 
@@ -369,7 +378,7 @@ def calibrate_positions(
                 if np.isclose(q[j], lower[j], rtol=1e-6, atol=0.0)
                 or np.isclose(q[j], upper[j], rtol=1e-6, atol=0.0)]
     if at_bound:
-        ranges = {"steering_offset": f"steering offset ±{_MAX_STEERING_OFFSET} rad",
+        ranges = {"steering_offset": f"steering offset ±{MAX_STEERING_OFFSET} rad",
                   "steering_cubic": "steering_cubic ±1/s² for the largest angle s driven (a ratio that "
                   "varies at most 2× over it: a drive that hardly turns cannot pin it)",
                   "truth time offset": f"clock offset ±{MAX_TIME_OFFSET:g} s"}

@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit.calibrate.exact import ExactCalibration
+from odomkit.calibrate.positions import MAX_STEERING_OFFSET, scale_range
 from odomkit.calibrate.residuals import CalibratedRobot
 from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
@@ -142,10 +143,9 @@ def _rms(log: OdometryLog, robot: Robot, truth: Truth) -> float:
 #: Fewest fixes a half is calibrated from.
 MIN_HALF_FIXES = 10
 _LABELS = ("first half", "second half")
-# The edges of calibrate_positions' plausible ranges that a half's fit may run to: a scale or
-# a length half to twice the start's value, a steering offset ±0.5 rad about it.
+# The parameters with a plausible range of calibrate_positions' that a half's fit may run to
+# (odomkit.calibrate.positions.scale_range, MAX_STEERING_OFFSET) besides the c_* and *_scale.
 _LENGTHS = ("wheel_base", "wheel_to_axle", "m_per_tick")
-_STEERING_OFFSET_RANGE = 0.5
 
 
 def weakly_pinned(joint: ExactCalibration, start: Robot) -> list[str]:
@@ -175,12 +175,12 @@ def weakly_pinned(joint: ExactCalibration, start: Robot) -> list[str]:
     for name, value, se in zip(joint.names, joint.values, joint.std_errors, strict=True):
         v, e = float(value), float(se)
         if name == "steering_offset":
-            room = _STEERING_OFFSET_RANGE - abs(v - float(getattr(start, name, 0.0)))
+            room = MAX_STEERING_OFFSET - abs(v - float(getattr(start, name, 0.0)))
         elif name == "steering_cubic":
             room = abs(v)
         elif name.startswith("c_") or name.endswith("_scale") or name in _LENGTHS:
-            p0 = float(getattr(start, name, math.nan))
-            room = min(v - p0 / 2, 2 * p0 - v)
+            low, high = scale_range(float(getattr(start, name, math.nan)))
+            room = min(v - low, high - v)
         else:  # a bias: no range to run to
             continue
         if not room > reach * e:

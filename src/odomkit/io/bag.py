@@ -101,8 +101,8 @@ from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.truth import Truth
 
-__all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_topics", "is_bag", "read_bag", "read_bag_odometry",
-           "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
+__all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_root", "bag_topics", "is_bag", "read_bag",
+           "read_bag_odometry", "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
 
 #: The message types odomkit reads, by their ROS 2 names (rosbags names ROS 1 types alike).
 MESSAGE_TYPES = {
@@ -217,12 +217,11 @@ def _open(path: Path) -> Iterator[Any]:
         raise InputError(f"is a gzip-compressed ROS bag; decompress it first ({how}) and give {plain}",
                          source=source)
     rosbags = require_rosbags()
-    storage_file = path.is_file() and path.suffix.lower() in (".db3", ".mcap")
-    if storage_file and (path.parent / "metadata.yaml").is_file():
-        path = path.parent
+    path = bag_root(path)
     stores = rosbags.typesys
     with ExitStack() as stack:
-        suffix = _MAGIC[kind][1] if kind in _MAGIC else None
+        # A lone file that its bytes call a bag, by another name (not a ROS 2 bag's folder).
+        suffix = _MAGIC[kind][1] if kind in _MAGIC and path.is_file() else None
         if suffix is not None and path.suffix != suffix:
             path = stack.enter_context(_named_as(path, suffix, source))
         with _bag_errors(source):
@@ -233,6 +232,21 @@ def _open(path: Path) -> Iterator[Any]:
             reader.open()
         stack.callback(reader.close)
         yield reader
+
+
+def bag_root(path: str | Path) -> Path:
+    """The bag ``path`` belongs to: a ROS 2 storage file (``.db3``, ``.mcap``) beside its
+    ``metadata.yaml`` is its folder's bag; anything else is itself. Two paths name one bag
+    where their roots resolve alike.
+
+    Examples
+    --------
+    >>> str(bag_root("run.bag"))
+    'run.bag'
+    """
+    path = Path(path)
+    storage_file = path.is_file() and path.suffix.lower() in (".db3", ".mcap")
+    return path.parent if storage_file and (path.parent / "metadata.yaml").is_file() else path
 
 
 @contextmanager

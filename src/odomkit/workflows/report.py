@@ -136,13 +136,14 @@ def _auto_window(run: TrackRun) -> tuple[str | None, str | None]:
 
 
 def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptions | None,
-            window: str | None, method: str, who: str = "",
-            said: Sequence[Scored] = ()) -> tuple[list[Scored], dict[str, Any]]:
+            window: str | None, method: str, who: str = "", said: Sequence[Scored] = (),
+            start_said: bool = True) -> tuple[list[Scored], dict[str, Any]]:
     """The evaluate workflow's figures: each log's raw scores and the JSON keys ``odomkit
     evaluate`` prints for them, verdicts included (the same function makes both). Their
     warnings join the page's, each led by ``who`` (``"after calibration: "``), except those
-    an earlier scoring of the same log (``said``) gave word for word and the late start of
-    the whole run, which the track's own warning has said already."""
+    an earlier scoring of the same log (``said``) gave word for word and, where the track
+    started from the truth as the scoring does (``start_said``: no ``pose0`` given), the late
+    start of the whole run, which the track's own warning has said already."""
     from odomkit.windows import is_late_start_note, parse_window
     from odomkit.workflows._scoring import pooled_report
     from odomkit.workflows.evaluate import score_logs
@@ -152,7 +153,7 @@ def _scored(log: Path, robot: Path, options: TruthOptions, log_options: LogOptio
                         errors_only=True)
     known = {w for s in said for w in s.warnings}
     for note in dict.fromkeys(w for s in scored for w in s.warnings):
-        if not is_late_start_note(note) and note not in known:
+        if not (start_said and is_late_start_note(note)) and note not in known:
             warnings.warn(f"{who}{note}", stacklevel=2)
     return scored, pooled_report(scored, (1.0,), None if window is None else str(parse_window(window)))
 
@@ -605,7 +606,8 @@ def run_report(
         else:
             with stage(progress, _TRUTH_STEPS, "report: scoring, calibration, noise fit, AMCL") as step:
                 summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options,
-                                                     window, kinds, method, figures, step)
+                                                     window, kinds, method, figures, step,
+                                                     start_said=pose0 is None)
             sections = [summary_section, *sections, *rest]
         notes += [n for n in figures.notes if n not in notes]
     title = f"odomkit report: {log_path.name}"
@@ -635,10 +637,12 @@ def _own_fixes(run: TrackRun) -> Truth | None:
 
 def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                 log_options: LogOptions | None, window: str | None, kinds: Sequence[str], method: str,
-                figures: ReportFigures, step: Progress = NO_PROGRESS) -> list[Section]:
+                figures: ReportFigures, step: Progress = NO_PROGRESS,
+                start_said: bool = True) -> list[Section]:
     """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS
     (``step`` advances once per step, :data:`_TRUTH_STEPS` in all; the workflows called
-    report no progress of their own, so that stages do not nest)."""
+    report no progress of their own, so that stages do not nest). ``start_said``: the track
+    started from the truth and said where (:func:`_scored`)."""
     from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_truth_table
     from odomkit.workflows.calibration import calibrate_files
     from odomkit.workflows.fit_amcl import fit_amcl_files
@@ -653,7 +657,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
     # test of the noise fitted below.
     file_models = read_robot(robot)[1]
     file_noise = bool(file_models)
-    scored, ev = _scored(log, robot, options, log_options, window if file_noise else None, method)
+    scored, ev = _scored(log, robot, options, log_options, window if file_noise else None, method,
+                         start_said=start_said)
     sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures) if file_noise else
                 Section("honesty", "How honest: the windowed test of the covariance", (Paragraph(
                     "The robot file has no [noise] table, so it predicts no covariance to test; the noise "

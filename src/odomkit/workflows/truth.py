@@ -72,7 +72,10 @@ class TruthOptions:
                        file_clock=self._file_clock(found))
 
     def _file_clock(self, table: Mapping[str, float]) -> float:
-        """The robot file's offset for the log's own truth, where none was given (``file_clock``)."""
+        """The robot file's offset for the log's own truth, where none was given (``file_clock``).
+        Kept once found: resolving again sees the zero :meth:`clock` put in ``time_offset``."""
+        if self.file_clock:
+            return self.file_clock
         return float(table.get("time_offset", 0.0)) if self.path is None and self.time_offset is None else 0.0
 
     def clock(self, table: Mapping[str, float]) -> float:
@@ -157,7 +160,7 @@ def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, f
     """The truth topic of the ``--truth`` bag and the σ its GPS fixes state; the options of a
     text truth file are refused by name, and so is a topic the log itself was read from
     (the same bag named twice: the odometry would be scored against itself)."""
-    from odomkit.io.bag import read_bag_truth
+    from odomkit.io.bag import bag_root, read_bag_truth
 
     assert options.path is not None
     text_only = [flag for flag, given in (("--truth-format", options.format != "auto"),
@@ -171,7 +174,7 @@ def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, f
     topic = found[0].source.rsplit(":", 1)[-1]
     own = log.meta.get("topics", ()) if log is not None and log.meta.get("format") == "bag" else ()
     if (log is not None and isinstance(own, list | tuple) and topic in own
-            and Path(log.source).resolve() == Path(options.path).resolve()):
+            and bag_root(log.source).resolve() == bag_root(options.path).resolve()):
         raise InputError(f"--truth {options.path} --truth-topic {topic} is the log's own topic {topic}: "
                          "the odometry would be scored against itself; the truth must come from another "
                          "source (motion capture, GPS)")
