@@ -258,3 +258,20 @@ def test_a_missing_topic_names_the_other_topics_with_their_types(tmp_path, bag_w
     assert "topics odomkit reads: /odom (Odometry)" in text
     assert "other topics: /fix (sensor_msgs/msg/NavSatFix), /scan00 (sensor_msgs/msg/LaserScan)" in text
     assert "/scan08 (sensor_msgs/msg/LaserScan) and 2 more" in text and "/scan09" not in text
+
+
+def test_a_replaced_wheel_channel_is_said_in_metres_not_radians(tmp_path, bag_writer, stamp):
+    """Only the yaw rate and the heading turn: a speed given by two topics that disagree is
+    said in metres travelled (a review found every other channel said in "rad" and "turns")."""
+    t0 = 1_700_000_000 * 10**9
+    msgs = []
+    for k in range(400):
+        ns = t0 + k * 50_000_000
+        msgs.append(("/odom", "nav_msgs/msg/Odometry", ns, {"header": stamp(ns),
+                                                             "twist": {"twist": {"linear": {"x": 1.0}}}}))
+        msgs.append(("/cmd", "geometry_msgs/msg/TwistStamped", ns + 1, {"header": stamp(ns + 1),
+                                                                          "twist": {"linear": {"x": 3.0}}}))
+    path = bag_writer(tmp_path / "two_speeds", "mcap", msgs)
+    with pytest.warns(UserWarning, match=r"speed from /cmd replaces /odom's .* by a factor 3\.0: .* /odom "
+                                         r"travels 19\.9 m in all"):
+        read_bag(path, ["/odom", "/cmd"])

@@ -800,15 +800,16 @@ def _check_replaced(name: str, kind: str, rows: NDArray[np.float64], old: tuple[
     duration = float(rows[-1] - rows[0])
     slack = _SLACK + _DRIFT * duration
     low, high = sorted((total_a, total_b))
-    unit, verb = ("m", "travels") if name == "speed" else ("rad", "turns")
+    turning = name in ("yaw_rate", "heading")  # else travel: a speed, a wheel's distance or ticks
+    unit, verb = ("rad", "turns") if turning else ("ticks" if name.startswith("ticks") else "m", "travels")
     figures = (f"over the {duration:.4g} s they share, {old_topic} {verb} {total_a:.3g} {unit} in all "
                f"(Σ|Δ| over {_WINDOW:g} s windows; net {net(a)}) and {new_topic} {total_b:.3g} {unit} "
                f"(net {net(b)})")
     said = (f"{source}: {name} from {new_topic} replaces {old_topic}'s (the topic named last is used), "
             "but they disagree")
-    causes = ("a command the robot did not follow, a wrong wheel radius, a topic of another robot"
-              if name == "speed" else
-              "an IMU not mounted level, a wrong wheel separation or yaw gain, a topic of another frame")
+    causes = ("an IMU not mounted level, a wrong wheel separation or yaw gain, a topic of another frame"
+              if turning else
+              "a command the robot did not follow, a wrong wheel radius, a topic of another robot")
     hint = f"one of them is not the robot's motion ({causes})"
     if high - low > slack and high > _FACTOR * low:
         ratio = f"{high / low:.1f}" if low > 0 else "∞"
