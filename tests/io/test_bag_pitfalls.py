@@ -62,13 +62,14 @@ def odom(stamp, times, speed, rate, topic="/odom"):
     return out
 
 
-def imu(stamp, times, rate, accel=(0.0, 0.0, 9.81), topic="/imu"):
-    """Imu messages (no orientation) at ``times`` [s] from T0: gyro z ``rate`` [rad/s],
-    linear acceleration ``accel`` [m/s²] (x, y, z)."""
+def imu(stamp, times, rate, accel=(0.0, 0.0, 9.81), topic="/imu", axis="z", others=0.0):
+    """Imu messages (no orientation) at ``times`` [s] from T0: gyro ``rate`` [rad/s] about
+    ``axis`` (``others`` about the other two), linear acceleration ``accel`` [m/s²] (x, y, z)."""
     rate = np.broadcast_to(rate, times.shape)
     a = dict(zip("xyz", map(float, accel), strict=True))
     return [(topic, IMU, T0 + round(t * 1e9),
-             {"header": stamp(T0 + round(t * 1e9)), "angular_velocity": {"z": float(w)},
+             {"header": stamp(T0 + round(t * 1e9)),
+              "angular_velocity": {k: float(w) if k == axis else others for k in "xyz"},
               "linear_acceleration": a, "orientation_covariance": NO_ORIENTATION})
             for t, w in zip(times, rate, strict=True)]
 
@@ -107,8 +108,30 @@ def test_an_imu_with_gravity_off_its_z_axis_warns(tmp_path, bag_writer, stamp, a
     times = np.arange(0.0, 2.0, 0.02)
     path = bag_writer(tmp_path / "side", "ros1", imu(stamp, times, 0.1, accel))
     with pytest.warns(UserWarning, match=rf"/imu: gravity is along its {re.escape(axis)} axis.*"
-                                         r"angular_velocity.z is not the robot's yaw rate"):
+                                         r"angular_velocity.z is not the robot's yaw rate.*"
+                                         rf"--imu-up {re.escape(axis)} reads the rate"):
         read_bag(path, ["/imu"])
+
+
+@pytest.mark.parametrize("up", ["+y", "-x"])
+def test_imu_up_reads_the_yaw_rate_about_the_axis_that_points_up(tmp_path, bag_writer, stamp, run_cli, up):
+    """An IMU on its side (gravity along ``up``) whose rate about that axis is the yaw rate
+    0.3 + 0.1 t and about the others a wobble: --imu-up reads the first, sign included, and
+    the IMU is level as read, so nothing warns (a Husky bag: 9.5 m from its GPS at the end,
+    368 m reading angular_velocity.z)."""
+    times = np.arange(0.0, 4.0, 0.02)
+    sign, axis = (1.0 if up[0] == "+" else -1.0), up[1]
+    gravity = tuple(sign * 9.8 if k == axis else 0.1 for k in "xyz")
+    true = 0.3 + 0.1 * times
+    path = bag_writer(tmp_path / "side_up", "mcap", imu(stamp, times, sign * true, gravity, axis=axis,
+                                                        others=0.05))
+    log = no_warnings(lambda: read_bag(path, ["/imu"], imu_up=up))
+    # A rate is resampled at the rows as its mean over each step (trapezoid): exact for a line.
+    np.testing.assert_allclose(log.channels["yaw_rate"][:-1], 0.3 + 0.1 * (times[:-1] + 0.01), atol=1e-12)
+    robot = tmp_path / "g.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n')
+    code, _, err = run_cli("track", path, "--robot", robot, "--topic", "/imu", "--imu-up", "q")
+    assert code == 2 and "--imu-up must be one of +x, -x, +y, -y, +z, -z" in err and "'q'" in err
 
 
 @pytest.mark.parametrize("accel", [(0.0, 0.0, 9.81), (0.0, 0.0, 0.0), (0.5, -0.4, 9.7), (0.0, 0.0, -9.81)])

@@ -1,6 +1,7 @@
 """The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
 files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-unit
---decimate --topic --joints --bag-time --truth-topic --span --record``, declared once here and parsed into
+--decimate --topic --joints --bag-time --truth-topic --imu-up --span --record``, declared once here and
+parsed into
 :class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
 it) raises, shown as one line each.
 
@@ -26,7 +27,8 @@ from odomkit.cli.shared_flags import Flag, with_flags
 from odomkit.workflows.logs import LOG_FORMATS, LogOptions
 
 __all__ = [
-    "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "JointsOption",
+    "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "ImuUpOption",
+    "JointsOption",
     "LOG_FLAGS", "log_options", "PeriodOption", "reported_warnings", "TimeUnitOption", "TopicOption",
     "RecordOption", "SpanOption", "TruthTopicOption", "with_log_options", "with_warnings", "WrapBitsOption",
 ]
@@ -71,6 +73,9 @@ SpanOption = Annotated[str | None, typer.Option(
                    "duration (:50% the first half, 50%: the rest, 120:600); a drive calibrated on one "
                    "part is judged on another.")]
 
+ImuUpOption = Annotated[str, typer.Option(
+    "--imu-up", help="ROS bag: the Imu axis that points up, +z (default), -z, +x, -x, +y or -y; its "
+                     "angular velocity about it is the yaw rate (an IMU mounted on its side).")]
 RecordOption = Annotated[str | None, typer.Option(
     "--record", help="Text log of tagged records (each line led by a word naming its type, several types "
                      "in one file: libRSF's odom2/loop, CARMEN's ODOM/FLASER): read only the lines of this "
@@ -81,13 +86,15 @@ def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: i
                 period: float | None, time_unit: str, decimate: int, topic: list[str] | None = None,
                 joints: str | None = None, bag_time: bool = False,
                 truth_topic: str | None = None, span: str | None = None,
-                record: str | None = None) -> LogOptions:
+                record: str | None = None, imu_up: str = "+z") -> LogOptions:
     """The parsed log options; a bad value is one line naming its flag (exit 2). ``--topic``
     may also be comma-separated; ``--joints`` is."""
     topics = tuple(name.strip() for text in topic or () for name in text.split(","))
     joint_names = tuple(name.strip() for name in joints.split(",")) if joints is not None else ()
+    up = imu_up.strip()
+    up = f"+{up}" if up in ("x", "y", "z") else up  # "y" is "+y"
     return LogOptions(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                      topics, joint_names, bag_time, truth_topic, span, record)
+                      topics, joint_names, bag_time, truth_topic, span, record, up)
 
 
 #: The log flags every command that reads a log takes, in the order of their help.
@@ -96,7 +103,8 @@ LOG_FLAGS: tuple[Flag, ...] = (
     ("cumulative", CumulativeOption, False), ("wrap_bits", WrapBitsOption, None),
     ("period", PeriodOption, None), ("time_unit", TimeUnitOption, "s"), ("decimate", DecimateOption, 1),
     ("topic", TopicOption, None), ("joints", JointsOption, None), ("bag_time", BagTimeOption, False),
-    ("truth_topic", TruthTopicOption, None), ("span", SpanOption, None), ("record", RecordOption, None),
+    ("truth_topic", TruthTopicOption, None), ("imu_up", ImuUpOption, "+z"), ("span", SpanOption, None),
+    ("record", RecordOption, None),
 )
 #: Decorator: the command takes :data:`LOG_FLAGS` and is called with ``log_opts``, the
 #: parsed :class:`~odomkit.workflows.logs.LogOptions` (:func:`odomkit.cli.shared_flags.with_flags`).

@@ -20,9 +20,10 @@ message                        channels
 ``nav_msgs/Odometry``          ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
 ``Twist``, ``TwistStamped``    ``speed``, ``yaw_rate`` (``geometry_msgs``; a command. Twist
                                has no header, so its time is always the bag's)
-``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro), and ``heading`` (yaw
-                               of the orientation) when the IMU gives one (its
-                               ``orientation_covariance[0]`` is not −1)
+``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro; about another axis
+                               with ``imu_up``, ``--imu-up``), and ``heading`` (yaw of the
+                               orientation) when the IMU gives one (its
+                               ``orientation_covariance[0]`` is not −1) and is level
 =============================  =============================================================
 
 A diff robot reads the two joints; a gyro robot (or a unicycle, the body-velocity vehicle)
@@ -472,18 +473,23 @@ def _twist_signals(messages: list[Any], ns: NDArray[np.int64], kind: str, topic:
     return _Stream(topic, ns, [("speed", signal, speed), ("yaw_rate", signal, rate)])
 
 
-def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source: str) -> _Stream:
-    rate = _finite(np.array([m.angular_velocity.z for m in messages], dtype=float), "angular velocity z",
-                   topic, source)
+def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source: str,
+                 up: str = "+z") -> _Stream:
+    """An Imu topic's yaw rate (its angular velocity about the axis ``up``, sign included) and,
+    mounted level (``up`` "+z") with an orientation, its heading."""
+    sign, axis = (1.0 if up[0] == "+" else -1.0), up[1]
+    rate = sign * _finite(np.array([getattr(m.angular_velocity, axis) for m in messages], dtype=float),
+                          f"angular velocity {axis}", topic, source)
     stream = _Stream(topic, ns, [("yaw_rate", "linear", rate)])
-    # sensor_msgs/Imu: orientation_covariance[0] = -1 means "no orientation estimate".
+    # sensor_msgs/Imu: orientation_covariance[0] = -1 means "no orientation estimate". The yaw of
+    # the orientation is the heading only for an IMU mounted level.
     oriented = all(float(m.orientation_covariance[0]) != -1.0 for m in messages)
-    if oriented:
+    if oriented and up == "+z":
         heading = _finite(np.array([_yaw(m.orientation) for m in messages]), "orientation", topic, source)
         stream.signals.append(("heading", "absolute", unwrap_angle(heading)))
     accel = np.array([[m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z]
                       for m in messages], dtype=float)
-    _check_level(accel, oriented, topic, source)
+    _check_level(accel, oriented and up == "+z", topic, source, up)
     return stream
 
 
@@ -496,27 +502,31 @@ _GRAVITY_RANGE = (5.0, 15.0)
 _LEVEL = 0.8
 
 
-def _check_level(accel: NDArray[np.float64], oriented: bool, topic: str, source: str) -> None:
-    """Warn where an IMU's gravity is not along its z axis: mounted on its side, its
-    ``angular_velocity.z`` is a rotation about a horizontal axis, not the robot's yaw rate.
+def _check_level(accel: NDArray[np.float64], oriented: bool, topic: str, source: str,
+                 up: str = "+z") -> None:
+    """Warn where an IMU's gravity is not along the axis read as up (``up``, ``--imu-up``;
+    its sign is not judged): mounted otherwise, the angular velocity read is a rotation about
+    a horizontal axis, not the robot's yaw rate.
 
-    ``accel`` (M, 3) [m/s²]: the messages' linear acceleration (x, y, z). Gravity on −z is
-    not warned about: some drivers report a level IMU's specific force with that sign."""
+    ``accel`` (M, 3) [m/s²]: the messages' linear acceleration (x, y, z). Gravity on the
+    negative side is not warned about: some drivers report a level IMU's specific force with
+    that sign."""
     finite = accel[np.isfinite(accel).all(axis=1)]
     if not finite.size:
         return
     mean = finite.mean(axis=0)
     size = float(np.linalg.norm(mean))
-    if not (_GRAVITY_RANGE[0] <= size <= _GRAVITY_RANGE[1]) or abs(mean[2]) >= _LEVEL * size:
+    read = "xyz".index(up[1])
+    if not (_GRAVITY_RANGE[0] <= size <= _GRAVITY_RANGE[1]) or abs(mean[read]) >= _LEVEL * size:
         return
     axis = int(np.argmax(np.abs(mean)))
     sign = "+" if mean[axis] > 0 else "-"
     name = "xyz"[axis]
     heading = ", nor its orientation's yaw the heading" if oriented else ""
     warnings.warn(f"{source}: {topic}: gravity is along its {sign}{name} axis (mean linear acceleration "
-                  f"({mean[0]:.2f}, {mean[1]:.2f}, {mean[2]:.2f}) m/s²), not z: the IMU is not mounted "
-                  f"level, so its angular_velocity.z is not the robot's yaw rate{heading} (about "
-                  f"{sign}angular_velocity.{name} is); publish it in a level frame", stacklevel=4)
+                  f"({mean[0]:.2f}, {mean[1]:.2f}, {mean[2]:.2f}) m/s²), not {up[1]}: the IMU is not "
+                  f"mounted as read, so its angular_velocity.{up[1]} is not the robot's yaw rate{heading}; "
+                  f"--imu-up {sign}{name} reads the rate about {sign}{name}", stacklevel=4)
 
 
 def _pose_truth(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
@@ -636,14 +646,14 @@ def _fix_truth(reader: Any, topic: str, receive_time: bool, source: str,
 
 
 def _read_stream(reader: Any, topic: str, msgtype: str, joints: Sequence[str], receive_time: bool,
-                 source: str, progress: Progress = NO_PROGRESS) -> _Stream:
+                 source: str, progress: Progress = NO_PROGRESS, imu_up: str = "+z") -> _Stream:
     conns = [c for c in reader.connections if c.topic == topic]
     messages, ns = _stamps(reader, conns, receive_time, topic, source, progress)
     kind = MESSAGE_TYPES[msgtype]
     if kind == "JointState":
         return _joint_signals(messages, ns, joints, topic, source)
     if kind == "Imu":
-        return _imu_signals(messages, ns, topic, source)
+        return _imu_signals(messages, ns, topic, source, imu_up)
     return _twist_signals(messages, ns, kind, topic, source)
 
 
@@ -820,7 +830,7 @@ def _check_replaced(name: str, kind: str, rows: NDArray[np.float64], old: tuple[
 
 def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
              receive_time: bool = False, truth_topic: str | None = None, *,
-             progress: Progress = NO_PROGRESS) -> OdometryLog:
+             progress: Progress = NO_PROGRESS, imu_up: str = "+z") -> OdometryLog:
     """Read a ROS bag's odometry topics as a log (module docstring: messages, time, topics).
 
     Parameters
@@ -839,6 +849,9 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     progress : Progress
         One stage, ``"reading NAME"`` of the messages of the topics read (their count in the
         bag's index), advanced every 1000 messages (:mod:`odomkit.progress`)
+    imu_up : the Imu axis that points up (``"+z"``, ``"-z"``, ``"+x"``, ...): the yaw rate is
+        the angular velocity about it, sign included; the orientation's yaw is read as a
+        heading only for ``"+z"``
 
     Returns
     -------
@@ -874,7 +887,7 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
         gps: Truth | None = None
         stated: float | None = None
         with stage(progress, total, f"reading {path.name}"):
-            streams = [_read_stream(reader, c, available[c], joints, receive_time, source, progress)
+            streams = [_read_stream(reader, c, available[c], joints, receive_time, source, progress, imu_up)
                        for c in chosen]
             if truth is not None and fixes:
                 gps, stated = _fix_truth(reader, truth, receive_time, source, progress)
