@@ -496,8 +496,8 @@ def _no_turn_finding(said: str, gain: float, robot: Robot) -> Finding:
                       "and its unit")
         else:
             advice = ("the yaw rate read is not the robot's: an IMU not mounted level turns about another "
-                      "axis (its angular_velocity.x or .y is the yaw rate then), or the wrong topic or "
-                      "field; check the unit too (radians read as degrees turn 57x too little)")
+                      "axis (its angular_velocity.x or .y is the yaw rate then: --imu-up), or the wrong "
+                      "topic or field; check the unit too (radians read as degrees turn 57x too little)")
     return Finding("turn_ratio", "fail", f"{said}: {what}", advice, gain)
 
 
