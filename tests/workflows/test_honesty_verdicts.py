@@ -355,3 +355,23 @@ def test_an_undetermined_fit_suggests_fewer_kinds_only_where_both_were_asked(
                            "--out", tmp_path / "f.toml")
     assert code == 2 and "the fit is undetermined" in err
     assert ("--kinds white" in err) is suggested
+
+
+def test_each_window_end_gives_the_sigma_of_its_start_heading(noisy_diff_log, tmp_path):
+    """An end far outside its ellipse may come from its start heading (a Husky bag: a window
+    starting slow and turning, its heading fitted to 0.8 m fixes off by 0.7 rad): each
+    window_ends entry gives that heading's σ. With heading truth it is the truth's heading
+    noise, exactly; fitted to positions alone it is that fit's, positive and finite."""
+    log, gt, robot = _simulate(noisy_diff_log, tmp_path, k_true=0.002, k_model=0.002, seconds=120.0,
+                               truth_noise=0.02)
+    opts = LogOptions(columns=SIM_COLUMNS)
+    headed = evaluate_logs([log], robot, [TruthOptions(gt, heading_sigma=0.01)], log_options=opts,
+                           window="10s")
+    ends = headed["per_log"][0]["window_ends"]
+    assert ends and all(e["start_heading_sigma"] == pytest.approx(0.01, rel=1e-12) for e in ends)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fitted = evaluate_logs([log], robot, [TruthOptions(tmp_path / "xy.csv", sigma=0.02)],
+                               log_options=opts, window="10s")
+    sigmas = [e["start_heading_sigma"] for e in fitted["per_log"][0]["window_ends"]]
+    assert sigmas and all(0 < s < 0.5 for s in sigmas)

@@ -265,6 +265,7 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
                    heading_errors=found.error[:, 2], heading_var=found.cov[:, 2, 2],
                    windows=len(found.windows), warnings=notes + own, window_notes=tuple(own),
                    left_out=tuple(left_out), honesty_t=log.t[found.end_rows],
+                   start_heading_var=found.start_cov[:, 2, 2],
                    honesty_t0=log.t[np.array([w.start for w in found.windows], dtype=np.int64)])
 
 

@@ -47,6 +47,9 @@ class Scored:
     honesty_t: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
     # (m,) log time of each window's start [s] (empty as honesty_t)
     honesty_t0: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
+    # (m,) variance of each window's start heading [rad²]: the truth's heading noise, or the
+    # heading fitted to position-only truth (empty as honesty_t)
+    start_heading_var: NDArray[np.float64] = field(default_factory=lambda: np.empty(0))
     # The evaluated rows themselves (the whole run of a log), for figures
     rows: TrackRows | None = None
     # Why a log asked for windows has none (None: it has some, or none were asked for)
@@ -260,9 +263,12 @@ def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[
 
 def _window_ends(s: Scored) -> dict[str, Any]:
     """``window_ends`` of a log scored in windows: each window's ``start`` and ``end`` [s, log
-    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, and its
-    ``heading_error`` [rad] and ``nees_heading`` (None where the truth has no heading), so
-    that an outlier can be found and looked at; nothing for a whole-track score."""
+    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, its
+    ``heading_error`` [rad] and ``nees_heading`` (None where the truth has no heading), and
+    the σ of its start heading ``start_heading_sigma`` [rad] (fitted to position-only truth, or
+    the truth's heading noise), so that an outlier can be found and looked at (a window that
+    starts slow and turning gets a start heading its fixes barely support); nothing for a
+    whole-track score."""
     if not s.honesty_t0.size:
         return {}
     from odomkit.evaluate import heading_nees, nees
@@ -274,10 +280,13 @@ def _window_ends(s: Scored) -> dict[str, Any]:
     def number(x: float) -> float | None:
         return float(x) if np.isfinite(x) else None
 
-    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, hh, qh, strict=True)
+    m = s.honesty_t0.size
+    start_var = s.start_heading_var if s.start_heading_var.shape == (m,) else np.full(m, np.nan)
+    rows = zip(s.honesty_t0, s.honesty_t, s.honesty_errors, q, hh, qh, start_var, strict=True)
     return {"window_ends": [{"start": float(a), "end": float(b), "error": [float(e[0]), float(e[1])],
-                             "nees": float(n), "heading_error": number(h), "nees_heading": number(nh)}
-                            for a, b, e, n, h, nh in rows]}
+                             "nees": float(n), "heading_error": number(h), "nees_heading": number(nh),
+                             "start_heading_sigma": number(math.sqrt(max(v, 0.0)) if np.isfinite(v) else v)}
+                            for a, b, e, n, h, nh, v in rows]}
 
 
 def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: str | None = None,
