@@ -113,7 +113,7 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     assert all(p["start_heading"] is not None and not p["start_heading_fitted"] for p in got["per_log"])
     assert [len(p["window_ends"]) for p in got["per_log"]] == [p["windows"] for p in got["per_log"]]
     assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees", "heading_error",
-                                                         "nees_heading"}
+                                                         "nees_heading", "start_heading_sigma"}
     assert set(got["coverage_heading"]) == set(got["coverage_heading_verdict"]) == set(got["coverage"])
     assert got["nees_heading_mean"] is not None and got["coverage_heading_overall"] is not None
     assert got["windows"] == sum(p["windows"] for p in got["per_log"])
