@@ -49,16 +49,27 @@ def _build(store: Any, msgtype: str, values: dict[str, Any]) -> Any:
     return store.types[msgtype](**kwargs)
 
 
+#: ackermann_msgs' definitions (the ROS interface, as its package declares it).
+ACKERMANN_MSGS = {
+    "ackermann_msgs/msg/AckermannDrive": "float32 steering_angle\nfloat32 steering_angle_velocity\n"
+                                         "float32 speed\nfloat32 acceleration\nfloat32 jerk\n",
+    "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\n"
+                                                "ackermann_msgs/AckermannDrive drive\n",
+}
+
+
 def write_bag(path: Path, fmt: str, messages: Iterable[tuple[str, str, int, dict[str, Any]]]) -> Path:
     """Write ``(topic, msgtype, bag time [ns], fields)`` messages; returns the bag's path
     (a ``.bag`` file for ros1, a folder for db3 and mcap)."""
     from rosbags.rosbag1 import Writer as Writer1
     from rosbags.rosbag2 import StoragePlugin
     from rosbags.rosbag2 import Writer as Writer2
-    from rosbags.typesys import Stores, get_typestore
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
     ros1 = fmt == "ros1"
     store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
+    for name, text in ACKERMANN_MSGS.items():  # a car's drive command: not in rosbags' stores
+        store.register(get_types_from_msg(text, name))
     path = path.with_suffix(".bag") if ros1 else path
     plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
     writer = Writer1(path) if ros1 else Writer2(path, version=9, storage_plugin=plugin)

@@ -4,8 +4,10 @@ messages (independent of the reader's resampling code)."""
 
 from __future__ import annotations
 
+import json
 import math
 from fractions import Fraction
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -216,3 +218,33 @@ def test_a_joint_that_jumps_by_more_than_pi_warns(tmp_path, bag_writer, stamp):
                                           "position": [p]}) for k, p in enumerate([3.0, -3.0, -2.9])]
     with pytest.warns(UserWarning, match="jumps by more than π"):
         read_bag(bag_writer(tmp_path / "wrap", "mcap", msgs))
+
+
+@pytest.mark.parametrize("fmt", ["ros1", "db3", "mcap"])
+def test_a_cars_ackermann_commands_read_as_its_text_log(tmp_path, bag_writer, stamp, run_cli, fmt):
+    """ackermann_msgs/AckermannDriveStamped (a car's drive command: speed and the road wheels'
+    steering angle): the bag reads as a text log of the same speed and steer, and a car
+    robot's track from it equals the text log's (the independent reader)."""
+    rng = np.random.default_rng(4)
+    t = np.arange(0.0, 10.0, 0.05)
+    speed = 4.0 + rng.uniform(-1, 1, t.size)
+    steer = 0.08 * np.sin(t / 2) + rng.uniform(-0.01, 0.01, t.size)
+    msgs = [("/drive", "ackermann_msgs/msg/AckermannDriveStamped", T0 + round(x * 1e9),
+             {"header": stamp(T0 + round(x * 1e9)), "drive": {"speed": float(v), "steering_angle": float(a)}})
+            for x, v, a in zip(t, speed, steer, strict=True)]
+    path = bag_writer(tmp_path / "car", fmt, msgs)
+    log = read_bag(path, ["/drive"])
+    # float32 in the message: the text log holds the same float32 values
+    np.testing.assert_array_equal(log.channels["speed"], speed.astype(np.float32).astype(float))
+    np.testing.assert_array_equal(log.channels["steer"], steer.astype(np.float32).astype(float))
+    text = tmp_path / "car.csv"
+    np.savetxt(text, np.column_stack((log.t, log.channels["speed"], log.channels["steer"])), delimiter=",",
+               header="t,speed,steer", comments="", fmt="%.17g")
+    robot = Path(__file__).parents[2] / "examples" / "car.toml"
+    runs = []
+    for args in ((path, "--topic", "/drive"), (text,)):
+        code, out, err = run_cli("track", *args, "--robot", robot, "--json")
+        assert code == 0, err
+        runs.append(json.loads(out))
+    assert runs[0]["pose"] == pytest.approx(runs[1]["pose"], abs=1e-9)
+    assert runs[0]["path_length"] == pytest.approx(runs[1]["path_length"], rel=1e-12)

@@ -56,7 +56,8 @@ TimeUnitOption = Annotated[str, typer.Option(
 DecimateOption = Annotated[int, typer.Option(
     "--decimate", help="Use every n-th row (increments summed, rates sampled).")]
 TopicOption = Annotated[list[str] | None, typer.Option(
-    "--topic", help="ROS bag topic (JointState, Odometry, Twist, TwistStamped, Imu); repeat it: the "
+    "--topic", help="ROS bag topic (JointState, Odometry, Twist, TwistStamped, Imu, AckermannDriveStamped); "
+                    "repeat it: the "
                     "first gives the rows, a later one's channels replace an earlier one's.")]
 JointsOption = Annotated[str | None, typer.Option(
     "--joints", help="ROS bag JointState wheel joints LEFT,RIGHT (or one); positions in rad, so the "

@@ -20,6 +20,8 @@ message                        channels
 ``nav_msgs/Odometry``          ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
 ``Twist``, ``TwistStamped``    ``speed``, ``yaw_rate`` (``geometry_msgs``; a command. Twist
                                has no header, so its time is always the bag's)
+``ackermann_msgs/``             ``speed`` (drive speed), ``steer`` (drive steering angle, the
+``AckermannDriveStamped``      road wheels'), each held from its stamp as a command is: a car
 ``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro; about another axis
                                with ``imu_up``, ``--imu-up``), and ``heading`` (yaw of the
                                orientation) when the IMU gives one (its
@@ -112,6 +114,15 @@ MESSAGE_TYPES = {
     "geometry_msgs/msg/Twist": "Twist",
     "geometry_msgs/msg/TwistStamped": "TwistStamped",
     "sensor_msgs/msg/Imu": "Imu",
+    "ackermann_msgs/msg/AckermannDriveStamped": "AckermannDriveStamped",
+}
+#: ackermann_msgs' definitions (ROS 1 and 2 alike), which rosbags' built-in type stores lack:
+#: registered for a ROS 2 bag that carries no definitions of its own (a ROS 1 bag does).
+_ACKERMANN = {
+    "ackermann_msgs/msg/AckermannDrive": "float32 steering_angle\nfloat32 steering_angle_velocity\n"
+                                         "float32 speed\nfloat32 acceleration\nfloat32 jerk\n",
+    "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\n"
+                                                "ackermann_msgs/AckermannDrive drive\n",
 }
 #: The messages a ground-truth topic may hold (``--truth-topic``): poses (motion capture) or
 #: GPS fixes (NavSatFix, position-only).
@@ -228,8 +239,10 @@ def _open(path: Path) -> Iterator[Any]:
         with _bag_errors(source):
             # The default types serve a ROS 2 bag without message definitions (db3 before Iron);
             # the messages odomkit reads are the same in every ROS 2 release.
-            reader = rosbags.highlevel.AnyReader(
-                [path], default_typestore=stores.get_typestore(stores.Stores.ROS2_HUMBLE))
+            default = stores.get_typestore(stores.Stores.ROS2_HUMBLE)
+            for name, text in _ACKERMANN.items():
+                default.register(stores.get_types_from_msg(text, name))
+            reader = rosbags.highlevel.AnyReader([path], default_typestore=default)
             reader.open()
         stack.callback(reader.close)
         yield reader
@@ -654,7 +667,18 @@ def _read_stream(reader: Any, topic: str, msgtype: str, joints: Sequence[str], r
         return _joint_signals(messages, ns, joints, topic, source)
     if kind == "Imu":
         return _imu_signals(messages, ns, topic, source, imu_up)
+    if kind == "AckermannDriveStamped":
+        return _ackermann_signals(messages, ns, topic, source)
     return _twist_signals(messages, ns, kind, topic, source)
+
+
+def _ackermann_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source: str) -> _Stream:
+    """A car's drive command (``ackermann_msgs/AckermannDriveStamped``): ``speed`` [m/s] and the
+    road wheels' ``steer`` [rad], each held from its stamp to the next, as a command is."""
+    speed = _finite(np.array([m.drive.speed for m in messages], dtype=float), "drive speed", topic, source)
+    steer = _finite(np.array([m.drive.steering_angle for m in messages], dtype=float), "steering angle",
+                    topic, source)
+    return _Stream(topic, ns, [("speed", "forward", speed), ("steer", "forward", steer)])
 
 
 def _integral_at(s: NDArray[np.float64], v: NDArray[np.float64], kind: str,
