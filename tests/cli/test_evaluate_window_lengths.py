@@ -101,12 +101,15 @@ def test_the_text_scores_each_length_in_a_block_that_names_it(run_cli):
 
 def _printed(mean: float, lo: float, hi: float, capsys, per_log: bool = False) -> str:
     from odomkit.cli.evaluate import print_report
+    from odomkit.evaluate import nees_verdict
 
     figures = {"rows_evaluated": 10, "rows_skipped": 0, "final_position_error": 0.1,
                "max_position_error": 0.2, "ate_rmse": 0.1, "rpe": {"1": 0.1}, "drift_percent": 1.0,
                "windows": 73, "nees_position_mean": mean, "nees_position_median": 1.0,
                "nees_bounds": [lo, hi], "coverage": {"0.5": 0.5, "0.9": 0.9, "0.95": 0.95, "0.99": 0.99},
-               "inside_95_fraction": 0.95}
+               "inside_95_fraction": 0.95,
+               # the verdict evaluate gives beside them, which the text says
+               "nees_verdict": nees_verdict(mean, [lo, hi])}
     logs = [{"log": "a.csv", **figures}, {"log": "b.csv", **figures}] if per_log else [{"log": "a.csv"}]
     print_report({**figures, "window": "30 s", "per_log": logs}, windowed=True)
     return capsys.readouterr().out

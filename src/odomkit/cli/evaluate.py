@@ -172,11 +172,9 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
                   "honesty test: one window per log (no --window), from the truth at its start to its end")
         lo, hi = out["nees_bounds"]
         mean = out["nees_position_mean"]
-        # A verdict only where the ends are independent samples (windows), as the bounds assume.
-        verdict = ("" if not windowed or whole_runs else
-                   ": above its bounds, the covariance is too small (optimistic)" if mean > hi else
-                   ": below its bounds, the covariance is too large (pessimistic)" if mean < lo else
-                   ": inside its bounds")
+        # evaluate's own verdict: given only where the ends are independent samples (windows),
+        # as the bounds assume.
+        verdict = _NEES_SIDE.get(str(out.get("nees_verdict")), "")
         shown, low, high = _nees_texts(mean, lo, hi)
         print(f"position NEES over {what}: mean {shown} (95 % bounds {low}..{high} if independent), "
               f"median {out['nees_position_median']:.3g}{verdict}")
@@ -225,8 +223,7 @@ def _heading_text(out: dict[str, Any], what: str, verdicts: bool) -> str:
     lo, hi = out["nees_heading_bounds"]
     mean = out["nees_heading_mean"]
     shown, low, high = _nees_texts(mean, lo, hi)
-    side = ("" if not verdicts else " above its bounds (optimistic)," if mean > hi else
-            " below its bounds (pessimistic)," if mean < lo else " inside its bounds,")
+    side = _HEADING_SIDE.get(str(out.get("nees_heading_verdict")), "") if verdicts else ""
     cov = out["coverage_heading"]
     word = out.get("coverage_heading_overall")
     said = f", coverage {word} ({_MEANING[word]})" if verdicts and word is not None else ""
@@ -235,6 +232,12 @@ def _heading_text(out: dict[str, Any], what: str, verdicts: bool) -> str:
             + " / ".join(_fmt(cov[k], ".3f") for k in ("0.5", "0.9", "0.95", "0.99")) + said)
 
 
+#: evaluate's NEES verdicts (``nees_verdict``, ``nees_heading_verdict``) as the text says them.
+_NEES_SIDE = {"optimistic": ": above its bounds, the covariance is too small (optimistic)",
+              "pessimistic": ": below its bounds, the covariance is too large (pessimistic)",
+              "consistent": ": inside its bounds"}
+_HEADING_SIDE = {"optimistic": " above its bounds (optimistic),",
+                 "pessimistic": " below its bounds (pessimistic),", "consistent": " inside its bounds,"}
 #: What each coverage verdict says of the covariance, in the text report.
 _MEANING = {"optimistic": "the covariance is too small", "pessimistic": "the covariance is too large",
             "consistent": "no level outside an honest covariance's range",
