@@ -97,12 +97,6 @@ def _log_poses(path: Path, robot: Robot, options: LogOptions, truth_options: Tru
     return OdometryPoses(log.t, track.poses, own, str(path))
 
 
-def _is_bag(path: Path) -> bool:
-    from odomkit.io.bag import is_bag
-
-    return is_bag(path)
-
-
 def _updates(odom: OdometryPoses, truth: Truth, opts: TruthOptions, model: str, update_min_d: float,
              update_min_a: float) -> tuple[AmclData, int, int]:
     """One log's AMCL data, its update count and the updates left out (no truth there)."""
@@ -189,12 +183,14 @@ def fit_amcl_files(
     elif log_options is not None and set(log_options.given()) - _BAG_FLAGS:
         stray = sorted(set(log_options.given()) - _BAG_FLAGS)
         raise InputError(f"{', '.join(stray)} reads logs, so it needs --robot")
+    from odomkit.io.bag import is_bag
+
     parts, per_log, skipped = [], [], 0
     for path, opts in zip(odometry, truth, strict=True):
         path = Path(path)
         if robot is not None:
             odom = _log_poses(path, robot, log_options or LogOptions(), opts, method)
-        elif _is_bag(path):
+        elif is_bag(path):
             odom = _bag_poses(path, log_options or LogOptions())
         else:
             if log_options is not None and log_options.given():

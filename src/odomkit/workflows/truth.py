@@ -100,6 +100,7 @@ class TruthOptions:
 def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth | None:
     """The truth file of ``options``, else the log's own ground truth, else None; its clock
     moved onto the log's by ``options.time_offset`` (t − offset)."""
+    from odomkit.io.bag import is_bag
     from odomkit.io.truth import read_truth
     from odomkit.truth import truth_from_log
 
@@ -107,7 +108,7 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     time_sigma = options.time_sigma or 0.0
     stated: object = None
     found: Truth | None
-    if options.path is not None and _is_bag(options.path):
+    if options.path is not None and is_bag(options.path):
         found, stated = _bag_truth(options, log)
     elif options.path is not None:
         if options.topic is not None:
@@ -148,12 +149,6 @@ def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
     if options.path is None and log is not None and isinstance(log.meta.get("truth"), Truth):
         offset += options.file_clock
     return offset
-
-
-def _is_bag(path: Path) -> bool:
-    from odomkit.io.bag import is_bag
-
-    return is_bag(path)
 
 
 def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, float | None]:
