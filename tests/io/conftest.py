@@ -97,3 +97,20 @@ def bag_writer() -> Callable[..., Path]:
 @pytest.fixture(scope="session")
 def stamp() -> Callable[..., dict[str, Any]]:
     return header
+
+
+def _one_line_error(call: Callable[[], object]) -> str:
+    """The message of the InputError ``call()`` raises, checked to be one line."""
+    from odomkit.errors import InputError
+
+    with pytest.raises(InputError) as info:
+        call()
+    text = str(info.value)
+    assert "\n" not in text
+    return text
+
+
+@pytest.fixture(scope="session")
+def errors() -> Callable[[Callable[[], object]], str]:
+    """``errors(call)``: the one-line InputError message ``call()`` raises."""
+    return _one_line_error

@@ -12,8 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from odomkit.errors import InputError
-
 pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
 
 from odomkit.io.bag import bag_topics, is_bag, read_bag  # noqa: E402
@@ -168,15 +166,7 @@ def test_a_held_command_resampled_is_its_time_weighted_mean(tmp_path, bag_writer
     assert log.channels["speed"] == pytest.approx(by_hand, rel=1e-14)
 
 
-def errors(call) -> str:
-    with pytest.raises(InputError) as info:
-        call()
-    text = str(info.value)
-    assert "\n" not in text
-    return text
-
-
-def test_what_is_not_there_is_named_with_what_is(tmp_path, bag_writer, stamp):
+def test_what_is_not_there_is_named_with_what_is(tmp_path, bag_writer, stamp, errors):
     stamps = [T0 + k * 10**7 for k in range(3)]
     msgs = joint_messages(stamps, [0, 1, 2], [0, 1, 2], stamp=stamp)
     msgs.append(("/scan", "sensor_msgs/msg/LaserScan", T0, {"header": stamp(T0)}))
@@ -201,7 +191,7 @@ def test_what_is_not_there_is_named_with_what_is(tmp_path, bag_writer, stamp):
     assert "not a readable ROS bag" in errors(lambda: read_bag(junk))
 
 
-def test_stamps_going_backwards_or_never_set_are_refused(tmp_path, bag_writer, stamp):
+def test_stamps_going_backwards_or_never_set_are_refused(tmp_path, bag_writer, stamp, errors):
     stamps = [T0, T0 + 2 * 10**7, T0 + 10**7]
     msgs = [("/js", JS, T0 + k * 10**8, {"header": stamp(ns), "name": ["l", "r"], "position": [k, k]})
             for k, ns in enumerate(stamps)]

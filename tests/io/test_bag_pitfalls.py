@@ -14,8 +14,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from odomkit.errors import InputError
-
 pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
 
 from odomkit.io.bag import is_bag, read_bag  # noqa: E402
@@ -30,14 +28,6 @@ c_scale = 1.0
 yaw_rate_bias = 0.0
 yaw_rate_scale = 1.0
 """
-
-
-def errors(call) -> str:
-    with pytest.raises(InputError) as info:
-        call()
-    text = str(info.value)
-    assert "\n" not in text
-    return text
 
 
 def no_warnings(call):
@@ -76,7 +66,7 @@ def imu(stamp, times, rate, accel=(0.0, 0.0, 9.81), topic="/imu", axis="z", othe
 
 # --- 1. the odometry topic as its own truth ------------------------------------------------
 
-def test_a_truth_topic_that_is_one_of_the_log_topics_is_refused(tmp_path, bag_writer, stamp, run_cli):
+def test_a_truth_topic_that_is_one_of_the_log_topics_is_refused(tmp_path, bag_writer, stamp, run_cli, errors):
     times = np.arange(0.0, 5.0, 0.1)
     path = bag_writer(tmp_path / "self", "ros1", odom(stamp, times, 1.0, 0.2))
     for wanted, truth in ((["/odom"], "/odom"), (["odom"], "odom"), (["/odom"], "odom")):
@@ -208,7 +198,7 @@ def test_an_honest_gyro_and_odometry_pair_does_not_warn(tmp_path, bag_writer, st
 
 # --- 3. bag names: gzip-compressed, no suffix, upper case ----------------------------------
 
-def test_a_gzip_compressed_bag_says_to_decompress_it(tmp_path, bag_writer, stamp, run_cli):
+def test_a_gzip_compressed_bag_says_to_decompress_it(tmp_path, bag_writer, stamp, run_cli, errors):
     bag = bag_writer(tmp_path / "t2", "ros1", odom(stamp, np.arange(0.0, 1.0, 0.1), 1.0, 0.0))
     robot = tmp_path / "husky.toml"
     robot.write_text(UNICYCLE)
@@ -270,7 +260,7 @@ def test_a_text_file_is_not_taken_for_a_bag(tmp_path):
 
 # --- 4. the other topics named --------------------------------------------------------------
 
-def test_a_missing_topic_names_the_other_topics_with_their_types(tmp_path, bag_writer, stamp):
+def test_a_missing_topic_names_the_other_topics_with_their_types(tmp_path, bag_writer, stamp, errors):
     times = np.arange(0.0, 1.0, 0.1)
     msgs = odom(stamp, times, 1.0, 0.0)
     msgs.append(("/fix", FIX, T0, {"header": stamp(T0)}))
