@@ -11,6 +11,7 @@ from odomkit.data import builtin_data_path
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUN = builtin_data_path("230620202042_run-01.csv")
+RUN2 = builtin_data_path("230620202042_run-02.csv")
 
 
 def _gt(tmp_path, shift=(0.0, 0.0, 0.0), dt=0.0, heading=True, name="gt.csv"):
@@ -46,18 +47,23 @@ def test_text_reports_say_what_a_single_run_means(run_cli, tmp_path):
     assert "this is the test to trust" not in out
 
 
-def test_windowed_text_lists_each_logs_ends_when_there_are_several(run_cli):
-    """Windows of one log share its bias draw, so coverage comes in lumps: with several logs
-    the text lists each log's ends, coverage and NEES, the per_log figures of the JSON."""
+def _per_log_lines(run_cli):
+    """``evaluate`` of two built-in runs in 10 s windows: each log's JSON figures (per_log)
+    and the text line the text report gives that log."""
     import json
 
-    second = builtin_data_path("230620202042_run-02.csv")
-    args = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s")
+    args = ("evaluate", RUN, RUN2, "--robot", ROBOT, "--window", "10s")
     code, out, _ = run_cli(*args)
     _, js, _ = run_cli(*args, "--json")
     assert code == 0
-    for one in json.loads(js)["per_log"]:
-        line = next(x for x in out.splitlines() if x.startswith(f"  {one['log']}: "))
+    return [(one, next(x for x in out.splitlines() if x.startswith(f"  {one['log']}: ")))
+            for one in json.loads(js)["per_log"]]
+
+
+def test_windowed_text_lists_each_logs_ends_when_there_are_several(run_cli):
+    """Windows of one log share its bias draw, so coverage comes in lumps: with several logs
+    the text lists each log's ends, coverage and NEES, the per_log figures of the JSON."""
+    for one, line in _per_log_lines(run_cli):
         assert f"{one['windows']} ends" in line and f"NEES mean {one['nees_position_mean']:.3g}" in line
         assert f"{one['coverage']['0.95']:.2f} / {one['coverage']['0.5']:.2f}" in line
     code, out, _ = run_cli("evaluate", RUN, "--robot", ROBOT, "--window", "10s")
@@ -68,21 +74,15 @@ def test_each_logs_line_gives_its_heading_where_the_truth_has_one(run_cli, tmp_p
     """The per-log lines of several logs give the heading's coverage, NEES mean and verdict
     beside the position's (the per_log figures of the JSON), and nothing of a heading where
     the truth has positions only."""
-    second = builtin_data_path("230620202042_run-02.csv")
-    args = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s")
-    code, out, _ = run_cli(*args)
-    _, js, _ = run_cli(*args, "--json")
-    assert code == 0
-    for one in json.loads(js)["per_log"]:
-        line = next(x for x in out.splitlines() if x.startswith(f"  {one['log']}: "))
+    for one, line in _per_log_lines(run_cli):
         c = one["coverage_heading"]
         assert (f"heading inside 95 % / 50 %: {c['0.95']:.2f} / {c['0.5']:.2f}, NEES mean "
                 f"{one['nees_heading_mean']:.3g}, coverage {one['coverage_heading_overall']}") in line, line
         assert line.index(f"NEES mean {one['nees_position_mean']:.3g}") < line.index("heading")
-    data = np.loadtxt(second, delimiter=",")
+    data = np.loadtxt(RUN2, delimiter=",")
     gt2 = tmp_path / "gt2.csv"
     np.savetxt(gt2, data[:, :3], delimiter=",", header="t,x,y", comments="")
-    position_only = ("evaluate", RUN, second, "--robot", ROBOT, "--window", "10s",
+    position_only = ("evaluate", RUN, RUN2, "--robot", ROBOT, "--window", "10s",
                      "--truth", _gt(tmp_path, heading=False), "--truth", gt2)
     code, out, _ = run_cli(*position_only)
     lines = [x for x in out.splitlines() if x.startswith("  ")]
