@@ -400,10 +400,8 @@ def _largest_end_chance(values: NDArray[np.float64], dof: int = 2) -> float:
     """The chance that the largest of n NEES values (each χ² with ``dof`` = 2 (a position,
     tail exp(−q/2)) or 1 (a heading, tail erfc(√(q/2))) for an honest covariance) reaches
     the largest seen: 1 − (1 − tail(q_max))ⁿ, computed without cancellation."""
-    from scipy.special import erfc
-
     q = float(values.max())
-    tail = math.exp(-q / 2) if dof == 2 else float(erfc(math.sqrt(q / 2)))
+    tail = math.exp(-q / 2) if dof == 2 else math.erfc(math.sqrt(q / 2))
     return float(-np.expm1(values.size * np.log1p(-tail)))
 
 
