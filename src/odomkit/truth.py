@@ -25,7 +25,9 @@ from odomkit.log import OdometryLog, clock_text
 
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
-           "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma", "start_heading", "start_pose", "Truth",
+           "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
+           "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma",
+           "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
 
 #: A fitted heading whose standard deviation exceeds this [rad] (about 23°) is refused:
@@ -268,6 +270,95 @@ def scatter_sigma(truth: Truth, block: int = 5) -> float | None:
         return 0.0
     rss = float(np.sum((resid / scale) ** 2))
     return scale * math.sqrt(rss / (2 * np.count_nonzero(ok) * (block - 3)))
+
+
+#: A truth whose heading is off the direction its positions move in by more than this [rad]
+#: (about 29°; the median over its stretches, folded so that driving backwards is not off)
+#: has a heading that is no heading of the robot (:func:`heading_against_motion`). A random
+#: heading gives π/4 (0.785); a rigid body glued on askew, a crab angle or a skid-steer's
+#: slip in turns stay far below it.
+GROSS_HEADING_OFF = 0.5
+#: The stretches :func:`heading_against_motion` compares: this long [s], and moving at least
+#: :data:`_MIN_CHORD` [m] and ten times the truth's noise, so that the chord's direction is
+#: good to a tenth of a radian.
+_CHORD_SPAN = 1.0
+_MIN_CHORD = 0.05
+
+
+def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[float, int]:
+    """How far the truth's heading is off the direction its own positions move in [rad].
+
+    A wheeled robot moves along its heading (forwards or backwards), and on a path of
+    constant curvature the chord between two fixes points exactly along the heading half
+    way between them; so over non-overlapping stretches of :data:`_CHORD_SPAN` seconds the
+    chord's direction is compared with the mean of the two ends' headings. The truth alone
+    is used (no odometry: every command that reads a truth can ask). Each stretch's
+    difference is folded into [0, π/2] (a robot reversing is not off); stretches that move
+    less than :data:`_MIN_CHORD` or ten times the truth's noise (:func:`truth_noise`: a spin in
+    place has no direction of motion) or that reach into a gap are left out.
+
+    A median far above a crab angle (:data:`GROSS_HEADING_OFF`) means the heading is not the
+    robot's: degrees read as radians, a quaternion read in another order, a motion
+    capture's body turned against the robot's axis, or a base that moves sideways.
+    ``odomkit check`` measures a small misalignment more finely, on straight stretches
+    (:func:`odomkit.calibrate.check_truth.heading_misalignment`).
+
+    Parameters
+    ----------
+    truth : Truth with heading
+    max_gap : stretches reaching into a truth gap longer than this are left out [s]
+
+    Returns
+    -------
+    (off, stretches) : the median folded difference [rad] and the number of stretches it
+        rests on; NaN and 0 where no stretch moves enough.
+
+    Raises
+    ------
+    ValueError
+        For a position-only truth.
+    """
+    from odomkit.angles import wrap_angle
+
+    if truth.theta is None:
+        raise ValueError("heading_against_motion needs a truth with heading")
+    starts = np.arange(truth.t[0], truth.t[-1] - _CHORD_SPAN, _CHORD_SPAN)
+    if starts.size == 0:
+        return math.nan, 0
+    before = truth_at(truth, starts, max_gap)
+    after = truth_at(truth, starts + _CHORD_SPAN, max_gap)
+    chord = after.poses[:, :2] - before.poses[:, :2]
+    turn = after.poses[:, 2] - before.poses[:, 2]  # unwrapped: a turn, not a wrap
+    moved = np.hypot(chord[:, 0], chord[:, 1])
+    least = max(_MIN_CHORD, 10.0 * truth_noise(truth))
+    use = before.valid & after.valid & (moved >= least)
+    if not use.any():
+        return math.nan, 0
+    mid_heading = before.poses[use, 2] + 0.5 * turn[use]
+    off = np.abs(wrap_angle(mid_heading - np.arctan2(chord[use, 1], chord[use, 0])))
+    folded = np.minimum(off, math.pi - off)
+    return float(np.median(folded)), int(folded.size)
+
+
+#: What makes a truth's heading no heading of the robot's (:func:`heading_off_motion`).
+HEADING_OFF_CAUSES = ("a heading in degrees read as radians (name the column theta_deg), a quaternion in "
+                      "another order (TUM rows are t x y z qx qy qz qw), a motion-capture body whose axes "
+                      "are turned against the robot's, or a base that moves sideways, which odomkit's "
+                      "vehicles do not")
+
+
+def heading_off_motion(truth: Truth, max_gap: float | None = 0.5) -> str | None:
+    """One clause saying the truth's heading is no heading of the robot's
+    (:func:`heading_against_motion` beyond :data:`GROSS_HEADING_OFF`), else None (also for a
+    position-only truth); :data:`HEADING_OFF_CAUSES` says why it may be."""
+    if truth.theta is None:
+        return None
+    off, stretches = heading_against_motion(truth, max_gap)
+    if not off > GROSS_HEADING_OFF:
+        return None
+    return (f"the truth's heading does not follow the direction its positions move in (median "
+            f"{math.degrees(off):.0f}° off over {stretches} stretches of {_CHORD_SPAN:g} s, a robot driving "
+            "backwards counted as on it; a random heading gives 45°)")
 
 
 def truth_from_log(log: OdometryLog) -> Truth | None:

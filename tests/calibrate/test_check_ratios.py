@@ -129,6 +129,22 @@ def test_a_gyro_in_degrees_read_as_radians_is_named():
     assert "yaw_rate_deg" in (turn.advice or "")
 
 
+def test_a_truth_heading_in_degrees_read_as_radians_is_named_beside_the_log():
+    """The turning ratio is the odometry's over the truth's: 1/57 is a log column in radians
+    read as degrees or, as here, the truth's heading in degrees read as radians; the advice
+    named only the first."""
+    robot = GyroOdometry()
+    rng = np.random.default_rng(4)
+    t = 0.05 * np.arange(4000)
+    rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25))
+    log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
+    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    truth = Truth(t[::2], poses[::2, :2], np.degrees(poses[::2, 2]), 0.002)
+    turn = by_check(check_truth_motion(log, robot, truth))["turn_ratio"]
+    assert turn.status == "fail" and turn.value == pytest.approx(math.pi / 180, rel=0.03)
+    assert "truth's heading in degrees" in turn.message and "theta_deg" in (turn.advice or "")
+
+
 @pytest.mark.parametrize("heading", [True, False])
 def test_a_differential_drive_with_a_wrong_wheel_base_is_told_the_right_one(heading):
     """Wheels 0.5 m apart, the robot file says 0.35 m: the odometry turns 0.5/0.35 = 1.43× per

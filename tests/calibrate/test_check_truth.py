@@ -109,3 +109,17 @@ def test_optiodom_tricycle_rigid_body_is_misaligned_alike_in_every_square_run(da
 
 
 MIN_SQUARE_STRETCHES = 30
+
+
+@pytest.mark.parametrize("straight", [True, False])
+def test_a_heading_that_is_no_heading_of_the_robot_fails(straight):
+    """A truth heading in degrees, or turned a quarter turn (a motion capture's body defined
+    along another axis), fails whether or not the robot drives straight; on a circle it
+    used to be "ok: too little straight driving"."""
+    log = legs_log(straight=straight)
+    truth = truth_of(log, 0.0)
+    for wrong in (Truth(truth.t, truth.xy, np.degrees(truth.theta)), truth_of(log, math.pi / 2)):
+        [finding] = check_truth_heading(log, ROBOT, wrong)
+        assert finding.status == "fail", finding
+        assert "does not follow the direction" in finding.message
+        assert "theta_deg" in (finding.advice or "")

@@ -83,3 +83,52 @@ def test_a_robot_files_clock_offset_applies_to_truth_files_not_to_a_logs_own_col
         np.testing.assert_allclose(load_truth(from_file, log).t, t - 0.3)
         (flagged,) = fill(robot, [TruthOptions(time_offset=0.1)])
         np.testing.assert_allclose(load_truth(flagged, log).t, t - 0.1)
+
+
+def _circle_files(tmp_path, write_truth):
+    """A unicycle's log on a circle (0.3 m/s, 0.2 rad/s, 60 s at 10 Hz) and its truth, written
+    by ``write_truth(path, t, x, y, theta)``."""
+    t = np.arange(0.0, 60.0, 0.1)
+    theta = 0.2 * t
+    x, y = 1.5 * np.sin(theta), 1.5 * (1 - np.cos(theta))
+    log = tmp_path / "log.csv"
+    log.write_text("t,speed,yaw_rate\n" + "".join(f"{ti:.1f},0.3,0.2\n" for ti in t))
+    robot = tmp_path / "robot.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n[noise]\nalpha_ss = 0.001\npsd_gyro = 1e-5\n')
+    truth = tmp_path / "truth.txt"
+    write_truth(truth, t, x, y, theta)
+    return log, robot, truth
+
+
+def _tum(quaternion):
+    def write(path, t, x, y, theta):
+        rows = [(ti, xi, yi, 0.0, *quaternion(th)) for ti, xi, yi, th in zip(t, x, y, theta, strict=True)]
+        path.write_text("".join(" ".join(f"{v:.9g}" for v in row) + "\n" for row in rows))
+    return write
+
+
+@pytest.mark.parametrize("case", ["degrees", "quaternion w first", "right"])
+def test_a_truth_heading_that_does_not_follow_its_motion_is_warned_about(tmp_path, run_cli, case):
+    """A heading in degrees read as radians, or a TUM quaternion written w first (yaw 0
+    throughout), scored every window from a heading that is not the robot's, silently
+    (heading NEES 243 and 18.5 on this circle, final error 0 m); now evaluate says so and
+    names the likely causes. The right TUM file says nothing."""
+    writers = {
+        "degrees": lambda p, t, x, y, th: p.write_text(
+            "t,x,y,theta\n" + "".join(f"{a:.2f},{b:.6f},{c:.6f},{np.degrees(d):.4f}\n"
+                                      for a, b, c, d in zip(t, x, y, th, strict=True))),
+        "quaternion w first": _tum(lambda th: (np.cos(th / 2), 0.0, 0.0, np.sin(th / 2))),
+        "right": _tum(lambda th: (0.0, 0.0, np.sin(th / 2), np.cos(th / 2))),
+    }
+    log, robot, truth = _circle_files(tmp_path, writers[case])
+    code, out, err = run_cli("evaluate", log, "--robot", robot, "--truth", truth, "--json")
+    assert code == 0, err
+    import json
+
+    said = [w for w in json.loads(out)["warnings"] if "does not follow the direction" in w]
+    if case == "right":
+        assert said == []
+    else:
+        [text] = said
+        assert str(truth) in text and "theta_deg" in text and "qx qy qz qw" in text
+        assert "does not follow the direction" in err

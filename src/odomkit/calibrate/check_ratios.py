@@ -118,9 +118,12 @@ _TRAVEL_UNITS = (
     (0.01, "metres read as centimetres", "check the distance channels' unit or m_per_tick (100x too small)"),
 )
 _TURN_UNITS = (
+    # The turning is the odometry's over the truth's, so either side's unit can be wrong.
     (1 / units.DEGREE, "degrees read as radians",
-     "name a column in degrees with its _deg name (steer_deg, yaw_rate_deg, heading_deg)"),
-    (units.DEGREE, "radians read as degrees", "name a column in radians without _deg"),
+     "name a column in degrees with its _deg name (steer_deg, yaw_rate_deg, heading_deg), or a truth "
+     "heading in radians without _deg"),
+    (units.DEGREE, "radians read as degrees, or the truth's heading in degrees read as radians",
+     "name a column in radians without _deg, or the truth's heading in degrees theta_deg"),
 )
 _UNIT_TOLERANCE = 0.04
 

@@ -27,7 +27,7 @@ import numpy as np
 from odomkit.calibrate.check_finding import Finding
 from odomkit.log import OdometryLog
 from odomkit.robot import Robot
-from odomkit.truth import Truth, truth_at
+from odomkit.truth import HEADING_OFF_CAUSES, Truth, heading_off_motion, truth_at
 from odomkit.truth_knots import INTERPOLATED_ADVICE, truth_knots
 
 __all__ = ["check_truth_heading", "check_truth_interpolated", "heading_misalignment"]
@@ -99,6 +99,9 @@ def check_truth_heading(log: OdometryLog, robot: Robot, truth: Truth | None,
     """The ``truth_heading`` finding (none for a position-only truth or none at all)."""
     if truth is None or truth.theta is None:
         return []
+    if note := heading_off_motion(truth, max_gap):  # no robot heading at all: nothing finer to tell
+        return [Finding("truth_heading", "fail", note + ": every window or start taken from it starts off "
+                        "the robot's heading", f"check the truth's heading: likely {HEADING_OFF_CAUSES}")]
     delta, se, n = heading_misalignment(log, robot, truth, max_gap)
     if not math.isfinite(delta):
         return [Finding("truth_heading", "ok", f"only {n} straight stretch(es) of {2 * HALF_SPAN:g} s: too "

@@ -133,9 +133,24 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     offset = applied_clock(options, log)
     if offset:
         truth = replace(truth, t=truth.t - offset)
+    if truth.theta is not None:
+        _warn_if_heading_off_motion(truth)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
+
+
+def _warn_if_heading_off_motion(truth: Truth) -> None:
+    """Warn where the truth's heading does not follow the direction its positions move in
+    (:func:`odomkit.truth.heading_off_motion`): every window restarted from it, and every
+    start aligned to it, starts off the robot's heading. A heading in degrees read as
+    radians, or a TUM quaternion written w first, scored a circle's windows at heading NEES
+    243 and 18.5, silently."""
+    from odomkit.truth import HEADING_OFF_CAUSES, heading_off_motion
+
+    if note := heading_off_motion(truth):
+        warnings.warn(f"{truth.source}: {note}: every window or start taken from it starts off the robot's "
+                      f"heading. Likely {HEADING_OFF_CAUSES}; odomkit check compares the two", stacklevel=3)
 
 
 def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
