@@ -151,6 +151,19 @@ def test_the_chance_of_the_largest_end_matches_monte_carlo(n, q, dof):
     assert abs(seen - want) <= 4 * np.sqrt(want * (1 - want) / sets)
 
 
+def test_ends_all_on_the_truth_have_certain_chance_and_no_numpy_warning():
+    """Window ends with NEES 0 (perfect odometry): any end reaches 0, chance 1. It was right,
+    but log1p(-1) printed numpy's "divide by zero" RuntimeWarning on the user's terminal."""
+    import warnings
+
+    from odomkit.workflows._scoring import _largest_end_chance
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert _largest_end_chance(np.zeros(5), 2) == 1.0
+        assert _largest_end_chance(np.zeros(3), 1) == 1.0
+
+
 def test_the_heading_gets_its_own_disagreement_note():
     """The heading's NEES and coverage verdicts disagree as the position's do (a user asked why
     run 01's heading NEES said optimistic while its coverage said consistent): the same note,

@@ -402,6 +402,8 @@ def _largest_end_chance(values: NDArray[np.float64], dof: int = 2) -> float:
     the largest seen: 1 − (1 − tail(q_max))ⁿ, computed without cancellation."""
     q = float(values.max())
     tail = math.exp(-q / 2) if dof == 2 else math.erfc(math.sqrt(q / 2))
+    if tail >= 1.0:  # q = 0: every end reaches it (and log1p(-1) would warn of a division by zero)
+        return 1.0
     return float(-np.expm1(values.size * np.log1p(-tail)))
 
 
