@@ -26,6 +26,7 @@ from odomkit.log import OdometryLog, clock_text
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
+           "implausible_speed", "PLAUSIBLE_SPEED",
            "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma",
            "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
@@ -285,6 +286,15 @@ _CHORD_SPAN = 1.0
 _MIN_CHORD = 0.05
 
 
+def _chords(truth: Truth, max_gap: float | None) -> tuple[TruthSamples, TruthSamples, NDArray[np.bool_]]:
+    """The truth at the two ends of non-overlapping stretches of :data:`_CHORD_SPAN` seconds,
+    and which stretches lie inside it without a gap."""
+    starts = np.arange(truth.t[0], truth.t[-1] - _CHORD_SPAN, _CHORD_SPAN)
+    before = truth_at(truth, starts, max_gap)
+    after = truth_at(truth, starts + _CHORD_SPAN, max_gap)
+    return before, after, before.valid & after.valid
+
+
 def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[float, int]:
     """How far the truth's heading is off the direction its own positions move in [rad].
 
@@ -322,16 +332,10 @@ def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[f
 
     if truth.theta is None:
         raise ValueError("heading_against_motion needs a truth with heading")
-    starts = np.arange(truth.t[0], truth.t[-1] - _CHORD_SPAN, _CHORD_SPAN)
-    if starts.size == 0:
-        return math.nan, 0
-    before = truth_at(truth, starts, max_gap)
-    after = truth_at(truth, starts + _CHORD_SPAN, max_gap)
+    before, after, use = _chords(truth, max_gap)
     chord = after.poses[:, :2] - before.poses[:, :2]
     turn = after.poses[:, 2] - before.poses[:, 2]  # unwrapped: a turn, not a wrap
-    moved = np.hypot(chord[:, 0], chord[:, 1])
-    least = max(_MIN_CHORD, 10.0 * truth_noise(truth))
-    use = before.valid & after.valid & (moved >= least)
+    use &= np.hypot(chord[:, 0], chord[:, 1]) >= max(_MIN_CHORD, 10.0 * truth_noise(truth))
     if not use.any():
         return math.nan, 0
     mid_heading = before.poses[use, 2] + 0.5 * turn[use]
@@ -359,6 +363,28 @@ def heading_off_motion(truth: Truth, max_gap: float | None = 0.5) -> str | None:
     return (f"the truth's heading does not follow the direction its positions move in (median "
             f"{math.degrees(off):.0f}° off over {stretches} stretches of {_CHORD_SPAN:g} s, a robot driving "
             "backwards counted as on it; a random heading gives 45°)")
+
+
+#: No wheeled vehicle's truth moves faster than this [m/s] (360 km/h) in a tenth of its
+#: stretches (:func:`implausible_speed`).
+PLAUSIBLE_SPEED = 100.0
+
+
+def implausible_speed(truth: Truth, max_gap: float | None = 0.5) -> str | None:
+    """One clause where the truth's positions move faster than any wheeled vehicle (the 90th
+    percentile of their speed over :data:`_CHORD_SPAN`-second stretches above
+    :data:`PLAUSIBLE_SPEED`), else None: millimetres read as metres (a Vicon export: 0.3 m/s
+    reads as 300 m/s), or a time column whose unit is too coarse."""
+    before, after, use = _chords(truth, max_gap)
+    if np.count_nonzero(use) < 3:
+        return None
+    chord = after.poses[use, :2] - before.poses[use, :2]
+    speed = float(np.percentile(np.hypot(chord[:, 0], chord[:, 1]), 90)) / _CHORD_SPAN
+    if not speed > PLAUSIBLE_SPEED:
+        return None
+    return (f"the truth's positions move at {speed:.3g} m/s (90th percentile over {_CHORD_SPAN:g} s "
+            f"stretches), faster than any wheeled vehicle ({PLAUSIBLE_SPEED:g} m/s): likely millimetres read "
+            "as metres (name the columns x_mm, y_mm) or a time unit too coarse (--truth-time-unit)")
 
 
 def truth_from_log(log: OdometryLog) -> Truth | None:

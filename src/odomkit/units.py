@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEGREE", "FOOT", "KMH", "MPH"]
+__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH"]
 
 DEGREE = math.pi / 180
 """Radians per degree."""
@@ -21,3 +21,5 @@ MPH = 0.44704
 """Metres per second per mph (1609.344 m / 3600 s, exactly)."""
 FOOT = 0.3048
 """Metres per international foot."""
+MILLIMETRE = 1e-3
+"""Metres per millimetre (a motion capture's export: Vicon's x_mm, y_mm)."""

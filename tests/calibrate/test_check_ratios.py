@@ -437,3 +437,19 @@ def test_a_far_yaw_rate_scale_of_a_twist_names_a_skid_steer_base():
     absorbed, skid = (str(w.message) for w in caught)
     assert "turns 0.97 ± 0.04 x as much as the truth" in absorbed and "skid-steer" not in absorbed
     assert "skid-steer" in skid
+
+
+def test_a_truth_in_millimetres_read_as_metres_is_named():
+    """The odometry travels a thousandth of the truth: the truth's positions are in mm (a Vicon
+    export), named with the columns that read them."""
+    robot = GyroOdometry()
+    rng = np.random.default_rng(4)
+    t = 0.05 * np.arange(4000)
+    rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25)) * (np.arange(t.size) // 100 % 2)
+    log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
+    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    truth = Truth(t[::2], 1000 * poses[::2, :2], poses[::2, 2], 0.002)
+    travel = by_check(check_truth_motion(log, robot, truth))["travel_ratio"]
+    assert travel.status == "fail" and travel.value == pytest.approx(1e-3, rel=0.03)
+    assert "the truth's millimetres read as metres" in travel.message
+    assert "x_mm, y_mm" in (travel.advice or "")

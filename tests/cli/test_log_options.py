@@ -21,8 +21,8 @@ from odomkit.io.optiodom import read_run
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
 LOG_FLAGS = {"--format", "--columns", "--cumulative", "--wrap-bits", "--period", "--time-unit",
-             "--time-scale", "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic", "--span",
-             "--record"}
+             "--time-scale", "--decimate", "--topic", "--joints", "--bag-time", "--truth-topic",
+             "--truth-frame", "--span", "--record"}
 CUMULATIVE = "t=t,ticks_left=L,ticks_right=R,gt_x=gx,gt_y=gy,gt_theta=gth"
 LOG_COMMANDS = ("track", "calibrate", "calibrate-noise", "umbmark")
 #: Every command that reads a log (issue 12 item 1: "Every command that reads a log shares these options").

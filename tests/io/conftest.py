@@ -43,6 +43,8 @@ def _build(store: Any, msgtype: str, values: dict[str, Any]) -> Any:
             (sub_node, sub_desc), length = desc
             if sub_node == Nodetype.BASE and sub_desc[0] == "string":
                 kwargs[name] = list(given or [])
+            elif sub_node == Nodetype.NAME:  # messages (tf2_msgs/TFMessage's transforms)
+                kwargs[name] = [_build(store, sub_desc, item) for item in given or []]
             else:
                 default_array = np.zeros(length) if node == Nodetype.ARRAY else np.zeros(0)
                 kwargs[name] = default_array if given is None else np.asarray(given, dtype=float)
@@ -58,6 +60,10 @@ ACKERMANN_MSGS = {
 }
 
 
+#: tf2_msgs' definition, which rosbags' ROS 1 type store lacks (a ROS 1 bag carries it).
+TF2_MSGS = {"tf2_msgs/msg/TFMessage": "geometry_msgs/TransformStamped[] transforms\n"}
+
+
 def write_bag(path: Path, fmt: str, messages: Iterable[tuple[str, str, int, dict[str, Any]]]) -> Path:
     """Write ``(topic, msgtype, bag time [ns], fields)`` messages; returns the bag's path
     (a ``.bag`` file for ros1, a folder for db3 and mcap)."""
@@ -70,6 +76,9 @@ def write_bag(path: Path, fmt: str, messages: Iterable[tuple[str, str, int, dict
     store = get_typestore(Stores.ROS1_NOETIC if ros1 else Stores.ROS2_HUMBLE)
     for name, text in ACKERMANN_MSGS.items():  # a car's drive command: not in rosbags' stores
         store.register(get_types_from_msg(text, name))
+    for name, text in TF2_MSGS.items():
+        if name not in store.types:  # /tf: in the ROS 2 stores, not in ROS 1's
+            store.register(get_types_from_msg(text, name))
     path = path.with_suffix(".bag") if ros1 else path
     plugin = StoragePlugin.MCAP if fmt == "mcap" else StoragePlugin.SQLITE3
     writer = Writer1(path) if ros1 else Writer2(path, version=9, storage_plugin=plugin)

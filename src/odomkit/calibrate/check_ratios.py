@@ -112,6 +112,8 @@ _TRAVEL_UNITS = (
     (units.KMH / units.MPH, "a speed in mph read as km/h", "name the column speed_mph, not speed_kmh"),
     (1 / units.FOOT, "feet read as metres", "convert feet to metres (m_per_tick, or the speed's unit)"),
     (1000.0, "millimetres read as metres", "check the distance channels' unit or m_per_tick (1000x too big)"),
+    (units.MILLIMETRE, "the truth's millimetres read as metres",
+     "name the truth's position columns x_mm, y_mm (--truth-columns)"),
     (100.0, "centimetres read as metres", "check the distance channels' unit or m_per_tick (100x too big)"),
     (0.001, "metres read as millimetres",
      "check the distance channels' unit or m_per_tick (1000x too small)"),

@@ -1,7 +1,7 @@
 """The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
 files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-unit
---decimate --topic --joints --bag-time --truth-topic --imu-up --span --record``, declared once here and
-parsed into
+--decimate --topic --joints --bag-time --truth-topic --truth-frame --imu-up --span --record``, declared
+once here and parsed into
 :class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
 it) raises, shown as one line each.
 
@@ -30,7 +30,8 @@ __all__ = [
     "BagTimeOption", "ColumnsOption", "CumulativeOption", "DecimateOption", "FormatOption", "ImuUpOption",
     "JointsOption",
     "LOG_FLAGS", "log_options", "PeriodOption", "reported_warnings", "TimeUnitOption", "TopicOption",
-    "RecordOption", "SpanOption", "TruthTopicOption", "with_log_options", "with_warnings", "WrapBitsOption",
+    "RecordOption", "SpanOption", "TruthFrameOption", "TruthTopicOption", "with_log_options", "with_warnings",
+    "WrapBitsOption",
 ]
 
 FormatOption = Annotated[str, typer.Option(
@@ -56,18 +57,23 @@ TimeUnitOption = Annotated[str, typer.Option(
 DecimateOption = Annotated[int, typer.Option(
     "--decimate", help="Use every n-th row (increments summed, rates sampled).")]
 TopicOption = Annotated[list[str] | None, typer.Option(
-    "--topic", help="ROS bag topic (JointState, Odometry, Twist, TwistStamped, Imu, AckermannDriveStamped); "
-                    "repeat it: the "
-                    "first gives the rows, a later one's channels replace an earlier one's.")]
+    "--topic", help="ROS bag topic (JointState, Odometry, Twist, TwistStamped, TwistWithCovarianceStamped, "
+                    "Imu, AckermannDriveStamped); repeat it: the first gives the rows, a later one's "
+                    "channels replace an earlier one's.")]
 JointsOption = Annotated[str | None, typer.Option(
     "--joints", help="ROS bag JointState wheel joints LEFT,RIGHT (or one); positions in rad, so the "
                      "robot file's m_per_tick is the wheel radius.")]
 BagTimeOption = Annotated[bool, typer.Option(
     "--bag-time", help="ROS bag: time messages by when the bag received them, not their header stamps.")]
 TruthTopicOption = Annotated[str | None, typer.Option(
-    "--truth-topic", help="ROS bag pose topic (Odometry, PoseStamped, PoseWithCovarianceStamped) that is "
-                          "the log's ground truth, e.g. motion capture; or a GPS NavSatFix topic "
-                          "(position-only, east-north metres from the first fix).")]
+    "--truth-topic", help="ROS bag pose topic (Odometry, PoseStamped, PoseWithCovarianceStamped, "
+                          "TransformStamped, or /tf with --truth-frame) that is the log's ground truth, e.g. "
+                          "motion capture; or a GPS NavSatFix topic (position-only, east-north metres from "
+                          "the first fix).")]
+TruthFrameOption = Annotated[str | None, typer.Option(
+    "--truth-frame", help="ROS bag: PARENT:CHILD, the transforms of a tf2_msgs/TFMessage --truth-topic "
+                          "(/tf) that are the truth, e.g. world:base_link (direct transforms only; not "
+                          "needed where the topic carries one pair).")]
 
 SpanOption = Annotated[str | None, typer.Option(
     "--span", help="Use part of the log: START:END from its first row, in seconds or percent of its "
@@ -87,7 +93,7 @@ def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: i
                 period: float | None, time_unit: str, decimate: int, topic: list[str] | None = None,
                 joints: str | None = None, bag_time: bool = False,
                 truth_topic: str | None = None, span: str | None = None,
-                record: str | None = None, imu_up: str = "+z") -> LogOptions:
+                record: str | None = None, imu_up: str = "+z", truth_frame: str | None = None) -> LogOptions:
     """The parsed log options; a bad value is one line naming its flag (exit 2). ``--topic``
     may also be comma-separated; ``--joints`` is."""
     topics = tuple(name.strip() for text in topic or () for name in text.split(","))
@@ -95,7 +101,7 @@ def log_options(format: str, columns: str | None, cumulative: bool, wrap_bits: i
     up = imu_up.strip()
     up = f"+{up}" if up in ("x", "y", "z") else up  # "y" is "+y"
     return LogOptions(format, columns, cumulative, wrap_bits, period, time_unit, decimate,
-                      topics, joint_names, bag_time, truth_topic, span, record, up)
+                      topics, joint_names, bag_time, truth_topic, span, record, up, truth_frame)
 
 
 #: The log flags every command that reads a log takes, in the order of their help.
@@ -104,7 +110,8 @@ LOG_FLAGS: tuple[Flag, ...] = (
     ("cumulative", CumulativeOption, False), ("wrap_bits", WrapBitsOption, None),
     ("period", PeriodOption, None), ("time_unit", TimeUnitOption, "s"), ("decimate", DecimateOption, 1),
     ("topic", TopicOption, None), ("joints", JointsOption, None), ("bag_time", BagTimeOption, False),
-    ("truth_topic", TruthTopicOption, None), ("imu_up", ImuUpOption, "+z"), ("span", SpanOption, None),
+    ("truth_topic", TruthTopicOption, None), ("truth_frame", TruthFrameOption, None),
+    ("imu_up", ImuUpOption, "+z"), ("span", SpanOption, None),
     ("record", RecordOption, None),
 )
 #: Decorator: the command takes :data:`LOG_FLAGS` and is called with ``log_opts``, the

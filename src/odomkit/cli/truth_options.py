@@ -1,6 +1,7 @@
 """The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
 and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
---truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap --truth-record``, parsed into
+--truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap --truth-record --truth-up``,
+parsed into
 :class:`odomkit.workflows.truth.TruthOptions`."""
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ __all__ = [
     "MaxGapOption", "parse_initial_cov", "TRUTH_FLAGS", "truth_options", "TruthColumnsOption",
     "TruthFormatOption", "TruthHeadingSigmaOption", "TruthListOption", "TruthOption", "TruthRecordOption",
     "TruthSigmaOption",
-    "TruthTimeOffsetOption", "TruthTimeSigmaOption", "TruthTimeUnitOption",
+    "TruthTimeOffsetOption", "TruthTimeSigmaOption", "TruthTimeUnitOption", "TruthUpOption",
     "with_truth_options",
 ]
 
@@ -61,11 +62,15 @@ TruthRecordOption = Annotated[str | None, typer.Option(
     "point2/angle, CARMEN's TRUEPOS): read only the lines of this type. The tag is dropped: "
     "--truth-columns counts from the field after it.")]
 
+TruthUpOption = Annotated[str, typer.Option(
+    "--truth-up", help="The axis of a TUM or KITTI truth file's frame that points up: +z (default), -z, "
+    "+x, -x, +y (a motion capture's Y-up frame), -y (KITTI's camera frame).")]
+
 
 def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: str, sigma: float | None,
                   max_gap: float, heading_sigma: float | None = None,
                   time_sigma: float | None = None, time_offset: float | None = None,
-                  record: str | None = None) -> TruthOptions:
+                  record: str | None = None, up: str = "+z") -> TruthOptions:
     """The parsed truth options (``--max-gap 0`` means no limit; a noise or offset not given is None)."""
     from odomkit.workflows.truth import TruthOptions
 
@@ -78,8 +83,13 @@ def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: 
         raise InputError(f"--max-gap must be a non-negative number of seconds, got {max_gap!r}")
     if time_offset is not None and not math.isfinite(time_offset):
         raise InputError(f"--truth-time-offset must be a finite number of seconds, got {time_offset!r}")
+    from odomkit.frames import UP_AXES
+
+    if up.strip() not in UP_AXES:
+        raise InputError(f"--truth-up must be one of {', '.join(UP_AXES)} (the truth file's axis that points "
+                         f"up), got {up!r}")
     return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma, time_sigma,
-                        time_offset, record)
+                        time_offset, record, up.strip())
 
 
 #: The truth flags besides ``--truth`` itself (one file, or one per log, as the command
@@ -89,7 +99,7 @@ TRUTH_FLAGS: tuple[Flag, ...] = (
     ("truth_time_unit", TruthTimeUnitOption, "s"), ("truth_sigma", TruthSigmaOption, None),
     ("truth_heading_sigma", TruthHeadingSigmaOption, None), ("truth_time_sigma", TruthTimeSigmaOption, None),
     ("truth_time_offset", TruthTimeOffsetOption, None), ("max_gap", MaxGapOption, 0.5),
-    ("truth_record", TruthRecordOption, None),
+    ("truth_record", TruthRecordOption, None), ("truth_up", TruthUpOption, "+z"),
 )
 #: Decorator: the command takes :data:`TRUTH_FLAGS` and is called with ``truth_base``, the
 #: parsed :class:`~odomkit.workflows.truth.TruthOptions` without a path
@@ -97,7 +107,7 @@ TRUTH_FLAGS: tuple[Flag, ...] = (
 with_truth_options = with_flags(TRUTH_FLAGS, "truth_base", lambda values: truth_options(
     None, values["truth_format"], values["truth_columns"], values["truth_time_unit"],
     values["truth_sigma"], values["max_gap"], values["truth_heading_sigma"], values["truth_time_sigma"],
-    values["truth_time_offset"], values["truth_record"]))
+    values["truth_time_offset"], values["truth_record"], values["truth_up"]))
 
 
 def parse_initial_cov(text: str | None) -> list[list[float]] | None:

@@ -6,32 +6,40 @@ one line saying to decompress it.
 
 **Messages and the channels they give** (:mod:`odomkit.log`):
 
-=============================  =============================================================
-message                        channels
-=============================  =============================================================
-``sensor_msgs/JointState``     two joints (``--joints left,right``): ``ticks_left``,
-                               ``ticks_right``; one joint: ``ticks``. A joint position is the
-                               wheel angle [rad], so one "tick" is one radian and the robot
-                               file's metres per tick is the wheel radius: ``m_per_tick =
-                               0.033``, or ``wheel_radius = 0.033`` with ``encoder_resolution
-                               = 6.283185307179586`` (2π "ticks" a turn). Positions are
-                               differenced; without positions, velocities [rad/s] are
-                               integrated over each step.
-``nav_msgs/Odometry``          ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
-``Twist``, ``TwistStamped``    ``speed``, ``yaw_rate`` (``geometry_msgs``; a command. Twist
-                               has no header, so its time is always the bag's)
+==============================  ============================================================
+message                         channels
+==============================  ============================================================
+``sensor_msgs/JointState``      two joints (``--joints left,right``): ``ticks_left``,
+                                ``ticks_right``; one joint: ``ticks``. A joint position is the
+                                wheel angle [rad], so one "tick" is one radian and the robot
+                                file's metres per tick is the wheel radius: ``m_per_tick =
+                                0.033``, or ``wheel_radius = 0.033`` with ``encoder_resolution
+                                = 6.283185307179586`` (2π "ticks" a turn). Positions are
+                                differenced; without positions, velocities [rad/s] are
+                                integrated over each step.
+``nav_msgs/Odometry``           ``speed`` (twist linear x [m/s]), ``yaw_rate`` (angular z)
+``Twist``, ``TwistStamped``     ``speed``, ``yaw_rate`` (``geometry_msgs``; a command. Twist
+                                has no header, so its time is always the bag's)
+``TwistWithCovarianceStamped``  ``speed``, ``yaw_rate`` (``geometry_msgs``; twist.twist linear
+                                x, angular z): wheel odometry without its pose, a measurement
+                                read as an Odometry's twist
 ``ackermann_msgs/``             ``speed`` (drive speed), ``steer`` (drive steering angle, the
-``AckermannDriveStamped``      road wheels'), each held from its stamp as a command is: a car
-``sensor_msgs/Imu``            ``yaw_rate`` (angular velocity z: a gyro; about another axis
-                               with ``imu_up``, ``--imu-up``), and ``heading`` (yaw of the
-                               orientation) when the IMU gives one (its
-                               ``orientation_covariance[0]`` is not −1) and is level
-=============================  =============================================================
+``AckermannDriveStamped``       road wheels'), each held from its stamp as a command is: a car
+``sensor_msgs/Imu``             ``yaw_rate`` (angular velocity z: a gyro; about another axis
+                                with ``imu_up``, ``--imu-up``), and ``heading`` (yaw of the
+                                orientation) when the IMU gives one (its
+                                ``orientation_covariance[0]`` is not −1) and is level
+==============================  ============================================================
 
 A diff robot reads the two joints; a gyro robot (or a unicycle, the body-velocity vehicle)
-reads ``speed`` + ``yaw_rate`` (Odometry, Twist, TwistStamped, or one of them with an Imu
-for the rate); a compass robot ``speed`` + an Imu's ``heading``; a gyro or tricycle robot
-one joint as its ``ticks``.
+reads ``speed`` + ``yaw_rate`` (Odometry, Twist, TwistStamped, TwistWithCovarianceStamped,
+or one of them with an Imu for the rate); a compass robot ``speed`` + an Imu's ``heading``;
+a gyro or tricycle robot one joint as its ``ticks``.
+
+**A twist that moves sideways.** No vehicle of odomkit's has a sideways velocity, so a
+twist's linear y is not read; where it is material (:func:`_check_lateral`: its RMS over the
+messages that move above 10 % of linear x's and 0.02 m/s), a warning names the topic and
+both figures: a holonomic (mecanum, omni) base's track would be wrong without a word.
 
 **Time.** Each message's header stamp (``--bag-time``: the time the bag received it).
 Stamps that go backwards are an error naming the message, and so are stamps that never
@@ -52,10 +60,17 @@ Imu topic whose mean linear acceleration puts gravity off its z axis (mounted on
 warns that its ``angular_velocity.z`` is not the robot's yaw rate.
 
 **Ground truth** (``--truth-topic /mocap``): a pose topic (Odometry, PoseStamped,
-PoseWithCovarianceStamped) becomes the log's ground truth, as a text log's ``gt_*`` columns
-do (never one of the log's own topics: the odometry scored against itself is refused):
-``track``, ``calibrate``, ``fit-noise`` and ``evaluate`` use it where a truth file is not
-given. A GPS topic (``sensor_msgs/NavSatFix``, ``--truth-topic /fix``) is position-only
+PoseWithCovarianceStamped, or TransformStamped, as vicon_bridge publishes
+``/vicon/NAME/NAME``: its translation x, y and its rotation's yaw) becomes the log's ground
+truth, as a text log's ``gt_*`` columns do (never one of the log's own topics: the odometry
+scored against itself is refused): ``track``, ``calibrate``, ``fit-noise`` and ``evaluate``
+use it where a truth file is not given. A ``tf2_msgs/TFMessage`` topic (``/tf``) gives the
+transforms of one frame pair among it (``--truth-frame world:base_link``: header.frame_id
+and child_frame_id, a leading '/' ignored on either; direct transforms only, none chained),
+each at its own header stamp; the topic's only pair needs no ``--truth-frame``, several are
+an error listing them with their counts (:func:`_tf_poses`), and a pair from the ``odom``
+frame warns (the odometry's own, as a rule). A ``tf_static`` topic is no truth: its
+transforms do not move. A GPS topic (``sensor_msgs/NavSatFix``, ``--truth-topic /fix``) is position-only
 truth on its own clock instead, as a truth file of latitude/longitude is
 (:func:`odomkit.io.truth.project_latlon`: east and north of the first fix [m]): kept at its
 fixes (``meta["truth"]``, which :func:`odomkit.truth.truth_from_log` returns), not
@@ -73,12 +88,13 @@ reads as its text file would.
 
 **What a rate means over a step** (row k's rate holds from row k to row k+1, as in
 :mod:`odomkit.log`): a command (Twist, TwistStamped) holds from its stamp to the next one
-(step k uses message k); an Odometry twist is the controller's estimate over an interval
-*ending* at its stamp (ROS 2 ``diff_drive_controller``: the wheel motion of each update
-divided by its period, averaged over the last ``velocity_rolling_window_size`` updates), so
-step k uses message k+1. That is exact for a window of one update (and for odomkit's own
-``--bag-out``); a longer window lags by about half its length, so where the bag has the
-wheels' JointState, dead-reckon that instead. An IMU or joint velocity is a sample of a
+(step k uses message k); an Odometry twist (and a TwistWithCovarianceStamped: wheel odometry
+without its pose) is the controller's estimate over an interval *ending* at its stamp (ROS 2
+``diff_drive_controller``: the wheel motion of each update divided by its period, averaged
+over the last ``velocity_rolling_window_size`` updates), so step k uses message k+1. That is
+exact for a window of one update (and for odomkit's own ``--bag-out``); a longer window lags
+by about half its length, so where the bag has the wheels' JointState, dead-reckon that
+instead. An IMU or joint velocity is a sample of a
 smooth signal: step k uses the mean of both ends (trapezoid rule, second order).
 """
 
@@ -100,12 +116,13 @@ from numpy.typing import NDArray
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError, OdomkitError
+from odomkit.kinematics import unicycle_moving
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.truth import Truth
 
-__all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_root", "bag_topics", "is_bag", "read_bag",
-           "read_bag_odometry", "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
+__all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_root", "bag_topics", "is_bag", "parse_truth_frame",
+           "read_bag", "read_bag_odometry", "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
 
 #: The message types odomkit reads, by their ROS 2 names (rosbags names ROS 1 types alike).
 MESSAGE_TYPES = {
@@ -113,6 +130,7 @@ MESSAGE_TYPES = {
     "nav_msgs/msg/Odometry": "Odometry",
     "geometry_msgs/msg/Twist": "Twist",
     "geometry_msgs/msg/TwistStamped": "TwistStamped",
+    "geometry_msgs/msg/TwistWithCovarianceStamped": "TwistWithCovarianceStamped",
     "sensor_msgs/msg/Imu": "Imu",
     "ackermann_msgs/msg/AckermannDriveStamped": "AckermannDriveStamped",
 }
@@ -124,14 +142,18 @@ _ACKERMANN = {
     "ackermann_msgs/msg/AckermannDriveStamped": "std_msgs/Header header\n"
                                                 "ackermann_msgs/AckermannDrive drive\n",
 }
-#: The messages a ground-truth topic may hold (``--truth-topic``): poses (motion capture) or
-#: GPS fixes (NavSatFix, position-only).
+#: The messages a ground-truth topic may hold (``--truth-topic``): poses (motion capture:
+#: vicon_bridge publishes TransformStamped; ``/tf`` transforms of one frame pair,
+#: ``--truth-frame``) or GPS fixes (NavSatFix, position-only).
 TRUTH_TYPES = {
     "nav_msgs/msg/Odometry": "Odometry",
     "geometry_msgs/msg/PoseStamped": "PoseStamped",
     "geometry_msgs/msg/PoseWithCovarianceStamped": "PoseWithCovarianceStamped",
     "sensor_msgs/msg/NavSatFix": "NavSatFix",
+    "geometry_msgs/msg/TransformStamped": "TransformStamped",
+    "tf2_msgs/msg/TFMessage": "TFMessage",
 }
+_TF = "tf2_msgs/msg/TFMessage"
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
 #: The first bytes of a ROS 1 bag (its version line) and of an MCAP file (its magic), and the
 #: suffix rosbags needs to open each: it picks its reader by the name alone.
@@ -294,7 +316,7 @@ def _topics(reader: Any, source: str) -> dict[str, str]:
 
 def _the_one(available: dict[str, str], types: dict[str, str], flag: str, source: str) -> str:
     """The bag's only topic of ``types``; else an error asking for ``flag``, listing them."""
-    found = sorted(n for n, t in available.items() if t in types)
+    found = sorted(n for n, t in available.items() if t in types and not _static_tf(n, t))
     if len(found) != 1:
         raise InputError(f"name the topic with {flag}; {_topic_list(available, types)}", source=source)
     return found[0]
@@ -307,8 +329,11 @@ _OTHERS_NAMED = 10
 def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -> str:
     """The topics of ``types`` there are, then the others with their types (the first
     :data:`_OTHERS_NAMED`): a topic read under a name odomkit does not expect is seen at once."""
-    readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if t in types]
-    others = [f"{n} ({t})" for n, t in sorted(topics.items()) if t not in types]
+    def listed(name: str, msgtype: str) -> bool:
+        return msgtype in types and not (types is TRUTH_TYPES and _static_tf(name, msgtype))
+
+    readable = [f"{n} ({types[t]})" for n, t in sorted(topics.items()) if listed(n, t)]
+    others = [f"{n} ({t})" for n, t in sorted(topics.items()) if not listed(n, t)]
     what = ("topics odomkit reads" if types is MESSAGE_TYPES else "truth topics" if types is TRUTH_TYPES
             else f"{'/'.join(types.values())} topics")
     text = f"{what}: " + (", ".join(readable) if readable else "none")
@@ -319,6 +344,11 @@ def _topic_list(topics: dict[str, str], types: dict[str, str] = MESSAGE_TYPES) -
             + (f" and {more} more" if more > 0 else ""))
 
 
+def _static_tf(name: str, msgtype: str) -> bool:
+    """A ``tf_static`` topic (``/tf_static``, ``/robot1/tf_static``): transforms that do not move."""
+    return msgtype == _TF and name.rstrip("/").rsplit("/", 1)[-1] == "tf_static"
+
+
 def _find_topic(topics: dict[str, str], wanted: str, source: str,
                 types: dict[str, str] = MESSAGE_TYPES) -> str:
     for name in (wanted, "/" + wanted.lstrip("/")):
@@ -327,6 +357,10 @@ def _find_topic(topics: dict[str, str], wanted: str, source: str,
                 raise InputError(f"topic {name} is {topics[name]}; odomkit reads "
                                  f"{', '.join(types.values())} ({_topic_list(topics, types)})",
                                  source=source)
+            if types is TRUTH_TYPES and _static_tf(name, topics[name]):
+                raise InputError(f"topic {name} holds static transforms, which do not move: it is no "
+                                 f"ground truth (/tf with --truth-frame PARENT:CHILD may be; "
+                                 f"{_topic_list(topics, types)})", source=source)
             return name
     raise InputError(f"no topic {wanted} in the bag; {_topic_list(topics, types)}", source=source)
 
@@ -378,35 +412,51 @@ def _stamps(reader: Any, conns: list[Any], receive_time: bool, topic: str,
     """The topic's messages and their times [ns] (header stamp, or the bag's time);
     ``progress`` is advanced every :data:`_REPORT_EVERY` messages and at the end."""
     messages, stamps = [], []
-    with _bag_errors(source):
-        for conn, bag_ns, raw in reader.messages(connections=conns):
-            msg = reader.deserialize(raw, conn.msgtype)
-            header = getattr(msg, "header", None)
-            if receive_time or header is None:
-                stamps.append(int(bag_ns))
-            else:
-                stamps.append(int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec))
-            messages.append(msg)
-            if len(messages) % _REPORT_EVERY == 0:
-                progress.advance(_REPORT_EVERY)
-    if len(messages) % _REPORT_EVERY:
-        progress.advance(len(messages) % _REPORT_EVERY)
+    for bag_ns, msg in _messages(reader, conns, source, progress):
+        header = getattr(msg, "header", None)
+        stamps.append(bag_ns if receive_time or header is None else _stamp_ns(header))
+        messages.append(msg)
     if len(messages) < 2:
         raise InputError(f"topic {topic} has {len(messages)} message(s); a log needs two or more",
                          source=source)
-    ns = np.array(stamps, dtype=np.int64)
+    return messages, _ordered(np.array(stamps, dtype=np.int64), receive_time, topic, source)
+
+
+def _messages(reader: Any, conns: list[Any], source: str, progress: Progress) -> Iterator[tuple[int, Any]]:
+    """Each message of ``conns`` decoded, with the time the bag received it [ns]; ``progress``
+    is advanced every :data:`_REPORT_EVERY` messages and at the end."""
+    count = 0
+    with _bag_errors(source):
+        for conn, bag_ns, raw in reader.messages(connections=conns):
+            yield int(bag_ns), reader.deserialize(raw, conn.msgtype)
+            count += 1
+            if count % _REPORT_EVERY == 0:
+                progress.advance(_REPORT_EVERY)
+    if count % _REPORT_EVERY:
+        progress.advance(count % _REPORT_EVERY)
+
+
+def _stamp_ns(header: Any) -> int:
+    """A header's stamp [ns]."""
+    return int(header.stamp.sec) * 1_000_000_000 + int(header.stamp.nanosec)
+
+
+def _ordered(ns: NDArray[np.int64], receive_time: bool, topic: str, source: str,
+             what: str = "message") -> NDArray[np.int64]:
+    """``ns`` (M,), M ≥ 2, checked: times that go backwards, or never change (a publisher that
+    does not fill its stamps in), are an error naming the ``what`` (message, transform)."""
     t = _seconds(ns)
     back = np.flatnonzero(np.diff(ns) < 0)
     hint = "pass --bag-time to use the time the bag received each message"
     if back.size:
         i = int(back[0]) + 1
-        raise InputError(f"{topic}: header stamps go backwards at message {i + 1} ({t[i]:.9f} s after "
+        raise InputError(f"{topic}: header stamps go backwards at {what} {i + 1} ({t[i]:.9f} s after "
                          f"{t[i - 1]:.9f} s); {hint}", source=source)
     if ns[-1] == ns[0]:
-        raise InputError(f"{topic}: every message was received at {t[0]:.9f} s" if receive_time else
+        raise InputError(f"{topic}: every {what} was received at {t[0]:.9f} s" if receive_time else
                          f"{topic}: every header stamp is {t[0]:.9f} s (never filled in?); {hint}",
                          source=source)
-    return messages, ns
+    return ns
 
 
 def _finite(values: NDArray[np.float64], what: str, topic: str, source: str) -> NDArray[np.float64]:
@@ -472,9 +522,15 @@ def _yaw(q: Any) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
+#: The kinds of twist message whose twist is a measurement over an interval *ending* at its
+#: stamp (module docstring): Odometry's, and wheel odometry published without its pose as a
+#: twist with covariance (a covariance says it is an estimate, never a command).
+_MEASURED_TWISTS = ("Odometry", "TwistWithCovarianceStamped")
+
+
 def _twist_signals(messages: list[Any], ns: NDArray[np.int64], kind: str, topic: str,
                    source: str) -> _Stream:
-    if kind == "Odometry":
+    if kind in ("Odometry", "TwistWithCovarianceStamped"):
         twists = [m.twist.twist for m in messages]
     elif kind == "TwistStamped":
         twists = [m.twist for m in messages]
@@ -482,8 +538,39 @@ def _twist_signals(messages: list[Any], ns: NDArray[np.int64], kind: str, topic:
         twists = messages
     speed = _finite(np.array([w.linear.x for w in twists], dtype=float), "linear x", topic, source)
     rate = _finite(np.array([w.angular.z for w in twists], dtype=float), "angular z", topic, source)
-    signal = "backward" if kind == "Odometry" else "forward"
+    _check_lateral(speed, np.array([w.linear.y for w in twists], dtype=float), rate, topic, source)
+    signal = "backward" if kind in _MEASURED_TWISTS else "forward"
     return _Stream(topic, ns, [("speed", signal, speed), ("yaw_rate", signal, rate)])
+
+
+#: A twist's lateral velocity (linear.y) is material, and warned about, where its RMS over the
+#: moving messages exceeds this share of linear.x's: a diff-drive or skid-steer base reports
+#: 0 (diff_drive_controller) or, filtered (robot_localization), a few % from slip in turns;
+#: 10 % missed is 10 m sideways per 100 m travelled, as large an error as any calibration fits.
+_LATERAL_SHARE = 0.1
+#: ... and this much [m/s]: below it, noise about zero in an estimated twist (of order
+#: 0.01 m/s) of a robot that crawls, whose 10 % would be less.
+_LATERAL_FLOOR = 0.02
+
+
+def _check_lateral(vx: NDArray[np.float64], vy: NDArray[np.float64], wz: NDArray[np.float64], topic: str,
+                   source: str) -> None:
+    """Warn where a twist's lateral velocity ``vy`` (M,) [m/s] is material against its forward
+    velocity ``vx`` (M,) [m/s] (:data:`_LATERAL_SHARE`, :data:`_LATERAL_FLOOR`) over the
+    messages that move (:func:`odomkit.kinematics.unicycle_moving`, yaw rate ``wz`` (M,)):
+    odomkit's vehicles have no sideways velocity, so a holonomic (mecanum, omni) base's
+    track would be wrong without a word."""
+    ok = np.isfinite(vy)
+    moving = ok & unicycle_moving(np.hypot(vx, np.where(ok, vy, 0.0)), wz)
+    if not moving.any():
+        return
+    rms_x = float(np.sqrt(np.mean(vx[moving] ** 2)))
+    rms_y = float(np.sqrt(np.mean(vy[moving] ** 2)))
+    if rms_y > _LATERAL_SHARE * rms_x and rms_y > _LATERAL_FLOOR:
+        warnings.warn(f"{source}: {topic}: the twist moves sideways: linear.y has RMS {rms_y:.3g} m/s "
+                      f"against linear.x's {rms_x:.3g} m/s over the {int(moving.sum())} messages that move; "
+                      "odomkit's vehicles have no sideways velocity (a holonomic base, mecanum or omni, "
+                      "is not modelled), so the track ignores linear.y", stacklevel=4)
 
 
 def _imu_signals(messages: list[Any], ns: NDArray[np.int64], topic: str, source: str,
@@ -542,23 +629,114 @@ def _check_level(accel: NDArray[np.float64], oriented: bool, topic: str, source:
                   f"--imu-up {sign}{name} reads the rate about {sign}{name}", stacklevel=4)
 
 
+#: A (parent, child) pair of frames, each without a leading '/'.
+_Pair = tuple[str, str]
+
+
+def _frame(name: str) -> str:
+    """A frame id as compared: without a leading '/' (ROS 1's tf wrote ``/world``)."""
+    return name.lstrip("/")
+
+
+def parse_truth_frame(text: str) -> tuple[str, str]:
+    """``--truth-frame PARENT:CHILD``: the frames of the ``/tf`` transforms that are the truth
+    (header.frame_id, child_frame_id), each without a leading '/'.
+
+    Examples
+    --------
+    >>> parse_truth_frame("/world:base_link")
+    ('world', 'base_link')
+    """
+    parts = [_frame(part.strip()) for part in text.split(":")] if isinstance(text, str) else []
+    if len(parts) != 2 or not all(parts):
+        raise InputError("--truth-frame takes PARENT:CHILD, the frames of the /tf transforms that are the "
+                         f"truth (world:base_link, map:base_footprint); got {text!r}")
+    return parts[0], parts[1]
+
+
+def _check_frame(available: dict[str, str], truth: str | None, frame: _Pair | None, source: str) -> None:
+    """``--truth-frame`` picks transforms of a TFMessage truth topic: refused for any other."""
+    if frame is None:
+        return
+    what = "--truth-frame picks the transforms of a tf2_msgs/TFMessage truth topic (/tf)"
+    if truth is None:
+        raise InputError(f"{what}; no --truth-topic is given", source=source)
+    if available[truth] != _TF:
+        raise InputError(f"{what}; {truth} is {available[truth]}", source=source)
+
+
 def _pose_truth(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
-                progress: Progress = NO_PROGRESS) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """A pose topic's times [ns] (M,) and poses (M, 3): x, y [m] and the unwrapped yaw [rad]."""
-    messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
-                           topic, source, progress)
+                progress: Progress = NO_PROGRESS,
+                frame: _Pair | None = None) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """A pose topic's times [ns] (M,) and poses (M, 3): x, y [m] and the unwrapped yaw [rad]
+    (a TFMessage topic's: the transforms of ``frame``, :func:`_tf_poses`)."""
     kind = TRUTH_TYPES[msgtype]
-    poses = [m.pose if kind == "PoseStamped" else m.pose.pose for m in messages]
-    xyt = _finite(np.array([[p.position.x, p.position.y, _yaw(p.orientation)] for p in poses], dtype=float),
-                  "pose", topic, source)
+    if kind == "TFMessage":
+        ns, xyt = _tf_poses(reader, topic, frame, receive_time, source, progress)
+    else:
+        messages, ns = _stamps(reader, [c for c in reader.connections if c.topic == topic], receive_time,
+                               topic, source, progress)
+        xyt = np.array([_planar(m, kind) for m in messages], dtype=float)
+    _finite(xyt, "pose", topic, source)
     xyt[:, 2] = unwrap_angle(xyt[:, 2])
     return ns, xyt
 
 
+def _planar(msg: Any, kind: str) -> tuple[float, float, float]:
+    """A pose message's x, y [m] and yaw [rad]; a transform's translation and rotation are a
+    pose of the child frame in the parent's."""
+    if kind == "TransformStamped":
+        position, rotation = msg.transform.translation, msg.transform.rotation
+    else:
+        pose = msg.pose if kind == "PoseStamped" else msg.pose.pose
+        position, rotation = pose.position, pose.orientation
+    return float(position.x), float(position.y), _yaw(rotation)
+
+
+def _tf_poses(reader: Any, topic: str, frame: _Pair | None, receive_time: bool, source: str,
+              progress: Progress = NO_PROGRESS) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """The transforms of one (parent, child) pair of a TFMessage topic, direct ones only (no
+    chaining): times [ns] (M,) (each transform's header stamp, or its message's bag time) and
+    x, y [m], yaw [rad] (M, 3). ``frame`` None: the topic's only pair; several are an error
+    listing them with their counts, as is a ``frame`` the topic does not carry."""
+    counts: dict[_Pair, int] = {}
+    chosen: _Pair | None = frame
+    stamps: list[int] = []
+    poses: list[tuple[float, float, float]] = []
+    for bag_ns, msg in _messages(reader, [c for c in reader.connections if c.topic == topic], source,
+                                 progress):
+        for tf in msg.transforms:
+            pair = (_frame(tf.header.frame_id), _frame(tf.child_frame_id))
+            counts[pair] = counts.get(pair, 0) + 1
+            chosen = pair if chosen is None else chosen
+            if pair == chosen:  # without a frame, only the first pair is kept: another is an error
+                stamps.append(bag_ns if receive_time else _stamp_ns(tf.header))
+                poses.append(_planar(tf, "TransformStamped"))
+    pairs = ", ".join(f"{p}:{c} ({n})" for (p, c), n in sorted(counts.items()))
+    if not counts:
+        raise InputError(f"{topic} holds no transforms", source=source)
+    if frame is None and len(counts) > 1:
+        raise InputError(f"{topic} carries transforms of {len(counts)} frame pairs; name the truth's with "
+                         f"--truth-frame PARENT:CHILD: {pairs} (transforms of each)", source=source)
+    assert chosen is not None
+    label = f"{topic} {chosen[0]}:{chosen[1]}"
+    if frame is not None and frame not in counts:
+        raise InputError(f"{topic} has no transform {chosen[0]}:{chosen[1]} (--truth-frame); its frame "
+                         f"pairs: {pairs} (transforms of each)", source=source)
+    if len(stamps) < 2:
+        raise InputError(f"{label}: {len(stamps)} transform(s); truth needs two or more", source=source)
+    if chosen[0].rsplit("/", 1)[-1] == "odom":
+        warnings.warn(f"{source}: {label}: a transform from the odom frame is, as a rule, the odometry's "
+                      "own (its controller or an EKF publishes it): the odometry would be scored against "
+                      "itself; ground truth comes from elsewhere (motion capture, GPS)", stacklevel=4)
+    ns = _ordered(np.array(stamps, dtype=np.int64), receive_time, label, source, "transform")
+    return ns, np.array(poses, dtype=float)
+
+
 def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
-                  progress: Progress = NO_PROGRESS) -> _Stream:
+                  progress: Progress = NO_PROGRESS, frame: _Pair | None = None) -> _Stream:
     """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
-    ns, xyt = _pose_truth(reader, topic, msgtype, receive_time, source, progress)
+    ns, xyt = _pose_truth(reader, topic, msgtype, receive_time, source, progress, frame)
     return _Stream(topic, ns, [("gt_x", "absolute", xyt[:, 0]), ("gt_y", "absolute", xyt[:, 1]),
                                ("gt_theta", "absolute", xyt[:, 2])])
 
@@ -573,8 +751,8 @@ def _first_at_each_time(ns: NDArray[np.int64], topic: str, source: str) -> NDArr
     return ~repeat
 
 
-def read_bag_truth(path: str | Path, topic: str | None = None,
-                   receive_time: bool = False) -> tuple[Truth, float | None]:
+def read_bag_truth(path: str | Path, topic: str | None = None, receive_time: bool = False,
+                   frame: str | None = None) -> tuple[Truth, float | None]:
     """A bag's ground-truth topic as truth on its own clock (``--truth BAG``, a truth that was
     recorded apart from the log, e.g. a motion capture's own bag).
 
@@ -586,8 +764,10 @@ def read_bag_truth(path: str | Path, topic: str | None = None,
     Parameters
     ----------
     path : a ROS 1 ``.bag``, a ROS 2 bag folder, or its ``.db3``/``.mcap`` file
-    topic : a :data:`TRUTH_TYPES` topic; None: the bag's only one
+    topic : a :data:`TRUTH_TYPES` topic; None: the bag's only one (``tf_static`` aside)
     receive_time : use the time the bag received each message instead of header stamps
+    frame : ``"PARENT:CHILD"``, the transforms of a TFMessage topic that are the truth
+        (``--truth-frame``, :func:`parse_truth_frame`); None: the topic's only frame pair
 
     Returns
     -------
@@ -601,18 +781,21 @@ def read_bag_truth(path: str | Path, topic: str | None = None,
     ------
     InputError
         Not a bag, no such topic (listing the truth topics there are), several truth topics
-        and none named, fewer than two messages, stamps that go backwards.
+        and none named, fewer than two messages, stamps that go backwards; ``frame`` as
+        :func:`read_bag`'s ``truth_frame``.
     """
     path = Path(path)
     source = str(path)
+    pair = None if frame is None else parse_truth_frame(frame)
     with _open(path) as reader:
         available = _topics(reader, source)
         if topic is None:
             topic = _the_one(available, TRUTH_TYPES, "--truth-topic", source)
         name = _find_topic(available, topic, source, TRUTH_TYPES)
+        _check_frame(available, name, pair, source)
         if TRUTH_TYPES[available[name]] == "NavSatFix":
             return _fix_truth(reader, name, receive_time, source)
-        ns, xyt = _pose_truth(reader, name, available[name], receive_time, source)
+        ns, xyt = _pose_truth(reader, name, available[name], receive_time, source, frame=pair)
     keep = _first_at_each_time(ns, name, source)
     return Truth(_seconds(ns[keep]), xyt[keep, :2], xyt[keep, 2], 0.0, f"{source}:{name}"), None
 
@@ -854,7 +1037,8 @@ def _check_replaced(name: str, kind: str, rows: NDArray[np.float64], old: tuple[
 
 def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
              receive_time: bool = False, truth_topic: str | None = None, *,
-             progress: Progress = NO_PROGRESS, imu_up: str = "+z") -> OdometryLog:
+             progress: Progress = NO_PROGRESS, imu_up: str = "+z",
+             truth_frame: str | None = None) -> OdometryLog:
     """Read a ROS bag's odometry topics as a log (module docstring: messages, time, topics).
 
     Parameters
@@ -876,6 +1060,9 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     imu_up : the Imu axis that points up (``"+z"``, ``"-z"``, ``"+x"``, ...): the yaw rate is
         the angular velocity about it, sign included; the orientation's yaw is read as a
         heading only for ``"+z"``
+    truth_frame : ``"PARENT:CHILD"`` (``--truth-frame``): the ``/tf`` transforms that are the
+        truth, where ``truth_topic`` is a TFMessage topic (:func:`parse_truth_frame`); None:
+        the topic's only frame pair
 
     Returns
     -------
@@ -888,20 +1075,25 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     InputError
         Not a bag (or a gzip-compressed one), no such topic or joint (listing the ones there
         are), a truth topic that is one of the log's topics, stamps that go backwards or are
-        zero, values that are not finite, rosbags not installed.
+        zero, values that are not finite, rosbags not installed; a ``truth_frame`` without a
+        TFMessage truth topic, or not on it, or a TFMessage truth topic of several frame pairs
+        without one; a ``tf_static`` truth topic.
 
     Warns
     -----
     UserWarning
         Rows left out (outside another topic's span); an Imu whose gravity is not along its
         z axis; a channel given by two topics whose two versions disagree grossly
-        (:func:`_check_replaced`).
+        (:func:`_check_replaced`); a twist that moves sideways (:func:`_check_lateral`); a
+        truth transform from the odom frame (the odometry's own, as a rule).
     """
     path = Path(path)
     source = str(path)
+    frame = None if truth_frame is None else parse_truth_frame(truth_frame)
     with _open(path) as reader:
         available = _topics(reader, source)
         truth = None if not truth_topic else _find_topic(available, truth_topic, source, TRUTH_TYPES)
+        _check_frame(available, truth, frame, source)
         chosen = _choose_topics(available, topics, source, truth)
         if joints and not any(MESSAGE_TYPES[available[c]] == "JointState" for c in chosen):
             raise InputError("--joints applies to a JointState topic; none is read", source=source)
@@ -917,7 +1109,7 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
                 gps, stated = _fix_truth(reader, truth, receive_time, source, progress)
             elif truth is not None:
                 streams.append(_truth_stream(reader, truth, available[truth], receive_time, source,
-                                             progress))
+                                             progress, frame))
     t, channels = _merge(streams, source)
     poses = None
     if truth is not None and not fixes:

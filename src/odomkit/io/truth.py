@@ -64,8 +64,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from odomkit import units
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
+from odomkit.frames import UP_AXES, likely_up, planar_poses, quaternion_matrices
 from odomkit.io._headers import no_such_column, time_text_error
 from odomkit.io.table import to_seconds
 from odomkit.io.text import (
@@ -86,11 +88,14 @@ __all__ = ["ECEF_RADIUS_RANGE", "GEO_SPAN_WARNING", "project_ecef", "project_lat
 
 TRUTH_FORMATS = ("auto", "tum", "kitti", "csv")
 _ECEF = ("ecef_x", "ecef_y", "ecef_z")
-_TARGETS = ("t", "x", "y", "theta", "theta_deg", "lat", "lon", "alt", *_ECEF, "heading_deg_north")
+_TARGETS = ("t", "x", "y", "x_mm", "y_mm", "theta", "theta_deg", "lat", "lon", "alt", *_ECEF,
+            "heading_deg_north")
 _HEADER_NAMES = {
     "t": ("t", "time", "timestamp", "stamp", "time_s"),
     "x": ("x", "gt_x", "x_gt", "pos_x", "tx"),
     "y": ("y", "gt_y", "y_gt", "pos_y", "ty"),
+    "x_mm": ("x_mm",),  # a motion capture's export in millimetres (Vicon's)
+    "y_mm": ("y_mm",),
     "theta": ("theta", "gt_theta", "theta_gt", "yaw", "heading", "th"),
     "theta_deg": ("theta_deg", "yaw_deg", "heading_deg"),
     "lat": ("lat", "latitude"),
@@ -269,7 +274,13 @@ def _csv_columns(path: Path, header: list[str] | None, ncols: int,
     else:
         _check_geo_columns(path, header, index)
         return index
-    missing = [k for k in ("t", "x", "y") if k not in index]
+    millimetres = [k for k in ("x_mm", "y_mm") if k in index]
+    if millimetres and (len(millimetres) == 1 or "x" in index or "y" in index):
+        named = ", ".join(k for k in ("x", "y", "x_mm", "y_mm") if k in index)
+        raise InputError("positions in millimetres are x_mm and y_mm together, not beside x or y "
+                         f"(columns named: {named})",
+                         source=str(path))
+    missing = [k for k in ("t", "x", "y") if k not in index and f"{k}_mm" not in index]
     if missing:
         raise InputError(f"no column for {', '.join(missing)} (header {header}); name the columns "
                          "with --truth-columns, e.g. t=time,x=px,y=py,theta=yaw (or "
@@ -288,7 +299,8 @@ def _check_geo_columns(path: Path, header: list[str] | None, index: dict[str, in
     """A GPS file's columns: t and either lat, lon[, alt] or ecef_x, ecef_y, ecef_z, never
     two of these and x, y, and a heading only as ``heading_deg_north``."""
     kinds = [(what, keys, hint) for what, keys, hint in (
-        ("x, y", ("x", "y"), "t=TIME,x=X,y=Y"), ("latitude/longitude", ("lat", "lon", "alt"), _GEO_COLUMNS),
+        ("x, y", ("x", "y", "x_mm", "y_mm"), "t=TIME,x=X,y=Y"),
+        ("latitude/longitude", ("lat", "lon", "alt"), _GEO_COLUMNS),
         ("ECEF", _ECEF, _ECEF_COLUMNS)) if any(k in index for k in keys)]
     if len(kinds) > 1:
         found = ", ".join(f"{k} ({_column_name(header, index[k])})" for _, keys, _ in kinds for k in keys
@@ -573,6 +585,24 @@ def project_ecef(
     return _onto_plane(pm, east, north, float(lat0), float(lon0), heading, source)
 
 
+def _ground_poses(path: Path, positions: NDArray[np.float64], rotations: NDArray[np.float64],
+                  up: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """A 3-D pose file's poses on the ground plane across ``up``
+    (:func:`odomkit.frames.planar_poses`), with a warning where ``up`` is z but the positions
+    hold another axis nearly constant (:func:`odomkit.frames.likely_up`): read so, the track
+    is one ground axis against the height, and the heading no turn of the robot's."""
+    if up == "+z" and (other := likely_up(positions)) is not None:
+        x, y, z = np.std(positions, axis=0)
+        warnings.warn(f"{path}: the positions hold {other[1]} nearly constant (spread x {x:.3g} m, "
+                      f"y {y:.3g} m, z {z:.3g} m): the file's "
+                      f"{other[1]} axis points up (a motion capture's Y-up frame, KITTI's camera frame), and "
+                      "read as z-up its track is one ground axis against the height; give --truth-up "
+                      f"{other} (or -{other[1]} if the track comes out mirrored)", stacklevel=4)
+    xy, yaw = planar_poses(positions, rotations, up)
+    assert yaw is not None
+    return xy, yaw
+
+
 def read_truth(
     path: str | Path,
     fmt: str = "auto",
@@ -581,6 +611,7 @@ def read_truth(
     sigma: float = 0.0,
     *,
     record: str | None = None,
+    up: str = "+z",
 ) -> Truth:
     """Read a ground-truth file (formats in the module docstring).
 
@@ -597,6 +628,10 @@ def read_truth(
         or CARMEN's ``TRUEPOS ...`` among other types), the tag dropped: ``columns`` then
         name the fields after it (:func:`odomkit.io.text.select_record`). None: every line,
         and a file whose lines are records of several types is refused, naming them.
+    up : the axis of a TUM or KITTI file's frame that points up (``--truth-up``, one of
+        :data:`odomkit.frames.UP_AXES`): its poses are read onto the plane across it
+        (:func:`odomkit.frames.planar_poses`). A z-up reading of positions that hold another
+        axis nearly constant (a Y-up motion capture) is warned about.
 
     Returns
     -------
@@ -610,19 +645,22 @@ def read_truth(
     if fmt not in TRUTH_FORMATS:
         raise InputError(f"unknown truth format {fmt!r}; expected one of {', '.join(TRUTH_FORMATS)}")
     seconds = seconds_per_unit(time_unit, "--truth-time-unit")
+    if up not in UP_AXES:
+        raise InputError(f"--truth-up must be one of {', '.join(UP_AXES)} (the file's axis that points up), "
+                         f"got {up!r}")
     spec = parse_truth_columns(columns) if columns else None
     if spec is not None and fmt in ("tum", "kitti"):
         raise InputError(f"--truth-columns applies to csv truth, not {fmt}")
     text = read_text(path, kind="truth file")
     try:
         return _truth_of_text(path, select_record(text, str(path), record, "truth"), fmt, spec, seconds,
-                              sigma, record)
+                              sigma, record, up)
     except InputError as exc:
         raise record_error(exc, text, record, "truth") from None
 
 
 def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[str] | None, seconds: float,
-                   sigma: float, record: str | None) -> Truth:
+                   sigma: float, record: str | None, up: str = "+z") -> Truth:
     """The truth in ``text``, the lines of the file that :func:`read_truth` reads."""
     layout = sniff_layout(text, str(path))
     if record is not None:
@@ -665,20 +703,25 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
     # GPS fixes (lat, lon, alt, heading, or ECEF x, y, z, heading), whether they are ECEF, and
     # whether the heading is given.
     geo, ecef, north = None, False, False
+    if up != "+z" and fmt not in ("tum", "kitti"):
+        raise InputError(f"--truth-up {up} turns a 3-D pose file (TUM or KITTI); a text truth's "
+                         "--truth-columns pick its ground axes (t,x,_,y reads the second and fourth "
+                         "columns as x, y)", source=str(path))
     if fmt == "tum":
-        t, xy = data[:, 0], data[:, 1:3]
-        qx, qy, qz, qw = data[:, 4], data[:, 5], data[:, 6], data[:, 7]
-        norm = qx**2 + qy**2 + qz**2 + qw**2
+        t = data[:, 0]
+        q = data[:, 4:8]
+        norm = np.sum(q**2, axis=1)
         if np.any(norm == 0):
             row = int(np.flatnonzero(norm == 0)[0])
             raise InputError("the quaternion is zero; expected a unit quaternion qx qy qz qw",
                              source=str(path), line=lines[row][0])
-        # Yaw (rotation about z) of the quaternion, ZYX convention; scale-free, so an
-        # unnormalised quaternion gives the same angle.
-        theta = np.arctan2(2 * (qw * qz + qx * qy), qw**2 + qx**2 - qy**2 - qz**2)
+        # The yaw about the up axis (for z up, the Z-Y-X yaw); scale-free, so an unnormalised
+        # quaternion gives the same angle.
+        xy, theta = _ground_poses(path, data[:, 1:4], quaternion_matrices(q), up)
     elif fmt == "kitti":
-        t, xy = data[:, 0], data[:, [4, 8]]
-        theta = np.arctan2(data[:, 5], data[:, 1])  # atan2(r21, r11)
+        t = data[:, 0]
+        rotations = data[:, [1, 2, 3, 5, 6, 7, 9, 10, 11]].reshape(-1, 3, 3)
+        xy, theta = _ground_poses(path, data[:, [4, 8, 12]], rotations, up)
     else:
         t = data[:, index["t"]]
         ecef = "ecef_x" in index
@@ -691,10 +734,13 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
             geo = np.column_stack([data[:, index[k]] if k in index else np.zeros(len(t)) for k in keys])
             xy, theta = geo[:, :2], None
         else:
-            xy = data[:, [index["x"], index["y"]]]
             theta = (data[:, index["theta"]] if "theta" in index
                      else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
-            _warn_if_ecef(path, rows, xy, header, index)
+            if "x_mm" in index:
+                xy = data[:, [index["x_mm"], index["y_mm"]]] * units.MILLIMETRE
+            else:
+                xy = data[:, [index["x"], index["y"]]]
+                _warn_if_ecef(path, rows, xy, header, index)
     t = to_seconds(t, seconds)
     order = np.argsort(t, kind="stable")
     if np.any(np.diff(t) < 0):

@@ -63,11 +63,12 @@ def _track_poses(path: Path) -> OdometryPoses:
 
 
 # The log options a bag's Odometry topic uses without a robot file.
-_BAG_FLAGS = {"--topic", "--bag-time", "--truth-topic"}
+_BAG_FLAGS = {"--topic", "--bag-time", "--truth-topic", "--truth-frame"}
 
 
 def _bag_poses(path: Path, options: LogOptions) -> OdometryPoses:
-    """A bag's ``nav_msgs/Odometry`` poses, and its truth topic (``--truth-topic``) if named."""
+    """A bag's ``nav_msgs/Odometry`` poses, and its truth topic (``--truth-topic``, ``--truth-frame``)
+    if named."""
     from odomkit.io.bag import bag_topics, read_bag, read_bag_odometry
     from odomkit.truth import truth_from_log
 
@@ -79,7 +80,8 @@ def _bag_poses(path: Path, options: LogOptions) -> OdometryPoses:
     if options.truth_topic is not None:
         if topic is None:
             topic = next(n for n, t in bag_topics(path).items() if t == "nav_msgs/msg/Odometry")
-        own = truth_from_log(read_bag(path, (topic,), (), options.bag_time, options.truth_topic))
+        own = truth_from_log(read_bag(path, (topic,), (), options.bag_time, options.truth_topic,
+                                      truth_frame=options.truth_frame))
     return OdometryPoses(odom.t, odom.poses, own, str(path))
 
 

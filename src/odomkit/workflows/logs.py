@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.robot import Robot
 
-__all__ = ["COLUMN_EXAMPLES", "IMU_AXES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log",
+__all__ = ["COLUMN_EXAMPLES", "LOG_FORMATS", "LogOptions", "detect_format", "load_log",
            "parse_span", "require_log_file"]
 
 LOG_FORMATS = ("auto", "csv", "khepera", "snowhite", "optiodom", "bag")
@@ -47,14 +47,12 @@ _APPLIES = {
     "khepera": {"cumulative", "wrap_bits", "period"},  # cumulative counts by definition
     "snowhite": {"period"},
     "optiodom": set(),
-    "bag": {"topic", "joints", "bag_time", "truth_topic", "imu_up"},
+    "bag": {"topic", "joints", "bag_time", "truth_topic", "truth_frame", "imu_up"},
 }
 _FLAGS = {"columns": "--columns", "cumulative": "--cumulative", "wrap_bits": "--wrap-bits",
           "period": "--period", "time_unit": "--time-unit", "topic": "--topic", "joints": "--joints",
-          "bag_time": "--bag-time", "truth_topic": "--truth-topic", "record": "--record",
-          "imu_up": "--imu-up"}
-#: The axes an IMU may be mounted with pointing up (``--imu-up``).
-IMU_AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
+          "bag_time": "--bag-time", "truth_topic": "--truth-topic", "truth_frame": "--truth-frame",
+          "record": "--record", "imu_up": "--imu-up"}
 
 
 def require_log_file(path: Path) -> None:
@@ -134,9 +132,12 @@ class LogOptions:
         types in one file): read only the lines of this type, the tag dropped, so that
         ``columns`` count from the field after it (csv only;
         :func:`odomkit.io.text.select_record`)
-    imu_up : the axis of a bag's Imu that points up, one of :data:`IMU_AXES` (bag only): its
+    imu_up : the axis of a bag's Imu that points up, one of :data:`odomkit.frames.UP_AXES` (bag only): its
         angular velocity about that axis is the yaw rate (``"+y"`` for an IMU on its side
         whose gravity reads along +y; :func:`odomkit.io.bag.read_bag`)
+    truth_frame : ``"PARENT:CHILD"``, the transforms of a ``tf2_msgs/TFMessage`` truth topic
+        (``/tf``) that are the truth, e.g. ``"world:base_link"`` (bag only; a leading '/' of
+        either frame ignored; :func:`odomkit.io.bag.parse_truth_frame`)
     """
 
     format: str = "auto"
@@ -153,6 +154,7 @@ class LogOptions:
     span: str | None = None
     record: str | None = None
     imu_up: str = "+z"
+    truth_frame: str | None = None
 
     def __post_init__(self) -> None:
         if self.span is not None:
@@ -170,8 +172,14 @@ class LogOptions:
             seconds_per_unit(self.time_unit, "--time-unit")
         if isinstance(self.decimate, bool) or not isinstance(self.decimate, int) or self.decimate < 1:
             raise InputError(f"--decimate must be a positive integer, got {self.decimate!r}")
-        if self.imu_up not in IMU_AXES:
-            raise InputError(f"--imu-up must be one of {', '.join(IMU_AXES)} (the IMU axis that points up), "
+        if self.truth_frame is not None:
+            from odomkit.io.bag import parse_truth_frame  # here: no numpy for --help
+
+            parse_truth_frame(self.truth_frame)
+        from odomkit.frames import UP_AXES  # lazily: numpy, and LogOptions is made for --help's flags too
+
+        if self.imu_up not in UP_AXES:
+            raise InputError(f"--imu-up must be one of {', '.join(UP_AXES)} (the IMU axis that points up), "
                              f"got {self.imu_up!r}")
         if any(not isinstance(name, str) or not name.strip("/ ") for name in self.topic):
             raise InputError(f"--topic must name topics, e.g. /joint_states; got {list(self.topic)!r}")
@@ -291,7 +299,7 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
 
         options.check_format(fmt, str(path))
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
-                       progress=progress, imu_up=options.imu_up)
+                       progress=progress, imu_up=options.imu_up, truth_frame=options.truth_frame)
         return _in_span(log, options)
     require_log_file(path)
     options.check_format(fmt, str(path))

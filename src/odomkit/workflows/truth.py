@@ -24,23 +24,26 @@ __all__ = ["applied_clock", "clock_from_robot", "load_truth", "resolved_truth", 
 class TruthOptions:
     """How to read the truth (see ``odomkit evaluate --help``).
 
-    ``path`` None means the log's own ground truth. ``sigma`` [m] is the truth's own
-    position noise per axis, ``heading_sigma`` [rad] its heading noise and ``time_sigma``
-    [s] its fixes' time against the log's clock. None means not given: zero, or the robot
-    file's ``[truth]`` (what ``fit-noise`` fitted) where a command scores a robot file's
-    covariance (:meth:`resolved`); ``fit-noise`` fits it. ``max_gap`` [s] is the longest gap between fixes to
-    interpolate across (None: no limit). ``time_offset`` [s] is how late the truth's clock
+    ``path`` None means the log's own ground truth. ``sigma`` [m] is the truth's own position
+    noise per axis, ``heading_sigma`` [rad] its heading noise and ``time_sigma`` [s] its fixes'
+    time against the log's clock. None means not given: zero, or the robot file's ``[truth]``
+    (what ``fit-noise`` fitted) where a command scores a robot file's covariance
+    (:meth:`resolved`); ``fit-noise`` fits it. ``max_gap`` [s] is the longest gap between fixes
+    to interpolate across (None: no limit). ``time_offset`` [s] is how late the truth's clock
     runs against the log's: a fix stamped t is the pose at log time t − ``time_offset``
     (``--truth-time-offset``; None: not given, the robot file's ``[truth] time_offset`` or
     zero, and ``calibrate --truth`` fits it). ``record`` reads only the lines of a file of
     tagged records that this word leads, the tag dropped (``--truth-record``;
-    :func:`odomkit.io.text.select_record`). A ``path`` that is a ROS bag is read by
-    :func:`odomkit.io.bag.read_bag_truth`: ``topic`` names its truth topic (``--truth-topic``
-    given with ``--truth``; None: the bag's only one) and ``bag_time`` times its messages by
-    when the bag received them (``--bag-time``). ``file_clock`` [s] is the robot file's
-    ``[truth] time_offset`` kept for the log's own truth where ``time_offset`` was not given
-    (:meth:`clock` gives zero there): it moves a truth on its own clock (a bag's GPS topic),
-    never a log's gt_* columns, which :func:`load_truth` alone can tell apart.
+    :func:`odomkit.io.text.select_record`). ``up`` is the axis of a TUM or KITTI file's frame
+    that points up (``--truth-up``; :func:`odomkit.frames.planar_poses`). A ``path`` that is a
+    ROS bag is read by :func:`odomkit.io.bag.read_bag_truth`: ``topic`` names its truth topic
+    (``--truth-topic`` given with ``--truth``; None: the bag's only one), ``frame`` the ``/tf``
+    transforms of a TFMessage truth topic (``--truth-frame PARENT:CHILD``; None: its only frame
+    pair) and ``bag_time`` times its messages by when the bag received them (``--bag-time``).
+    ``file_clock`` [s] is the robot file's ``[truth] time_offset`` kept for the log's own truth
+    where ``time_offset`` was not given (:meth:`clock` gives zero there): it moves a truth on
+    its own clock (a bag's GPS topic), never a log's gt_* columns, which :func:`load_truth`
+    alone can tell apart.
     """
 
     path: Path | None = None
@@ -53,9 +56,11 @@ class TruthOptions:
     time_sigma: float | None = None
     time_offset: float | None = None
     record: str | None = None
+    up: str = "+z"
     topic: str | None = None
     bag_time: bool = False
     file_clock: float = 0.0
+    frame: str | None = None
 
     def resolved(self, defaults: Mapping[str, float] | None = None) -> TruthOptions:
         """These options with each truth noise and the clock offset not given taken from
@@ -111,11 +116,13 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     if options.path is not None and is_bag(options.path):
         found, stated = _bag_truth(options, log)
     elif options.path is not None:
-        if options.topic is not None:
-            raise InputError(f"--truth-topic names a topic of a ROS bag; the --truth file {options.path} "
-                             "is not a bag (.bag, .db3, .mcap or a ROS 2 bag folder)")
+        for given, what in ((options.topic, "--truth-topic names a topic of a ROS bag"),
+                            (options.frame, "--truth-frame picks transforms of a ROS bag's /tf topic")):
+            if given is not None:
+                raise InputError(f"{what}; the --truth file {options.path} is not a bag (.bag, .db3, .mcap "
+                                 "or a ROS 2 bag folder)")
         found = read_truth(options.path, options.format, options.columns, options.time_unit, sigma,
-                           record=options.record)
+                           record=options.record, up=options.up)
     else:
         found = None if log is None else truth_from_log(log)
         stated = None if log is None else log.meta.get("truth_position_sigma")
@@ -135,6 +142,7 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
         truth = replace(truth, t=truth.t - offset)
     if truth.theta is not None:
         _warn_if_heading_off_motion(truth)
+    _warn_if_units_off(truth, log)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
@@ -151,6 +159,35 @@ def _warn_if_heading_off_motion(truth: Truth) -> None:
     if note := heading_off_motion(truth):
         warnings.warn(f"{truth.source}: {note}: every window or start taken from it starts off the robot's "
                       f"heading. Likely {HEADING_OFF_CAUSES}; odomkit check compares the two", stacklevel=3)
+
+
+#: Seconds per unit of the time units a clock may be written in besides seconds.
+_TIME_UNITS = {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}
+
+
+def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
+    """Warn where the truth moves faster than a wheeled vehicle
+    (:func:`odomkit.truth.implausible_speed`), or where its span and the log's differ by a
+    time unit's factor (within 2x of 1000, 1e6, 1e9): a truth stamped in ms read as s spans
+    1000 times the log's seconds, and overlaps it only in its first thousandth, which
+    evaluate reported as "no window travels --min-travel", not as a unit."""
+    from odomkit.truth import implausible_speed
+
+    if note := implausible_speed(truth):
+        warnings.warn(f"{truth.source}: {note}", stacklevel=3)
+    if log is None or len(log.t) < 2 or len(truth) < 2:
+        return
+    ours, theirs = float(log.t[-1] - log.t[0]), float(truth.t[-1] - truth.t[0])
+    if not (ours > 0 and theirs > 0):
+        return
+    for unit, seconds in _TIME_UNITS.items():
+        for ratio, whose, flag in ((theirs / ours, "the truth's", "--truth-time-unit"),
+                                   (ours / theirs, "the log's", "--time-unit")):
+            if 0.5 / seconds <= ratio <= 2.0 / seconds:
+                warnings.warn(f"{truth.source}: the truth spans {theirs:.4g} s and the log {ours:.4g} s, a "
+                              f"factor {ratio:.3g}: {whose} time is likely in {unit} read as seconds "
+                              f"({flag} {unit})", stacklevel=3)
+                return
 
 
 def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
@@ -176,11 +213,12 @@ def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, f
     text_only = [flag for flag, given in (("--truth-format", options.format != "auto"),
                                           ("--truth-columns", options.columns is not None),
                                           ("--truth-time-unit", options.time_unit != "s"),
-                                          ("--truth-record", options.record is not None)) if given]
+                                          ("--truth-record", options.record is not None),
+                                          ("--truth-up", options.up != "+z")) if given]
     if text_only:
         raise InputError(f"{', '.join(text_only)} applies to a text truth file; {options.path} is a "
                          "ROS bag (name its truth topic with --truth-topic)")
-    found = read_bag_truth(options.path, options.topic, options.bag_time)
+    found = read_bag_truth(options.path, options.topic, options.bag_time, options.frame)
     topic = found[0].source.rsplit(":", 1)[-1]
     own = log.meta.get("topics", ()) if log is not None and log.meta.get("format") == "bag" else ()
     if (log is not None and isinstance(own, list | tuple) and topic in own
@@ -193,16 +231,17 @@ def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, f
 
 def with_truth_topic(log: LogOptions, truth: TruthOptions,
                      truth_given: bool) -> tuple[LogOptions, TruthOptions]:
-    """Where ``--truth-topic`` belongs: to the ``--truth`` bag where a truth file is given
-    (``truth_given``), else to the log bag (its own ground truth). ``--bag-time`` times both.
+    """Where ``--truth-topic`` (and ``--truth-frame``) belong: to the ``--truth`` bag where a
+    truth file is given (``truth_given``), else to the log bag (its own ground truth).
+    ``--bag-time`` times both.
 
-    Returns the log and truth options with ``truth_topic`` moved to ``TruthOptions.topic``
-    in the first case, unchanged in the second.
+    Returns the log and truth options with ``truth_topic`` and ``truth_frame`` moved to
+    ``TruthOptions.topic`` and ``TruthOptions.frame`` in the first case, unchanged in the second.
     """
     if not truth_given:
         return log, truth
-    return (replace(log, truth_topic=None),
-            replace(truth, topic=log.truth_topic, bag_time=log.bag_time))
+    return (replace(log, truth_topic=None, truth_frame=None),
+            replace(truth, topic=log.truth_topic, frame=log.truth_frame, bag_time=log.bag_time))
 
 
 def resolved_truth(robot_path: str | Path, options: Sequence[TruthOptions]) -> list[TruthOptions]:
