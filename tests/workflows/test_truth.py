@@ -152,3 +152,17 @@ def test_a_truth_in_another_unit_is_named(tmp_path, run_cli, case):
                              "ms" if case == "milliseconds" else "s", *(
                                  ["--truth-columns", "t,x_mm,y_mm,theta"] if case == "millimetres" else []))
     assert code == 0 and "m/s" not in err and "read as seconds" not in err, err
+
+
+def test_a_truth_that_merely_runs_longer_is_no_unit(tmp_path):
+    """A GPS logging for 17 hours around a 60 s drive spans 1000 times the log, on the same
+    clock: it starts elsewhere, so no time unit is blamed."""
+    import warnings
+
+    t = np.arange(-30000.0, 30000.0, 1.0)
+    path = tmp_path / "gps.csv"
+    path.write_text("t,x,y\n" + "".join(f"{ti:.1f},{0.3 * ti:.3f},0\n" for ti in t))
+    log = OdometryLog(np.arange(0.0, 60.0, 0.1), {"speed": np.full(600, 0.3)}, source="log.csv")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert load_truth(TruthOptions(path), log) is not None

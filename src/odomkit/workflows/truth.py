@@ -168,8 +168,9 @@ _TIME_UNITS = {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}
 def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     """Warn where the truth moves faster than a wheeled vehicle
     (:func:`odomkit.truth.implausible_speed`), or where its span and the log's differ by a
-    time unit's factor (within 2x of 1000, 1e6, 1e9): a truth stamped in ms read as s spans
-    1000 times the log's seconds, and overlaps it only in its first thousandth, which
+    time unit's factor (within 2x of 1000, 1e6, 1e9) while both start together: a truth
+    stamped in ms read as s spans 1000 times the log's seconds, and overlaps it only in its
+    first thousandth, which
     evaluate reported as "no window travels --min-travel", not as a unit."""
     from odomkit.truth import implausible_speed
 
@@ -178,7 +179,9 @@ def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     if log is None or len(log.t) < 2 or len(truth) < 2:
         return
     ours, theirs = float(log.t[-1] - log.t[0]), float(truth.t[-1] - truth.t[0])
-    if not (ours > 0 and theirs > 0):
+    # Both clocks start together (relative times from 0, as a recorder writes them); a truth
+    # that merely runs far longer (a GPS logging the whole day) starts elsewhere as a rule.
+    if not (ours > 0 and theirs > 0) or abs(float(truth.t[0] - log.t[0])) > 0.01 * max(ours, theirs):
         return
     for unit, seconds in _TIME_UNITS.items():
         for ratio, whose, flag in ((theirs / ours, "the truth's", "--truth-time-unit"),
