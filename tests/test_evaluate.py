@@ -209,3 +209,98 @@ def test_nees_summary_leaves_out_singular_rows():
     assert out["count"] == 2 and out["mean"] == pytest.approx(2.5) and out["median"] == pytest.approx(2.5)
     assert out["bounds"] == pytest.approx(list(nees_bounds(2, 2)))
     assert nees_summary(e[2:], cov[2:])["mean"] is None
+
+
+def _near_singular_track(n=50, near=3):
+    """A track started at the truth pose with zero covariance: its first rows' covariance is
+    nearly singular (σ 1e-6 m across, 0.1 m along) while the truth's own noise puts 1 mm
+    between estimate and truth on every row; the rest have σ 0.1 m both ways."""
+    t = np.arange(n, dtype=float)
+    truth = np.column_stack((0.1 * t, np.zeros(n), np.zeros(n)))
+    poses = truth + [0.0, 1e-3, 0.0]
+    poses[0] = truth[0]  # the start: no error, zero covariance (singular, nothing lost)
+    cov = np.zeros((n, 3, 3))
+    cov[1:near + 1] = np.diag([1e-2, 1e-12, 1e-4])
+    cov[near + 1:] = np.diag([1e-2, 1e-2, 1e-4])
+    return t, poses, truth, cov
+
+
+def test_evaluate_track_warns_where_near_singular_rows_make_most_of_the_nees(tmp_path, run_cli):
+    """User study s24, M2: evaluate_track returned a NEES mean of 6.6e7 on Snowhite silently,
+    where ``odomkit evaluate`` of the same track warns that a few nearly singular rows make
+    most of the summed NEES. Both now say it, from one function (odomkit.evaluate)."""
+    import json
+    import warnings
+
+    from odomkit.evaluate import evaluate_track
+
+    t, poses, truth, cov = _near_singular_track()
+    # Directly: each row's eᵀP⁻¹e, and the share of the three nearly singular rows.
+    err = poses - truth
+    values = (err[:, 0] ** 2 / np.where(cov[:, 0, 0] > 0, cov[:, 0, 0], np.nan)
+              + err[:, 1] ** 2 / np.where(cov[:, 1, 1] > 0, cov[:, 1, 1], np.nan))[1:]
+    share = values[:3].sum() / values.sum()
+    assert share > 0.5
+    with pytest.warns(UserWarning, match=rf"{100 * share:.4g} % of the summed NEES comes from 3 of 50 rows"):
+        got = evaluate_track(poses, truth, cov)
+    assert got.nees_position_mean == pytest.approx(values.mean(), rel=1e-12)
+    # The same line as odomkit evaluate's on the same track (which names the file first).
+    cells = np.column_stack((t, poses, cov[:, 0, 0], cov[:, 0, 1], cov[:, 0, 2], cov[:, 1, 1], cov[:, 1, 2],
+                             cov[:, 2, 2], truth))
+    track = tmp_path / "track.csv"
+    np.savetxt(track, cells, delimiter=",", comments="", fmt="%.17g",
+               header="t,x,y,theta,cov_xx,cov_xy,cov_xtheta,cov_yy,cov_ytheta,cov_thetatheta,gt_x,gt_y,gt_theta")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        evaluate_track(poses, truth, cov)
+    code, out, err = run_cli("evaluate", track, "--json")
+    assert code == 0, err
+    [said] = [str(w.message) for w in caught]
+    assert f"{track}: {said}" in json.loads(out)["warnings"]
+    # Rows of one regular covariance say nothing.
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        evaluate_track(poses, truth, np.broadcast_to(np.diag([1e-2, 1e-2, 1e-4]), cov.shape))
+
+
+def test_evaluate_track_warns_on_snowhite_as_the_user_study_found(data_dir):
+    from pathlib import Path
+
+    from odomkit.evaluate import evaluate_track
+    from odomkit.io.halmstad import read_snowhite
+    from odomkit.io.robotfile import read_robot
+    from odomkit.track import dead_reckon_log
+
+    path = data_dir / "halmstad-khepera-snowhite" / "snowhite.txt"
+    if not path.exists():
+        pytest.skip("snowhite.txt is not in the data folder")
+    robot, noise = read_robot(Path(__file__).resolve().parents[1] / "examples" / "snowhite.toml")
+    log = read_snowhite(path)
+    track = dead_reckon_log(log, robot, noise=noise)
+    with pytest.warns(UserWarning, match="of the summed NEES comes from"):
+        got = evaluate_track(track.poses, log.ground_truth, track.cov)
+    assert got.nees_position_mean > 1e6
+
+
+def test_the_two_nees_means_and_error_signs_are_told_apart_where_defined():
+    """User study s24, M3: ``nees_position_mean`` is over a track's rows in evaluate_track and
+    track --json's ground_truth, over window ends in evaluate --robot (246.9 against 17.96 for
+    one run); errors are estimate − truth in pose_errors, truth − odometry at window ends.
+    Each definition says so, beside the other."""
+    from pathlib import Path
+
+    from odomkit.evaluate import TrackEvaluation, pose_errors
+    from odomkit.window_errors import WindowErrors
+    from odomkit.workflows.evaluate import evaluate_logs
+
+    def said(text):
+        return " ".join((text or "").split())
+
+    assert "window ends" in said(TrackEvaluation.__doc__) and "rows" in said(TrackEvaluation.__doc__)
+    assert "over window ends" in said(evaluate_logs.__doc__) and "rows" in said(evaluate_logs.__doc__)
+    assert "truth − odometry" in said(pose_errors.__doc__)
+    assert "estimate − truth" in said(WindowErrors.__doc__)
+    docs = Path(__file__).resolve().parents[1] / "docs" / "reference" / "commands"
+    track, evaluate = (said((docs / f"{name}.md").read_text()) for name in ("track", "evaluate"))
+    assert "`ground_truth`" in track and "over every row" in track
+    assert "mean over window ends" in evaluate and "estimate − truth" in evaluate

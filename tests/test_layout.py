@@ -44,7 +44,6 @@ PENDING: Mapping[str, str] = {
     "io/csvlog.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/halmstad.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/jsonfile.py": "issue 9: new module; test module after the refactor",
-    "io/optiodom.py": "issue 9: tested in tests/io/test_readers.py for now",
     "io/trackio.py": "issue 9: tested in tests/test_cli_track.py for now",
     "io/umbmark_errors.py": "issue 9: new module; tested through the umbmark CLI for now",
     "simulate/blocks.py": "issue 9: new module; tested through tests/simulate/test_engine.py",

@@ -48,6 +48,37 @@ def test_malformed_logs_are_rejected_naming_source_and_field(kwargs, message):
         OdometryLog(**args)
 
 
+def _with(values, row, value):
+    out = np.array(values, dtype=float)
+    out[row] = value
+    return out
+
+
+@pytest.mark.parametrize("t, channels, message", [
+    # a clock that jumps back 3 s at row 50: dead-reckoned, it ran silently backwards
+    (_with(np.arange(0, 10, 0.1), slice(50, None), np.arange(5.0, 10.0, 0.1) - 3.0),
+     {"speed": np.full(100, 0.5)},
+     r"^run\.csv: time goes backwards at row 50 \(rows count from 0\): 2 s after 4\.9 s"),
+    (_with(np.arange(100.0), 7, np.nan), {"speed": np.ones(100)}, r"^run\.csv: time is nan at row 7 \(rows"),
+    (np.arange(100.0), {"speed": np.ones(100), "yaw_rate": _with(np.zeros(100), [50, 60], np.nan)},
+     r"^run\.csv: channel 'yaw_rate' is nan at row 50 \(rows count from 0; 1 more row\)"),
+    (np.arange(100.0), {"ticks_left": _with(np.ones(100), 0, np.inf), "ticks_right": np.ones(100)},
+     r"^run\.csv: channel 'ticks_left' is inf at row 0 \(rows count from 0\)"),
+])
+def test_time_going_back_and_values_that_are_not_numbers_are_refused(t, channels, message):
+    """API user study, M5: a log built in Python was not checked as the readers check theirs:
+    time going backwards was dead-reckoned silently, a NaN failed later as ``dd[50] is nan``."""
+    with pytest.raises(InputError, match=message) as info:
+        OdometryLog(t, channels, source="run.csv")
+    assert "\n" not in str(info.value)
+
+
+def test_repeated_times_are_zero_length_steps_as_the_readers_keep_them():
+    t = np.array([0.0, 0.1, 0.1, 0.2])
+    log = OdometryLog(t, {"dist": np.array([0.0, 0.1, 0.0, 0.1]), "steer": np.zeros(4)})
+    assert len(log) == 4
+
+
 def test_missing_channel_names_what_the_log_has():
     log = OdometryLog(np.arange(3.0), {"speed": np.ones(3), "steer": np.zeros(3)}, source="s.txt")
     expected = r"^s\.txt: log has no channel 'yaw_rate' \(it has \['speed', 'steer'\]\)"

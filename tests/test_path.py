@@ -11,7 +11,7 @@ import pytest
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import diff_body_steps
-from odomkit.path import Arc, KellyArc, Spin, Straight, parse_segment
+from odomkit.path import Arc, KellyArc, Spin, SteerArc, Straight, parse_segment
 
 
 @pytest.mark.parametrize("text, model, expected", [
@@ -42,8 +42,18 @@ def test_bad_segment_strings_name_the_option_and_the_syntax(text, model):
 
 
 def test_unknown_model():
-    with pytest.raises(ModelError, match="unknown model 'car'"):
-        parse_segment("arc:1,2", "car")
+    with pytest.raises(ModelError, match="unknown model 'boat'"):
+        parse_segment("arc:1,2", "boat")
+
+
+def test_steered_segments_by_robot_type():
+    """``odomkit predict --robot`` reads a tricycle's or car's segments as wheel speed,
+    steering angle and duration."""
+    assert parse_segment("arc:0.5,0.2,4", "car") == SteerArc(0.5, 0.2, 4.0)
+    assert parse_segment("straight:0.5,4", "tricycle") == SteerArc(0.5, 0.0, 4.0)
+    assert parse_segment("arc:0.5,0.2,4", "unicycle") == KellyArc(0.5, 0.2, 4.0)
+    with pytest.raises(ModelError, match=r"for model 'tricycle'; expected arc:V,ALPHA,T"):
+        parse_segment("arc:3,1", "tricycle")
 
 
 @pytest.mark.parametrize("radius, angle", [(2.0, math.pi / 3), (0.7, -1.2), (-1.5, 0.4), (5.0, 2 * math.pi)])

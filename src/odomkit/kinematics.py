@@ -135,7 +135,7 @@ def car_speed_factor(steer: ArrayLike, wheel_base: float, encoder_offset: float 
     """Rear-axle speed per unit speed of the measuring wheel, v / v_e (:class:`~odomkit.robot.Car`).
 
     Rear wheel at lateral offset H: v_e = v − ωH with ω = v·tan α/L, so
-    v/v_e = 1/(1 − tan α·H/L) (DESIGN.md). Front wheel at (L, H): its contact point moves
+    v/v_e = 1/(1 − tan α·H/L) (docs/reference/robot-files.md). Front wheel at (L, H): its contact point moves
     at (v − ωH, ωL) and an Ackermann wheel rolls along that direction, so
     v/v_e = 1/√((1 − tan α·H/L)² + tan² α) = cos α/√((cos α − sin α·H/L)² + sin² α)
     (H = 0: cos α, the tricycle). Derived here; checked against a closed circle.

@@ -92,6 +92,12 @@ def wheel_channels(names: Iterable[str], source: str | None = None) -> tuple[str
     return pair
 
 
+def _rows_from_zero(rows: NDArray[np.intp]) -> str:
+    """What a message naming ``rows[0]`` adds: rows count from 0, and how many more there are."""
+    more = rows.size - 1
+    return "rows count from 0" + (f"; {more} more row{'s' if more > 1 else ''}" if more else "")
+
+
 @dataclass(frozen=True)
 class OdometryLog:
     """A log of N rows.
@@ -99,10 +105,12 @@ class OdometryLog:
     Parameters
     ----------
     t : ndarray, shape (N,)
-        Time of each row [s]. Repeated timestamps are allowed (zero-length steps);
-        decreasing ones are rejected by the readers.
+        Time of each row [s], finite. Repeated timestamps are allowed (zero-length steps);
+        decreasing ones are an :class:`~odomkit.errors.InputError` naming the row (counted
+        from 0), here as in the readers.
     channels : mapping of str to ndarray, shape (N,)
-        Sensor channels named as in the module docstring.
+        Sensor channels named as in the module docstring; a value that is NaN or infinite
+        is an :class:`~odomkit.errors.InputError` naming the channel and row (from 0).
     ground_truth : ndarray, shape (N, 3), optional
         True pose ``[x, y, θ]`` at each row [m, m, rad], θ continuous.
     source : str
@@ -117,11 +125,29 @@ class OdometryLog:
 
     def __post_init__(self) -> None:
         error = partial(InputError, source=self.source)
-        n = validate.shape(self.t, "time", ("N",), error=error).shape[0]
+        t = validate.shape(self.t, "time", ("N",), error=error)
+        n = t.shape[0]
+        # The readers refuse these at their file's line; a log built in Python is checked
+        # here, or time going back is dead-reckoned silently and a NaN fails deep inside.
+        bad = np.flatnonzero(~np.isfinite(t))
+        if bad.size:
+            raise error(f"time is {t[bad[0]]} at row {bad[0]} ({_rows_from_zero(bad)}); expected finite "
+                        "times [s]")
+        back = np.flatnonzero(np.diff(t) < 0) + 1
+        if back.size:
+            i = int(back[0])
+            raise error(f"time goes backwards at row {i} ({_rows_from_zero(back)}): {clock_text(t[i])} s "
+                        f"after {clock_text(t[i - 1])} s; expected times that never decrease (repeated "
+                        "times are zero-length steps)")
         for name, values in self.channels.items():
             if name not in KNOWN_CHANNELS:
                 raise error(f"unknown channel {name!r}; expected one of {sorted(KNOWN_CHANNELS)}")
-            validate.shape(values, f"channel {name!r}", (n,), error=error)
+            checked = validate.shape(values, f"channel {name!r}", (n,), error=error)
+            bad = np.flatnonzero(~np.isfinite(checked))
+            if bad.size:
+                raise error(f"channel {name!r} is {checked[bad[0]]} at row {bad[0]} "
+                            f"({_rows_from_zero(bad)}); expected finite numbers (drop or interpolate "
+                            "the row first)")
         if self.ground_truth is not None:
             validate.shape(self.ground_truth, "ground truth", (n, 3), error=error)
 

@@ -99,10 +99,14 @@ class SteerArc:
 DiffSegment = Arc | Straight | Spin
 Segment = Arc | Straight | Spin | KellyArc | SteerArc
 
+# keyed by the model (odomkit predict --model) or the robot type (--robot)
 _SYNTAX = {
     "diff": "arc:L,R | straight:D | spin:DTHETA",
     "gyro": "arc:V,OMEGA,T | straight:V,T",
     "compass": "arc:V,OMEGA,T | straight:V,T",
+    "unicycle": "arc:V,OMEGA,T | straight:V,T",
+    "tricycle": "arc:V,ALPHA,T | straight:V,T",
+    "car": "arc:V,ALPHA,T | straight:V,T",
 }
 
 
@@ -115,6 +119,8 @@ def parse_segment(text: str, model: str = "diff") -> Segment:
     Arc(left=3.0, right=1.0)
     >>> parse_segment("straight:0.5,10", model="gyro")
     KellyArc(speed=0.5, yaw_rate=0.0, duration=10.0)
+    >>> parse_segment("arc:0.5,0.2,10", model="tricycle")  # wheel speed, steering angle, duration
+    SteerArc(speed=0.5, steer=0.2, duration=10.0)
     """
     if model not in _SYNTAX:
         raise ModelError(f"unknown model {model!r}; expected one of {', '.join(_SYNTAX)}")
@@ -133,6 +139,11 @@ def parse_segment(text: str, model: str = "diff") -> Segment:
                 return Straight(values[0])
             if kind == "spin" and len(values) == 1:
                 return Spin(values[0])
+        elif model in ("tricycle", "car"):
+            if kind == "arc" and len(values) == 3:
+                return SteerArc(*values)
+            if kind == "straight" and len(values) == 2:
+                return SteerArc(values[0], 0.0, values[1])
         else:
             if kind == "arc" and len(values) == 3:
                 return KellyArc(*values)

@@ -270,7 +270,7 @@ ENCODER_POSITIONS = ("rear", "front")
 class Car:
     """Car-like (Ackermann) vehicle as a bicycle: the reference point is the centre of the
     rear axle, the steering angle is that of a virtual front wheel on the centre line, and
-    the speed is measured at one real wheel (DESIGN.md, robot files).
+    the speed is measured at one real wheel (docs/reference/robot-files.md, the ``car`` row).
 
     With ω = v·tan α / L the yaw rate of the rear-axle speed v, the measuring wheel at
     lateral offset H (+ left) moves at

@@ -78,7 +78,8 @@ class Truth:
         (``--truth-time-sigma``; jitter and latency between two clocks): a fix δ off is off
         by the velocity times δ, so it adds (v·σ)² along the track where the robot moves and
         nothing where it stands; the heading's share ω·δ counts only where a start heading
-        is fitted to position-only truth (:func:`odomkit.window_errors._pose_rates` says why).
+        is fitted to position-only truth (:mod:`odomkit.window_errors` says why, under "The
+        truth's clock").
     stated_sigma : float
         The position σ per axis [m] the truth's own file states (a GPS fix's covariance, a
         bag's NavSatFix) where ``sigma`` was not given (0: none stated). No fit uses it

@@ -1,11 +1,11 @@
 """Unit factors: odomkit's one home for the non-SI units logs come in.
 
-odomkit computes in SI (metres, seconds, radians; DESIGN.md). Logs arrive in other units: a
-CAN bus gives a car's speed in km/h or mph and its steering angle in degrees, a gyro logs
-°/s. The readers (:mod:`odomkit.io.csvlog`) convert named columns with these factors, and the
-data check (:mod:`odomkit.calibrate.check_ratios`) recognises a track that is off by one of
-them. Each constant is the SI value of one unit, exactly (the international mile and foot
-are defined in metres: 1609.344 m and 0.3048 m).
+odomkit computes in SI (metres, seconds, radians; docs/reference/commands/index.md). Logs
+arrive in other units: a CAN bus gives a car's speed in km/h or mph and its steering angle
+in degrees, a gyro logs °/s. The readers (:mod:`odomkit.io.csvlog`) convert named columns
+with these factors, and the data check (:mod:`odomkit.calibrate.check_ratios`) recognises a
+track that is off by one of them. Each constant is the SI value of one unit, exactly (the
+international mile and foot are defined in metres: 1609.344 m and 0.3048 m).
 """
 from __future__ import annotations
 

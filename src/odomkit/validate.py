@@ -2,10 +2,11 @@
 
 Each validator returns its argument in canonical form (``float``, ``int`` or a float
 array) or raises one error whose one-line message names the field and says what was
-expected (DESIGN.md, Conventions), e.g. ``DiffDrive.wheel_base must be a positive finite
-number, got -0.4``. The error is :class:`~odomkit.errors.ModelError` unless the caller
-passes ``error=``: any callable that takes the message, such as
-:class:`~odomkit.errors.InputError` or ``functools.partial(InputError, source=path)``.
+expected (docs/reference/commands/index.md, "What every command shares"), e.g.
+``DiffDrive.wheel_base must be a positive finite number, got -0.4``. The error is
+:class:`~odomkit.errors.ModelError` unless the caller passes ``error=``: any callable that
+takes the message, such as :class:`~odomkit.errors.InputError` or
+``functools.partial(InputError, source=path)``.
 
 What counts as what
 -------------------

@@ -25,6 +25,19 @@ B_j the covariance that unit variance in noise parameter j alone gives
 (:meth:`odomkit.noise.NoiseModel.variance_parameters`). The recursion
 P_{k+1} = F P Fᵀ + G Q Gᵀ is linear in (P_0, Q) and a bias adds S diag(σ²) Sᵀ, so the
 sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
+
+The truth's clock
+-----------------
+A truth fix δ seconds off the log's clock is off by the pose's rate times δ; the rate is
+taken from the window's own dead reckoning over its first and last 0.2 s. Its heading share
+(ω·δ) is kept only at a start whose heading was fitted to position-only truth: there the
+fixes' clock turns the fitted heading by ω·δ, which swings the whole window (a 1 Hz GPS
+0.2 s late on a car turning at 0.3 rad/s: 0.06 rad, 14 m across 240 m), and θ is never
+compared at the end. Elsewhere it is left out on purpose: with the truth's heading compared
+at window ends it would give θ variance to the windows that turn at an end and none to
+those that do not, a per-log bias could then absorb the latter's θ errors exactly, and the
+likelihood had a spurious spike there (seen on commanded-velocity logs: every white θ
+variance fitted to zero and the truth's σ to 0.8 m).
 """
 
 from __future__ import annotations
@@ -84,7 +97,8 @@ class WindowErrors:
         The windows scored (W), those whose start heading could be had.
     error : ndarray, shape (W, 3)
         Truth − odometry at each window end [m, m, rad], θ wrapped; θ NaN where the
-        truth has no heading.
+        truth has no heading (the opposite sign of :func:`odomkit.evaluate.pose_errors`,
+        estimate − truth).
     cov : ndarray, shape (W, 3, 3)
         Predicted covariance of ``error``: start covariance carried to the end, the
         truth's noise at the end and the odometry noise.
@@ -445,7 +459,8 @@ def window_covariance_basis(
         (position-only truth, a compass robot's measured heading) and the end heading is
         not compared. A fix δ seconds off the log's clock is off by the pose rate times δ
         (u from the window's own dead reckoning, :data:`RATE_SPAN`; its heading share only
-        at a start heading fitted to position-only truth, :func:`_pose_rates` says why):
+        at a start heading fitted to position-only truth; the module docstring, "The
+        truth's clock", says why):
         the time column is Φ u_a u_aᵀ Φᵀ + u_b u_bᵀ, zero where the robot stands.
 
     Returns
@@ -537,6 +552,12 @@ def log_window_basis(
     position-only truth, at the first row where its fixes give a heading, said in the
     basis's ``notes``; where they give none at any row, the window is dropped and the note
     says so.
+
+    A building block, with a building block's defaults: no truth-noise columns
+    (``truth_columns=False``: the truth's noise is the fixed ``sigma``, ``heading_sigma`` and
+    ``time_sigma`` of ``truth``, zero unless given). ``odomkit fit-noise`` fits the truth's
+    noise (``truth_columns=True``) and trims the fit; its defaults, in one call for logs in
+    memory: :func:`odomkit.workflows.fit_noise.fit_noise_in_memory`.
 
     Returns
     -------

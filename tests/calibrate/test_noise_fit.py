@@ -297,3 +297,45 @@ def test_degenerate_information_is_named_not_printed_as_nan():
                                 0.01, 0.95)
     text = " ".join(notes)
     assert "nan" not in text and "degenerate" in text
+
+
+def _two_kinds_of_runs(r: float, spread: float, n: int = 40):
+    """Runs of two kinds, half with heading bases (A, B) = (1, r), half (r, 1), and end
+    headings ±``spread`` exactly: the likelihood's maximum is k_L² = k_R² = spread²/(1 + r),
+    where every run's variance is spread², and the expected Fisher information of
+    (k_L², k_R²), ½ Σ ∂C ∂C / C², has the correlation −2r/(1 + r²) (worked by hand)."""
+    A, Bm = np.zeros((n, 3, 3)), np.zeros((n, 3, 3))
+    A[:, 2, 2] = np.where(np.arange(n) < n // 2, 1.0, r)
+    Bm[:, 2, 2] = np.where(np.arange(n) < n // 2, r, 1.0)
+    e = np.zeros((n, 3))
+    e[:, 2] = spread * np.where(np.arange(n) % 2 == 0, 1.0, -1.0)
+    return fit_wheel_noise(e, A, Bm, mean=np.zeros(1), components=("theta",))
+
+
+def test_calibrate_noise_judges_confounded_wheels_as_fit_noise_does():
+    """API user study, L5: calibrate-noise said two k's were confounded beyond |ρ| 0.99,
+    fit-noise beyond 0.95, for the same quantity (the Fisher correlation of two variance
+    estimates); a CW+CCW square at ρ = −0.964 went without a word. One threshold now."""
+    r = 0.78  # −2r/(1 + r²) = −0.9697
+    fit = _two_kinds_of_runs(r, 0.01)
+    assert fit.k_left**2 == pytest.approx(1e-4 / (1 + r), rel=1e-4)
+    assert fit.k_correlation == pytest.approx(-2 * r / (1 + r**2), abs=1e-4)
+    assert any("cannot tell k_left from k_right" in w for w in fit.warnings), fit.warnings
+    from odomkit.calibrate.fit_noise import CONFOUNDED_CORRELATION
+
+    assert CONFOUNDED_CORRELATION < abs(fit.k_correlation) < 0.99
+    calm = _two_kinds_of_runs(0.5, 0.01)  # ρ = −0.8
+    assert not any("cannot tell" in w for w in calm.warnings), calm.warnings
+
+
+def test_calibrate_noise_leaves_the_first_order_regime_where_fit_noise_does():
+    """σθ 0.25 rad at the end: the second-order along-track error D·σθ²/2 is 12 % of the
+    first-order D·σθ, beyond fit-noise's tenth (σθ 0.2 rad); calibrate-noise said so only
+    above 0.3 rad."""
+    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+
+    fit = _two_kinds_of_runs(0.1, 0.25)
+    assert fit.sigma_theta == pytest.approx(0.25, rel=1e-4)
+    assert any("first-order" in w for w in fit.warnings), fit.warnings
+    assert FIRST_ORDER_SIGMA_THETA < fit.sigma_theta < 0.3
+    assert not any("first-order" in w for w in _two_kinds_of_runs(0.1, 0.15).warnings)

@@ -38,6 +38,7 @@ UNITS: dict[str, tuple[str, ...]] = {
     "--gyro-noise": ("rad²/s",),
     "--heading-noise": ("rad²·s",),
     "--compass-period": ("s",),
+    "--sample-period": ("s",),
     "--lateral-noise": ("m²/m",),
     # calibration and evaluation
     "--side": ("m",),

@@ -86,3 +86,28 @@ def test_a_read_only_folder_for_real(tmp_path):
             check_outputs({"--out": folder / "a.csv"})
     finally:
         folder.chmod(stat.S_IRWXU)
+
+
+def test_a_python_writer_on_an_existing_file_names_its_overwrite_parameter(tmp_path):
+    """API user study, L1: ``write_robot`` and ``write_tum`` said "pass --force", which a
+    Python caller has not; their parameter is ``overwrite=True``. The message names both."""
+    import numpy as np
+
+    from odomkit.io.robotfile import write_robot
+    from odomkit.io.trackio import write_tum
+    from odomkit.log import OdometryLog
+    from odomkit.robot import DiffDrive, Unicycle
+    from odomkit.track import dead_reckon_log
+
+    robot_path, tum_path = tmp_path / "r.toml", tmp_path / "t.tum"
+    robot_path.write_text("mine")
+    tum_path.write_text("mine")
+    log = OdometryLog(np.arange(3.0), {"speed": np.ones(3), "yaw_rate": np.zeros(3)})
+    track = dead_reckon_log(log, Unicycle())
+    for call in (lambda: write_robot(robot_path, DiffDrive(0.2)), lambda: write_tum(tum_path, track),
+                 lambda: check_outputs({"--out": tum_path})):
+        with pytest.raises(InputError, match=r"exists already; pass --force to replace it "
+                                             r"\(overwrite=True from Python\)$"):
+            call()
+    assert robot_path.read_text() == tum_path.read_text() == "mine"
+    write_robot(robot_path, DiffDrive(0.2), overwrite=True)

@@ -148,3 +148,34 @@ def test_encoder_resolution_rad_reads_wheel_positions_in_radians(tmp_path):
     assert robot("encoder_resolution = 4096").m_per_tick_left == pytest.approx(2 * math.pi * 0.05 / 4096)
     with pytest.raises(InputError, match='ticks per revolution or "rad"'):
         robot('encoder_resolution = "deg"')
+
+
+def test_noise_comes_in_the_documented_order_whatever_the_files_and_is_found_by_type(tmp_path):
+    """API user study, L3: ``noise[0]`` was taken for the file's first model. The reader's
+    order is the registry's (:data:`odomkit.noise.NOISE_MODELS`), then ``[noise.parameters]``,
+    whatever the file's order; that is documented, and so is the lookup by type."""
+    from odomkit.noise import (
+        NOISE_MODELS,
+        LateralSlipNoise,
+        NoiseSet,
+        ParameterUncertainty,
+        SpeedNoise,
+        WheelNoise,
+    )
+
+    body = ('[robot]\ntype = "diff"\nwheel_base = 0.2\nm_per_tick = 1e-4\n'
+            '[noise.parameters]\nsigma_wheel_base = 0.002\n'
+            '[noise]\nk_left = 0.001\nk_right = 0.002\nalpha_ss = 1e-5\nalpha_lateral = 3e-5\n')
+    path = tmp_path / "robot.toml"
+    path.write_text(body)
+    _, noise = read_robot(path)
+    registry = list(NOISE_MODELS.values())
+    plain = [m for m in noise if not isinstance(m, ParameterUncertainty)]
+    assert [type(m) for m in plain] == sorted((type(m) for m in plain), key=registry.index)
+    assert isinstance(noise[-1], ParameterUncertainty)
+    found = NoiseSet.of(noise)
+    assert found.get(WheelNoise) == WheelNoise(0.001, 0.002)
+    assert found.get(SpeedNoise) == SpeedNoise(alpha_ss=1e-5)
+    assert found.get(LateralSlipNoise) == LateralSlipNoise(3e-5)
+    doc = read_robot.__doc__
+    assert "NOISE_MODELS" in doc and "NoiseSet.of(noise).get(" in doc

@@ -98,3 +98,32 @@ def test_calibrate_writes_a_speed_fed_car_that_reads_back_as_the_calibrated_car(
     assert robot.steering_offset == pytest.approx(0.004, abs=2e-4)  # the offset put in
     assert noise == (ParameterUncertainty(sigma_wheel_base=0.01, sigma_scale_left=0.02,
                                           sigma_steering_offset=0.003),)
+
+
+def test_truth_given_with_the_fits_key_names_reads_back(tmp_path):
+    """``NoiseFit.truth_noise`` and fit-noise's JSON name the truth's noise ``truth_sigma``,
+    ``truth_heading_sigma``, ``truth_time_sigma``; the file's ``[truth]`` table ``sigma``,
+    ``heading_sigma``, ``time_sigma`` (API user study, H4: the fit's names were dropped
+    silently, an empty ``[truth]`` table written). Both spellings are taken."""
+    from odomkit.io.robotfile import read_truth_table
+
+    fitted = {"truth_sigma": 0.004, "truth_heading_sigma": 0.0111, "truth_time_sigma": 0.0204}
+    path = write_robot(tmp_path / "fit.toml", DiffDrive(0.2), truth=fitted)
+    assert read_truth_table(path) == {"sigma": 0.004, "heading_sigma": 0.0111, "time_sigma": 0.0204}
+    mixed = {"sigma": 0.01, "truth_time_offset": 0.05}
+    path = write_robot(tmp_path / "mixed.toml", DiffDrive(0.2), truth=mixed)
+    assert read_truth_table(path) == {"sigma": 0.01, "time_offset": 0.05}
+
+
+@pytest.mark.parametrize("truth, word", [
+    ({"sigma": 0.01, "truth_sigmaa": 0.02}, "truth_sigmaa"),
+    ({"position_sigma": 0.01}, "position_sigma"),
+    ({"sigma": 0.01, "truth_sigma": 0.01}, "sigma"),  # one key given twice
+])
+def test_truth_with_an_unknown_or_doubled_key_is_refused(tmp_path, truth, word):
+    from odomkit.errors import InputError
+
+    with pytest.raises(InputError, match=word) as info:
+        write_robot(tmp_path / "bad.toml", DiffDrive(0.2), truth=truth)
+    assert "\n" not in str(info.value)
+    assert not (tmp_path / "bad.toml").exists()

@@ -66,11 +66,18 @@ CASES = [
 ]
 
 
+def _period(noise):
+    """A 10 Hz sample period for per-sample noise (a TricycleNoise), which needs one."""
+    models = noise if isinstance(noise, tuple) else (noise,)
+    return {"sample_period": 0.1} if any(m.per_sample for m in models) else {}
+
+
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
 def test_monte_carlo_confirms_the_propagated_covariance(case):
     name, robot, path, noise = case
-    theory = predict(path, noise, robot=robot, engine="recursion", partitions=PARTITIONS)
-    mc = simulate_runs(path, noise, robot=robot, runs=RUNS, partitions=PARTITIONS, seed=7)
+    per = _period(noise)
+    theory = predict(path, noise, robot=robot, engine="recursion", partitions=PARTITIONS, **per)
+    mc = simulate_runs(path, noise, robot=robot, runs=RUNS, partitions=PARTITIONS, seed=7, **per)
     if isinstance(robot, CompassOdometry):  # the compass's readings are its steps
         assert mc.partitions >= PARTITIONS
     final = mc.final
@@ -117,10 +124,10 @@ def test_closed_engine_refuses_bias_and_steered_vehicles():
     with pytest.raises(ModelError, match="bias noise has no closed form"):
         predict(DIFF_PATH, (WheelNoise(0.01, 0.01), ParameterUncertainty(0.01)), 0.4)
     with pytest.raises(ModelError, match="steering model has no closed form"):
-        predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7))
+        predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), sample_period=0.1)
     # the transition engine gives the recursion's numbers
-    a = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="recursion")
-    b = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="transition")
+    a = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="recursion", sample_period=0.1)
+    b = predict(STEER_PATH, TricycleNoise(0.01, 0.01), robot=Car(2.7), engine="transition", sample_period=0.1)
     assert np.allclose(a.cov, b.cov, rtol=1e-9, atol=1e-18)
 
 
@@ -130,7 +137,8 @@ def test_monte_carlo_experiment_gives_a_car_with_bias_its_verdict():
     from odomkit.simulate import monte_carlo
 
     noise = (TricycleNoise(0.02, 0.004), ParameterUncertainty(0.03, 0.005, sigma_steering_offset=0.002))
-    r = monte_carlo(STEER_PATH, noise, robot=Car(2.7, 0.8), runs=4000, partitions=40, seed=11)
-    assert r["theory"]["pose"] == pytest.approx(
-        predict(STEER_PATH, noise, robot=Car(2.7, 0.8), engine="recursion", partitions=40).to_dict()["pose"])
+    r = monte_carlo(STEER_PATH, noise, robot=Car(2.7, 0.8), runs=4000, partitions=40, seed=11,
+                    sample_period=0.1)
+    p = predict(STEER_PATH, noise, robot=Car(2.7, 0.8), engine="recursion", sample_period=0.1)
+    assert r["theory"]["pose"] == pytest.approx(p.to_dict()["pose"])
     assert r["linear_model_ok"], r["verdict"]

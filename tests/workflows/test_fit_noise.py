@@ -519,3 +519,28 @@ def test_one_window_length_given_twice_is_refused(run_cli, tmp_path):
     assert code == 2 and stdout == ""
     assert stderr.strip().splitlines() == [
         "odomkit: error: --window 1min is the same length as --window 60s (60 s): give each length once"]
+
+
+def test_the_fits_warnings_reach_python_callers_and_the_cli_says_each_once(run_cli, tmp_path):
+    """User study s24, M4: fit_noise_files returned its warnings (a model family that does not
+    describe the logs, in-sample coverage off its range) in the dict but issued none, so in a
+    notebook the fit's most important warnings never showed, while calibrate_exact's and
+    evaluate_logs' did. They are UserWarnings now; the CLI, which collects them, prints each
+    once on stderr, in text and with --json, and the JSON lists the same lines."""
+    from odomkit.workflows.fit_noise import fit_noise_files
+    from odomkit.workflows.truth import TruthOptions
+
+    with pytest.warns(UserWarning) as caught:
+        result = fit_noise_files(ROBOT, RUNS[:1], [TruthOptions()], tmp_path / "p.toml", window="10s")
+    issued = [" ".join(str(w.message).split()) for w in caught]
+    assert result["warnings"] and all(issued.count(w) == 1 for w in result["warnings"])
+    for json_flag in ((), ("--json",)):
+        code, stdout, stderr = run_cli("fit-noise", "--robot", ROBOT, *_logs(RUNS[:1]), "--window", "10s",
+                                       "--out", tmp_path / f"c{len(json_flag)}.toml", *json_flag)
+        assert code == 0, stderr
+        said = [line.removeprefix("odomkit: warning: ") for line in stderr.splitlines()
+                if line.startswith("odomkit: warning: ")]
+        assert len(said) == len(set(said)), said
+        assert sorted(said) == sorted(result["warnings"])
+        if json_flag:
+            assert sorted(json.loads(stdout)["warnings"]) == sorted(said)

@@ -432,3 +432,13 @@ def test_a_robot_file_without_noise_gets_its_errors_and_the_fitted_noise_tested(
     assert any("has no [noise] table" in chunk for chunk in page.text)
     assert "fitted.coverage.0.5" in page.cells
 
+
+
+def test_the_noise_fits_warnings_are_on_the_page_once(with_truth):
+    """The fit issues its warnings as UserWarnings now (user study s24, M4); the report, which
+    leads each with "the noise fit: ", must not list them bare too."""
+    result, _, _ = with_truth
+    lead = "the noise fit: "
+    fitted = [w.removeprefix(lead) for w in result["warnings"] if w.startswith(lead)]
+    assert fitted
+    assert not set(fitted) & set(result["warnings"])

@@ -6,8 +6,9 @@ returning :class:`~odomkit.calibrate.check_finding.Finding`\\ s, each ``ok``, ``
 ``fail`` with a message in the log's own numbers and, where something is missing or wrong,
 what to do about it:
 
-* :func:`check_values` — NaN or infinite values (the file readers refuse them already, so
-  this guards logs built in Python);
+* :func:`check_values` — NaN or infinite values (the file readers and
+  :class:`~odomkit.log.OdometryLog` refuse them already, so this guards a log whose arrays
+  were changed in place after it was built);
 * :func:`check_time` — repeated or decreasing timestamps, and time jumps (a step more
   than :data:`GAP_FACTOR` times the median period);
 * :func:`check_counters` — counter wraps (an increment within a few typical steps of

@@ -49,6 +49,7 @@ if TYPE_CHECKING:
     from odomkit.window_errors import WindowBasis
 
 __all__ = [
+    "CONFOUNDED_CORRELATION",
     "DEFAULT_FIXED",
     "DEFAULT_TRIM",
     "DEFAULT_WHITE",
@@ -92,9 +93,17 @@ DEFAULT_FIXED = frozenset({"sigma_dt"})
 #: costs more; ``--trim 1`` keeps every window.
 DEFAULT_TRIM: float | None = 0.999
 #: σθ at a window end [rad] above which the first-order model is doubtful: the along-track
-#: second-order error (≈ D σθ²/2) reaches a tenth of the cross-track error (D σθ).
+#: second-order error (≈ D σθ²/2) reaches a tenth of the cross-track error (D σθ). Also
+#: calibrate-noise's limit at a run's end (:mod:`odomkit.calibrate.noise_fit`): the same
+#: model judged the same way (it had 0.3 rad there, with no reason recorded).
 FIRST_ORDER_SIGMA_THETA = 0.2
-_CORRELATION = 0.95
+#: |correlation| of two fitted variances' estimates (expected Fisher information) beyond
+#: which they are not told apart: each standard error is 1/√(1 − ρ²) > 3.2 times that of a
+#: fit of either alone. Every pair of fit-noise's parameters is judged by it, and
+#: calibrate-noise's k_L², k_R² (:mod:`odomkit.calibrate.noise_fit`): one quantity, one
+#: threshold (calibrate-noise had 0.99, with no reason recorded, and passed a CW+CCW square's
+#: −0.964 without a word).
+CONFOUNDED_CORRELATION = 0.95
 
 
 def first_order_note(var_theta: ArrayLike, start_var_theta: ArrayLike | None = None) -> str | None:
@@ -486,6 +495,15 @@ def fit_noise(
 ) -> NoiseFit:
     """Maximum-likelihood variances of ``models`` from the window bases of several logs.
 
+    A building block, with a building block's defaults: no trimming (``trim=None``), white
+    noise alone (``kinds=("white",)``), and the truth's noise fitted only where the bases
+    carry it as columns (:func:`odomkit.window_errors.log_window_basis`'s ``truth_columns``,
+    False by default). ``odomkit fit-noise``'s defaults differ (trim :data:`DEFAULT_TRIM`,
+    white and bias, the truth's noise fitted, :data:`DEFAULT_FIXED` held): for logs in memory
+    they are :func:`odomkit.workflows.fit_noise.fit_noise_in_memory`, which gives the
+    command's result; chained by hand with these defaults the fit is another, far more
+    cautious model.
+
     Parameters
     ----------
     bases : sequence of WindowBasis
@@ -764,7 +782,7 @@ def _warn(out: list[str], lik: WindowLikelihood, params: Sequence[NoiseParameter
                    f"not bound it){hint}; kept at its robot-file value")
     for x in range(informed.size):
         for y in range(x + 1, informed.size):
-            if abs(corr[x, y]) > _CORRELATION:
+            if abs(corr[x, y]) > CONFOUNDED_CORRELATION:
                 a, b = params[informed[x]].key, params[informed[y]].key
                 out.append(f"{a} and {b} are not separately identifiable (correlation "
                            f"{corr[x, y]:+.3f}){hint}")

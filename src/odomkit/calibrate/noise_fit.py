@@ -29,14 +29,17 @@ the interval is open: its upper end is ``inf``.
 When the data cannot identify the fit, the result says so in ``warnings``:
 
 * the two k's are confounded when the estimates of k_L² and k_R² correlate beyond
-  :data:`CONFOUNDED_CORRELATION` (expected Fisher information of the Gaussian model,
-  I_jk = ½ Σ_i tr(C_i⁻¹ ∂_j C_i C_i⁻¹ ∂_k C_i), e.g. Kay, *Fundamentals of Statistical
-  Signal Processing I*, eq. 3.31). On a forward–spin–back path each wheel drives the other's
-  side of the return leg and ρ ≈ −0.9997: only k_L² + k_R² is measured, and each interval
-  alone means little;
+  :data:`odomkit.calibrate.fit_noise.CONFOUNDED_CORRELATION` (expected Fisher information
+  of the Gaussian model, I_jk = ½ Σ_i tr(C_i⁻¹ ∂_j C_i C_i⁻¹ ∂_k C_i), e.g. Kay,
+  *Fundamentals of Statistical Signal Processing I*, eq. 3.31). On a forward–spin–back
+  path each wheel drives the other's side of the return leg and ρ ≈ −0.9997: only
+  k_L² + k_R² is measured, and each interval alone means little;
 * the runs leave the first-order regime when the fitted end-heading spread σθ exceeds
-  :data:`FIRST_ORDER_SIGMA_THETA` (the along-track error's second-order term D·σθ²/2 is then
-  no longer small, and the fitted k comes out too large).
+  :data:`odomkit.calibrate.fit_noise.FIRST_ORDER_SIGMA_THETA` (the along-track error's
+  second-order term D·σθ²/2 is then no longer small, and the fitted k comes out too large).
+
+Both thresholds are fit-noise's, kept in :mod:`odomkit.calibrate.fit_noise`: the same
+quantities judged once (this module had its own, 0.99 and 0.3 rad, with no reason recorded).
 """
 
 from __future__ import annotations
@@ -52,6 +55,7 @@ from scipy.special import ndtri
 
 from odomkit import validate
 from odomkit.angles import wrap_angle
+from odomkit.calibrate.fit_noise import CONFOUNDED_CORRELATION, FIRST_ORDER_SIGMA_THETA
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import ellipse_points
 from odomkit.integrate import dead_reckon
@@ -59,16 +63,10 @@ from odomkit.kinematics import Method, diff_body_jacobian, diff_body_steps, step
 from odomkit.log import OdometryLog
 from odomkit.robot import DiffDrive
 
-__all__ = ["CONFOUNDED_CORRELATION", "FIRST_ORDER_SIGMA_THETA", "fit_wheel_noise",
-           "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
+__all__ = ["fit_wheel_noise", "fit_wheel_noise_from_runs", "wheel_noise_basis", "WheelNoiseFit"]
 
 _AXES = {"x": 0, "y": 1, "theta": 2}
 
-#: |correlation| of the k_L², k_R² estimates beyond which the two are not told apart
-#: (standard errors inflated by 1/√(1 − ρ²) > 7 against a fit of either k alone).
-CONFOUNDED_CORRELATION = 0.99
-#: End-heading standard deviation [rad] beyond which the first-order likelihood is wrong.
-FIRST_ORDER_SIGMA_THETA = 0.3
 # The upper end of an interval is searched up to this factor times the k that alone
 # explains the whole observed spread: a k predicting a spread 10⁶ times the observed one
 # that is still inside the interval means the profile never crosses.

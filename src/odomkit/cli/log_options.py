@@ -1,8 +1,7 @@
-"""The log options shared by every command that reads a log (DESIGN.md, "Text logs and truth
-files", "ROS bags"): ``--format --columns --cumulative --wrap-bits --period --time-unit
---decimate --topic --joints --bag-time --truth-topic --truth-frame --imu-up --span --record``, declared
-once here and parsed into
-:class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
+"""The log options shared by every command that reads a log (docs/reference/logs-and-truth.md):
+``--format --columns --cumulative --wrap-bits --period --time-unit --decimate --topic --joints
+--bag-time --truth-topic --truth-frame --imu-up --span --record``, declared once here and parsed
+into :class:`odomkit.workflows.logs.LogOptions`; and the warnings that reading (or the work after
 it) raises, shown as one line each.
 
 ``track``, ``calibrate``, ``calibrate-noise``, ``umbmark --runs``, ``fit-noise``, ``evaluate``,

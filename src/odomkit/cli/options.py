@@ -1,10 +1,12 @@
-"""Options shared by ``odomkit predict`` and ``odomkit simulate``: the robot/noise model,
-the path of segments and the initial state, parsed the same way for both."""
+"""Options shared by ``odomkit predict`` and ``odomkit simulate``: the robot/noise model
+(by flags, or a robot file with ``--robot``), the path of segments and the initial state,
+parsed the same way for both."""
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 from typing import TYPE_CHECKING, Annotated
 
 import typer
@@ -14,13 +16,15 @@ from odomkit.errors import ModelError
 if TYPE_CHECKING:
     from odomkit.path import Segment
     from odomkit.propagate.plan import NoiseArg
+    from odomkit.robot import Robot
 
 __all__ = [
     "MODEL_FLAGS", "CompassPeriodOption", "GyroNoiseOption", "HeadingNoiseOption",
     "InitialCovMatrixOption", "InitialCovOption", "LateralNoiseOption",
     "InitialPoseOption", "JsonOption", "KLeftOption", "KRightOption", "ModelOption", "noise_from_flags",
-    "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "SegmentOption",
-    "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption", "WheelBaseOption"
+    "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "RobotFileOption",
+    "SamplePeriodOption", "SegmentOption", "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption",
+    "WheelBaseOption"
 ]
 
 Opt = typer.Option
@@ -28,14 +32,25 @@ Opt = typer.Option
 MODEL_FLAGS = {
     "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle",
              "--lateral-noise"},
-    "gyro": {"--speed-noise", "--gyro-noise", "--lateral-noise"},
+    "gyro": {"--speed-noise", "--gyro-noise", "--lateral-noise", "--sample-period"},
     "compass": {"--speed-noise", "--heading-noise", "--compass-period", "--lateral-noise"},
 }
+#: The flags a robot file (``--robot``) may come with: the file gives the vehicle and noise.
+ROBOT_FILE_FLAGS = {"--compass-period", "--sample-period"}
 
 SegmentOption = Annotated[list[str], Opt("--segment", help=(
     "Path segment, repeatable. diff: arc:L,R (wheel travels [m]) | straight:D [m] | "
-    "spin:DTHETA [rad]; gyro/compass: arc:V,OMEGA,T [m/s, rad/s, s] | straight:V,T [m/s, s]."))]
-ModelOption = Annotated[str, Opt("--model", help="diff | gyro | compass")]
+    "spin:DTHETA [rad]; gyro/compass (and a unicycle): arc:V,OMEGA,T [m/s, rad/s, s] | "
+    "straight:V,T [m/s, s]; a tricycle or car (--robot): arc:V,ALPHA,T (wheel speed, "
+    "steering angle, duration [m/s, rad, s]) | straight:V,T [m/s, s]."))]
+ModelOption = Annotated[str | None, Opt("--model", help="diff (default) | gyro | compass")]
+RobotFileOption = Annotated[Path | None, Opt("--robot", help=(
+    "Robot file (TOML): its vehicle and [noise] as they are (e.g. fit-noise --out), instead "
+    "of --model and the noise flags; any vehicle, any noise that track takes for it."))]
+SamplePeriodOption = Annotated[float | None, Opt("--sample-period", help=(
+    "Sample period T of the odometry [s]: each segment lasts a whole number of periods and "
+    "its samples are the steps (not --partitions). Required by noise given per sample (a "
+    "tricycle's or car's sigma_speed, sigma_steer, sigma_dt)."))]
 NoiseOption = Annotated[str, Opt("--noise", help="diff model: wheel (Chong–Kleeman) | classical (eq. 1–3)")]
 WheelBaseOption = Annotated[float | None, Opt("--wheel-base", help="Wheel base B [m].")]
 KLeftOption = Annotated[float | None, Opt("--k-left", help="Left wheel k_L [m^½].")]
@@ -143,19 +158,28 @@ class PathProblem:
     pose0: list[float]
     cov0: list[list[float]] | None
     compass_period: float | None = None
+    sample_period: float | None = None
+    robot: Robot | None = None
 
 
 def path_problem(
-    model: str, noise: str, segments: list[str], given: dict[str, float | None],
+    model: str | None, noise: str, segments: list[str], given: dict[str, float | None],
     initial_pose: str, initial_cov: str | None, initial_cov_matrix: str | None,
+    robot_file: Path | None = None,
 ) -> PathProblem:
     """Check and parse the shared options.
 
     ``given`` maps each model flag (``--wheel-base``, ``--k-left``, ...) to its value or
     None; a flag that does not belong to ``model`` is an error, not silently ignored.
+    ``robot_file`` (``--robot``) gives the vehicle and its noise instead of ``model`` and
+    the noise flags (which it excludes); the segments are then the vehicle's.
     """
     from odomkit.path import parse_segment  # not at import time: keeps --help fast
 
+    if robot_file is not None:
+        return _robot_problem(robot_file, model, noise, segments, given, initial_pose, initial_cov,
+                              initial_cov_matrix)
+    model = "diff" if model is None else model
     if model not in MODEL_FLAGS:
         raise ModelError(f"--model must be one of {', '.join(MODEL_FLAGS)}, got {model!r}")
     stray = [flag for flag, v in given.items() if v is not None and flag not in MODEL_FLAGS[model]]
@@ -164,21 +188,57 @@ def path_problem(
     wheel_base = given.get("--wheel-base")
     if model == "diff" and wheel_base is None:
         raise ModelError("--model diff needs --wheel-base (metres)")
-    if initial_cov is not None and initial_cov_matrix is not None:
-        raise ModelError("give --initial-cov or --initial-cov-matrix, not both")
-    cov0 = None
-    if initial_cov is not None:
-        var = parse_numbers(initial_cov, "--initial-cov", 3)
-        if min(var) < 0:
-            raise ModelError(f"--initial-cov holds variances, which must be >= 0; got {var}")
-        cov0 = [[var[0], 0.0, 0.0], [0.0, var[1], 0.0], [0.0, 0.0, var[2]]]
-    elif initial_cov_matrix is not None:
-        cov0 = parse_matrix(initial_cov_matrix)
     return PathProblem(
         segments=[parse_segment(s, model) for s in segments],
         noise=noise_from_flags(model, noise, given),
         wheel_base=wheel_base,
         pose0=parse_numbers(initial_pose, "--initial-pose", 3),
-        cov0=cov0,
+        cov0=_initial_cov(initial_cov, initial_cov_matrix),
         compass_period=_positive_or_none("--compass-period", given.get("--compass-period"), "s"),
+        sample_period=_positive_or_none("--sample-period", given.get("--sample-period"), "s"),
+    )
+
+
+def _initial_cov(initial_cov: str | None, initial_cov_matrix: str | None) -> list[list[float]] | None:
+    """The start covariance of ``--initial-cov`` (variances) or ``--initial-cov-matrix``."""
+    if initial_cov is not None and initial_cov_matrix is not None:
+        raise ModelError("give --initial-cov or --initial-cov-matrix, not both")
+    if initial_cov is not None:
+        var = parse_numbers(initial_cov, "--initial-cov", 3)
+        if min(var) < 0:
+            raise ModelError(f"--initial-cov holds variances, which must be >= 0; got {var}")
+        return [[var[0], 0.0, 0.0], [0.0, var[1], 0.0], [0.0, 0.0, var[2]]]
+    if initial_cov_matrix is not None:
+        return parse_matrix(initial_cov_matrix)
+    return None
+
+
+def _robot_problem(
+    robot_file: Path, model: str | None, noise: str, segments: list[str], given: dict[str, float | None],
+    initial_pose: str, initial_cov: str | None, initial_cov_matrix: str | None,
+) -> PathProblem:
+    """The path problem of ``--robot``: the file's vehicle and [noise] (the shared reader,
+    :func:`odomkit.io.robotfile.read_robot`), its segment syntax, and no model flags."""
+    from odomkit.errors import InputError
+    from odomkit.io.robotfile import read_robot
+    from odomkit.path import parse_segment
+
+    stray = [flag for flag, v in given.items() if v is not None and flag not in ROBOT_FILE_FLAGS]
+    stray += ["--model"] * (model is not None) + ["--noise"] * (noise != "wheel")
+    if stray:
+        raise ModelError(f"--robot takes the vehicle and its noise from the robot file: drop "
+                         f"{', '.join(stray)}")
+    robot, models = read_robot(robot_file)
+    if not models:
+        raise InputError("has no [noise] table: nothing to predict (add one, e.g. fit-noise --out)",
+                         source=str(robot_file))
+    return PathProblem(
+        segments=[parse_segment(s, robot.type_name) for s in segments],
+        noise=models,
+        wheel_base=None,
+        pose0=parse_numbers(initial_pose, "--initial-pose", 3),
+        cov0=_initial_cov(initial_cov, initial_cov_matrix),
+        compass_period=_positive_or_none("--compass-period", given.get("--compass-period"), "s"),
+        sample_period=_positive_or_none("--sample-period", given.get("--sample-period"), "s"),
+        robot=robot,
     )

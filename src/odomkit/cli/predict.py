@@ -21,6 +21,8 @@ from odomkit.cli.options import (
     ModelOption,
     NoiseOption,
     Opt,
+    RobotFileOption,
+    SamplePeriodOption,
     SegmentOption,
     SigmaAngleOption,
     SigmaDistanceOption,
@@ -54,7 +56,7 @@ def _print_table(data: dict[str, Any]) -> None:
 @app.command("predict")
 def predict_command(
     segment: SegmentOption,
-    model: ModelOption = "diff",
+    model: ModelOption = None,
     noise: NoiseOption = "wheel",
     wheel_base: WheelBaseOption = None,
     k_left: KLeftOption = None,
@@ -66,6 +68,8 @@ def predict_command(
     heading_noise: HeadingNoiseOption = None,
     lateral_noise: LateralNoiseOption = None,
     compass_period: CompassPeriodOption = None,
+    robot: RobotFileOption = None,
+    sample_period: SamplePeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
     initial_cov_matrix: InitialCovMatrixOption = None,
@@ -74,14 +78,16 @@ def predict_command(
         "the track's direct-heading engines on its samples)."))] = "closed",
     partitions: Annotated[int | None, Opt(
         "--partitions", help=("Steps per segment (recursion engines; classical pieces). A "
-                              "compass ignores it: its steps are its samples."))] = None,
+                              "compass and --sample-period ignore it: the steps are the "
+                              "samples."))] = None,
     plot: Annotated[Path | None, Opt(
         "--plot", help="Draw the path with its 95 % ellipses and the covariance elements over the "
                        "distance into this file (.png, .svg or .pdf; needs the plot extra).")] = None,
     force: Annotated[bool, Opt("--force", help="Replace an existing --plot file.")] = False,
     json_out: JsonOption = False,
 ) -> None:
-    """Predict the end pose and its covariance for a path of segments (closed form)."""
+    """Predict the end pose and its covariance for a path of segments (closed form, or the
+    track's engines where there is none)."""
     # The propagation stack loads only when the command runs (fast --help).
     from odomkit.propagate.predict import ENGINES
     from odomkit.workflows.predict import run_predict
@@ -94,11 +100,12 @@ def predict_command(
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
          "--heading-noise": heading_noise, "--compass-period": compass_period,
-         "--lateral-noise": lateral_noise},
-        initial_pose, initial_cov, initial_cov_matrix)
+         "--lateral-noise": lateral_noise, "--sample-period": sample_period},
+        initial_pose, initial_cov, initial_cov_matrix, robot)
     result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
                          pose0=problem.pose0, cov0=problem.cov0, engine=engine,
                          partitions=partitions, compass_period=problem.compass_period,
+                         robot=problem.robot, sample_period=problem.sample_period,
                          plot=plot, overwrite=force)
     if json_out:
         print_json(result)

@@ -5,8 +5,9 @@
     odomkit simulate --model diff --wheel-base 0.4 --k-left 0.001 --k-right 0.001 \\
         --segment arc:3,1 --runs 10000 --partitions 10000 --seed 1 [--json]
 
-Same robot, noise and segment options as ``odomkit predict`` (parsed by its helpers),
-plus ``--runs --partitions --seed --workers --chunk-runs --scheduler --systematic``.
+Same robot, noise and segment options as ``odomkit predict`` (parsed by its helpers; a
+robot file with ``--robot``), plus ``--runs --partitions --seed --workers --chunk-runs
+--scheduler --systematic``.
 """
 
 from __future__ import annotations
@@ -31,6 +32,8 @@ from odomkit.cli.options import (
     ModelOption,
     NoiseOption,
     Opt,
+    RobotFileOption,
+    SamplePeriodOption,
     SegmentOption,
     SigmaAngleOption,
     SigmaDistanceOption,
@@ -93,7 +96,7 @@ def _print_table(r: dict[str, Any]) -> None:
 @app.command("simulate")
 def simulate_command(
     segment: SegmentOption,
-    model: ModelOption = "diff",
+    model: ModelOption = None,
     noise: NoiseOption = "wheel",
     wheel_base: WheelBaseOption = None,
     k_left: KLeftOption = None,
@@ -105,6 +108,8 @@ def simulate_command(
     heading_noise: HeadingNoiseOption = None,
     lateral_noise: LateralNoiseOption = None,
     compass_period: CompassPeriodOption = None,
+    robot: RobotFileOption = None,
+    sample_period: SamplePeriodOption = None,
     initial_pose: InitialPoseOption = "0,0,0",
     initial_cov: InitialCovOption = None,
     initial_cov_matrix: InitialCovMatrixOption = None,
@@ -113,8 +118,8 @@ def simulate_command(
         "--partitions", help=(
             "Partitions K of each segment: the numerical resolution (speed, wheel and gyro "
             "noise are split over them). A compass draws one heading error per compass "
-            "sample (--compass-period), and K is rounded up to whole steps per sample; the "
-            "output reports the K used."))] = 1000,
+            "sample (--compass-period), and K is rounded up to whole steps per sample; with "
+            "--sample-period the steps are the samples; the output reports the K used."))] = 1000,
     seed: Annotated[int, Opt("--seed", help="Random seed (same seed, same numbers).")] = 0,
     workers: Annotated[int | None, Opt(
         "--workers", help="Threads for a local run (default: CPU count).")] = None,
@@ -146,8 +151,8 @@ def simulate_command(
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
          "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
          "--heading-noise": heading_noise, "--compass-period": compass_period,
-         "--lateral-noise": lateral_noise},
-        initial_pose, initial_cov, initial_cov_matrix)
+         "--lateral-noise": lateral_noise, "--sample-period": sample_period},
+        initial_pose, initial_cov, initial_cov_matrix, robot)
     sys_err = None
     if systematic is not None:
         e_d, e_b, e_s = parse_numbers(systematic, "--systematic", 3)
@@ -165,6 +170,7 @@ def simulate_command(
             systematic=sys_err, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress, compass_period=problem.compass_period,
             max_work=max_work, plot=plot, overwrite=force,
+            robot=problem.robot, sample_period=problem.sample_period,
         )
     if json_out:
         print_json(with_warnings(result, warned))

@@ -1,8 +1,7 @@
-"""The truth options shared by every command that takes ground truth (DESIGN.md, "Text logs
-and truth files"): ``--truth --truth-format --truth-columns --truth-time-unit --truth-sigma
---truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap --truth-record --truth-up``,
-parsed into
-:class:`odomkit.workflows.truth.TruthOptions`."""
+"""The truth options shared by every command that takes ground truth
+(docs/reference/logs-and-truth.md): ``--truth --truth-format --truth-columns --truth-time-unit
+--truth-sigma --truth-heading-sigma --truth-time-sigma --truth-time-offset --max-gap --truth-record
+--truth-up``, parsed into :class:`odomkit.workflows.truth.TruthOptions`."""
 
 from __future__ import annotations
 

@@ -41,6 +41,7 @@ from numpy.typing import NDArray
 from odomkit.angles import wrap_angle
 from odomkit.errors import InputError
 from odomkit.io.bag import require_rosbags
+from odomkit.io.files import EXISTS_ALREADY
 from odomkit.io.ros import UNOBSERVED_VARIANCE, ros_pose_covariance, ros_twist_covariance
 from odomkit.noise import NoiseSet
 from odomkit.track import Track
@@ -96,7 +97,7 @@ def check_bag_out(path: str | Path, fmt: str | None = None, *, overwrite: bool =
             raise InputError("--bag-out: this folder is not a ROS 2 bag; odomkit replaces only a bag "
                              "folder (metadata.yaml and its storage files)", source=str(path))
         if not overwrite:
-            raise InputError("exists already; pass --force to replace it", source=str(path))
+            raise InputError(EXISTS_ALREADY, source=str(path))
         here = path.resolve()
         for source in inputs:
             if here in (Path(source).resolve(), *Path(source).resolve().parents):

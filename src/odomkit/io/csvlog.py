@@ -1,5 +1,5 @@
 """Text logs as users have them: comma, semicolon, tab or whitespace separated, with or
-without a header, ``#`` comments, plain or gzip (DESIGN.md, "Text logs and truth files").
+without a header, ``#`` comments, plain or gzip (docs/reference/logs-and-truth.md, "Log options").
 
 The layout (delimiter, header) is sniffed from the first data lines
 (:func:`odomkit.io.text.sniff_layout`); the columns are named by ``--columns``, either in
@@ -52,7 +52,7 @@ UNIT_COLUMNS: dict[str, tuple[str, float]] = {
     "speed_kmh": ("speed", units.KMH), "speed_mph": ("speed", units.MPH),
 }
 """Column names that read a channel in another unit: name -> (channel, SI units per unit).
-odomkit's channels are radians and metres per second (DESIGN.md), but a CAN steering angle
+odomkit's channels are radians and metres per second (:mod:`odomkit.log`), but a CAN steering angle
 or a gyro is often logged in degrees (°/s for the yaw rate, as the truth's ``theta_deg``)
 and a car's speed in km/h or mph (the factors: :mod:`odomkit.units`)."""
 #: A bicycle or tricycle steering angle beyond ±90° (and a little more: OptiOdom's tricycle

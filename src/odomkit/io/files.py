@@ -14,7 +14,11 @@ from pathlib import Path
 
 from odomkit.errors import InputError
 
-__all__ = ["check_outputs", "refuse_overwrite", "write_new_text"]
+__all__ = ["check_outputs", "EXISTS_ALREADY", "refuse_overwrite", "write_new_text"]
+
+#: What every writer says of an output that exists: the command line's flag and the Python
+#: writers' parameter, since both reach the same check.
+EXISTS_ALREADY = "exists already; pass --force to replace it (overwrite=True from Python)"
 
 
 def _key(path: Path) -> str:
@@ -102,7 +106,7 @@ def _check_file(flag: str, path: Path, overwrite: bool, made: set[str]) -> None:
         raise InputError(f"{flag} names a folder; give a file path", source=str(path))
     if path.exists():
         if not overwrite:
-            raise InputError("exists already; pass --force to replace it", source=str(path))
+            raise InputError(EXISTS_ALREADY, source=str(path))
         if not os.access(path, os.W_OK):
             raise InputError(f"{flag}: the file is not writable", source=str(path))
         return
@@ -136,7 +140,7 @@ def refuse_overwrite(*paths: str | Path | None, overwrite: bool = False) -> None
     """
     for path in paths:
         if path is not None and Path(path).exists() and not overwrite:
-            raise InputError("exists already; pass --force to replace it", source=str(path))
+            raise InputError(EXISTS_ALREADY, source=str(path))
 
 
 def write_new_text(path: str | Path, text: str, overwrite: bool = False) -> Path:

@@ -14,9 +14,11 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numpy.typing import NDArray
 
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError
+from odomkit.io.csvlog import STEER_LIMIT
 from odomkit.io.table import read_numeric, warn_if_cumulative
 from odomkit.io.text import read_text
 from odomkit.log import OdometryLog
@@ -104,13 +106,40 @@ def read_metadata(path: str | Path) -> OptiOdomMetadata:
     )
 
 
-def read_run(path: str | Path, platform: str = "diff") -> OdometryLog:
+#: The platform words :func:`read_run` takes: the dataset's ``diff`` and ``tricyc``, and the
+#: robot type's ``tricycle`` for ``tricyc``.
+_PLATFORMS = {"diff": "diff", "tricyc": "tricyc", "tricycle": "tricyc"}
+
+
+def _platform_of_columns(data: NDArray[np.float64]) -> tuple[str | None, int]:
+    """What columns 5 and 6 say a run is, and the row that says it: ``"diff"`` where column 6
+    goes beyond any steering angle (±π/2: a wheel's ticks per cycle, tens in every real
+    run), ``"tricyc"`` where it is fractional within ±π/2 beside whole ticks in column 5 (a
+    steering angle [rad]); None (row −1) where they cannot tell."""
+    fifth, sixth = data[:, 4], data[:, 5]
+    beyond = np.flatnonzero(np.abs(sixth) > STEER_LIMIT)
+    if beyond.size:
+        return "diff", int(beyond[0])
+    fractional = np.flatnonzero(sixth != np.round(sixth))
+    if fractional.size and np.all(fifth == np.round(fifth)):
+        return "tricyc", int(fractional[0])
+    return None, -1
+
+
+def read_run(path: str | Path, platform: str | None = None) -> OdometryLog:
     """Read one synchronised run file ``<id>_run-NN.csv``.
 
     Parameters
     ----------
     path : the run file (plain or gzip)
-    platform : "diff" or "tricyc" (decides what columns 5 and 6 mean)
+    platform : "diff", "tricycle" (or the dataset's "tricyc"), or None
+        What columns 5 and 6 mean: the right and left wheels' ticks per cycle (diff), or
+        the traction wheel's ticks per cycle and the steering angle [rad] (tricycle). None:
+        what the columns say (column 6 beyond ±π/2: ticks, a diff run; fractional within
+        ±π/2 beside whole ticks in column 5: a steering angle, a tricycle run), an
+        :class:`~odomkit.errors.InputError` where they cannot tell. A platform the columns
+        contradict is an :class:`~odomkit.errors.InputError` too, never a steering angle
+        read as ticks. :func:`read_experiment` takes it from the experiment's metadata.
 
     Warns
     -----
@@ -118,9 +147,25 @@ def read_run(path: str | Path, platform: str = "diff") -> OdometryLog:
         When a tick column never decreases and takes many values: the dataset's ticks are
         per-cycle increments, so such a column is a cumulative counter in a foreign file.
     """
-    if platform not in ("diff", "tricyc"):
-        raise InputError(f"platform must be diff or tricyc, got {platform!r}", source=str(path))
+    if platform is not None and platform not in _PLATFORMS:
+        raise InputError(f"platform must be diff or tricycle (or tricyc), got {platform!r}", source=str(path))
     data = read_numeric(path, 6, delimiter=",")
+    seen, row = _platform_of_columns(data)
+    value = f"{data[row, 5]:.6g} in data row {row + 1}" if seen else ""
+    if platform is None and seen is None:
+        raise InputError("columns 5 and 6 cannot tell a diff run from a tricycle run (column 6 holds "
+                         "only whole numbers within ±π/2: a left wheel that hardly turns, or a steering "
+                         "held straight); pass platform='diff' or platform='tricycle'", source=str(path))
+    platform = _PLATFORMS[platform] if platform is not None else seen
+    if seen == "tricyc" and platform == "diff":
+        raise InputError(f"column 6 holds {value}, no whole number of ticks: a tricycle run's steering "
+                         "angle [rad], not a diff run's left-wheel ticks; read it as a tricycle run "
+                         "(platform='tricycle'; on the command line, with a tricycle robot file)",
+                         source=str(path))
+    if seen == "diff" and platform == "tricyc":
+        raise InputError(f"column 6 holds {value}, no steering angle (at most ±π/2 rad): a diff run's "
+                         "left-wheel ticks; read it as a diff run (platform='diff'; on the command line, "
+                         "with a diff robot file)", source=str(path))
     t = data[:, 0]
     truth = np.column_stack((data[:, 1], data[:, 2], unwrap_angle(data[:, 3])))
     if platform == "diff":

@@ -295,7 +295,21 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     Returns
     -------
     robot : DiffDrive | Tricycle | GyroOdometry | CompassOdometry | Unicycle | Car
-    noise : tuple of noise models (empty when the file has no [noise] table)
+    noise : tuple of noise models
+        Empty when the file has no ``[noise]`` table. Not in the file's order: the models
+        of ``[noise]``'s own keys in the registry's order (:data:`odomkit.noise.NOISE_MODELS`),
+        then those of its sub-tables (``[noise.parameters]``), so that a file read and
+        written again (:func:`write_robot`) lists them in one order. Find a model by its
+        type rather than by its place: ``NoiseSet.of(noise).get(WheelNoise)`` (None where
+        the file has none; :class:`odomkit.noise.NoiseSet`).
+
+    Examples
+    --------
+    >>> from odomkit.data import builtin_data_path
+    >>> from odomkit.noise import NoiseSet, WheelNoise
+    >>> robot, noise = read_robot(builtin_data_path("optiodom_diff.toml"))
+    >>> NoiseSet.of(noise).get(WheelNoise)
+    WheelNoise(k_left=0.001, k_right=0.001)
     """
     path = Path(path)
     doc = _document(path)
@@ -393,15 +407,50 @@ def robot_to_dict(robot: Robot, noise: tuple[NoiseModel, ...] = (),
                 noise_table.update(entry)
         doc["noise"] = noise_table
     if truth:
-        doc["truth"] = {key: float(truth[key]) for key in TRUTH_KEYS if key in truth}
+        doc["truth"] = _truth_table(truth)
     return doc
+
+
+def _truth_table(truth: Mapping[str, float]) -> dict[str, float]:
+    """``truth`` as the file's ``[truth]`` table: :data:`TRUTH_KEYS`, or the same with a
+    ``truth_`` prefix (the names of ``NoiseFit.truth_noise`` and fit-noise's JSON) mapped to
+    them; any other key, or one key given in both spellings, is refused rather than dropped
+    (a file without its truth's noise scores every window far too confidently)."""
+    table: dict[str, float] = {}
+    for given, value in truth.items():
+        key = given.removeprefix("truth_")
+        if key not in TRUTH_KEYS:
+            accepted = ", ".join(TRUTH_KEYS)
+            raise InputError(f"truth has an unknown key {given!r}; expected {accepted} "
+                             f"(or the same with a truth_ prefix)")
+        if key in table:
+            raise InputError(f"truth gives {key!r} twice ({key} and truth_{key}); give one")
+        table[key] = float(value)
+    # The file's order, whatever the mapping's.
+    return {key: table[key] for key in TRUTH_KEYS if key in table}
 
 
 def write_robot(path: str | Path, robot: Robot, noise: tuple[NoiseModel, ...] = (),
                 overwrite: bool = False, truth: Mapping[str, float] | None = None,
                 name: str | None = None) -> Path:
-    """Write a robot file; refuse to replace an existing file unless ``overwrite``."""
+    """Write a robot file; refuse to replace an existing file unless ``overwrite``.
+
+    Parameters
+    ----------
+    path : the TOML file to write
+    robot, noise : the ``[robot]`` and ``[noise]`` tables (as :func:`read_robot` returns them)
+    overwrite : replace an existing file (``--force`` on the command line)
+    truth : mapping, optional
+        The ``[truth]`` table, :data:`TRUTH_KEYS`: ``sigma`` [m], ``heading_sigma`` [rad],
+        ``time_sigma`` [s], ``time_offset`` [s]. Each may also be spelled with a ``truth_``
+        prefix (``truth_sigma``, as ``NoiseFit.truth_noise`` and fit-noise's JSON name them),
+        so ``truth=fit.truth_noise`` writes the fitted truth noise. Any other key raises
+        :class:`~odomkit.errors.InputError`.
+    name : the ``[robot] name`` (None: none written)
+    """
     path = Path(path)
+    # The document first: a bad truth key is refused before an existing file is touched.
+    text = tomli_w.dumps(robot_to_dict(robot, noise, truth, name))
     refuse_overwrite(path, overwrite=overwrite)
-    path.write_text(tomli_w.dumps(robot_to_dict(robot, noise, truth, name)), encoding="utf-8")
+    path.write_text(text, encoding="utf-8")
     return path

@@ -398,7 +398,7 @@ def warn_if_cumulative(values: NDArray[np.float64], source: str, column: str) ->
 
     A column that never decreases over the whole log and takes many distinct values (at
     least 16, and 1 % of the rows) is how a counter looks; increments of a real wheel
-    jitter up and down (DESIGN.md: a result that could silently be wrong is a warning).
+    jitter up and down (a result that could silently be wrong is a warning, never silent).
     ``column`` names it in the message, e.g. ``"column 'L' (ticks_left)"``.
     """
     if values.size < _MIN_DISTINCT:
@@ -419,7 +419,8 @@ def check_time_order(t: NDArray[np.float64], table: NumericTable) -> None:
     give zero-length steps).
 
     A row earlier than the one before it is a logger's clock jumping back or rows written
-    out of order; sorting would hide either, so the user decides (DESIGN.md, "Text logs").
+    out of order; sorting would hide either, so the user decides
+    (docs/reference/logs-and-truth.md, "Log options").
     ``t`` is the column as read (row ``k`` of ``table``), in the file's own unit.
     """
     back = np.flatnonzero(np.diff(t) < 0)

@@ -3,7 +3,8 @@ comma, semicolon, tab or whitespace separated, with or without a header.
 
 Every text reader of :mod:`odomkit.io` starts here, so that a compressed log, a byte-order
 mark, a comment written in Latin-1 or a binary file handed over by mistake behave the same
-in every format, and a problem is one line naming the file and line (DESIGN.md, "Text logs").
+in every format, and a problem is one line naming the file and line
+(docs/reference/logs-and-truth.md).
 The layout of a table (:func:`sniff_layout`: delimiter, header) and the unit of its time
 column (:func:`seconds_per_unit`) are decided here once, for logs and truth files alike.
 

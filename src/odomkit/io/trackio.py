@@ -42,10 +42,11 @@ def track_table(track: Track) -> np.ndarray:
 
 def write_track_csv(path: str | Path, track: Track, overwrite: bool = False,
                     truth: NDArray[np.float64] | None = None) -> Path:
-    """Write ``t,x,y,theta,cov_xx,...`` (DESIGN.md); covariance cells are empty when the
-    track has no covariance. θ is written continuous (unwrapped). Numbers are written
-    with all the digits that read back to the same double; with polars installed (the
-    ``fast`` extra) the file is written about 5x faster.
+    """Write ``t,x,y,theta,cov_xx,...`` (:data:`TRACK_COLUMNS`; docs/reference/commands/track.md,
+    "Outputs"); covariance cells are empty when the track has no covariance. θ is written
+    continuous (unwrapped). Numbers are written with all the digits that read back to the
+    same double; with polars installed (the ``fast`` extra) the file is written about 5x
+    faster.
 
     ``truth`` (N, 3), NaN where there is none, adds the :data:`TRUTH_COLUMNS` (empty cells
     for NaN).

@@ -149,6 +149,12 @@ class NoiseModel(ABC):
         The model's noise moves the position alone (:meth:`lateral_variances`), with no
         raw input to (Δd, Δθ): it is defined for every step map, so it may join a model
         with a step map of its own, and it never stops the per-wheel fast path.
+    per_sample : bool
+        The model's variances are per *sample* (per log row: a steering angle or a
+        compass reading with its own error at every row), not per metre, second or run:
+        over a stretch of travel its covariance depends on how many samples there are.
+        A log's rows say that; a planned path needs the sample period
+        (:func:`odomkit.propagate.paths.path_model`).
     """
 
     robot_types: ClassVar[tuple[str, ...]] = ()
@@ -156,6 +162,7 @@ class NoiseModel(ABC):
     step_map: ClassVar[str | None] = None
     toml_table: ClassVar[str] = "noise"
     position_only: ClassVar[bool] = False
+    per_sample: ClassVar[bool] = False
 
     @property
     def kind(self) -> NoiseKind:

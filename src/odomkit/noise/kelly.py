@@ -149,6 +149,8 @@ class CompassNoise(NoiseModel):
 
     robot_types: ClassVar[tuple[str, ...]] = ("compass",)
     family: ClassVar[str | None] = "compass"
+    # one error of variance psd/T per reading (a planned path: its compass_period)
+    per_sample: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         require_non_negative(self)
@@ -176,22 +178,24 @@ class CompassNoise(NoiseModel):
         return self.psd_compass / validate.positive(period, "compass_period", unit="s")
 
 
-def compass_sample_count(duration: float, period: float, segment: int | None = None) -> int:
+def compass_sample_count(duration: float, period: float, segment: int | None = None,
+                         *, sensor: str = "compass") -> int:
     """How many compass periods a segment of ``duration`` [s] lasts; a ModelError unless
     it is a whole number (to 1e-9 relative), so that every segment starts and ends on a
-    compass sample.
+    compass sample. ``sensor`` names the period in the messages (``"sample"``: the
+    ``sample_period`` of per-sample noise, :func:`odomkit.propagate.paths.path_model`).
 
     Examples
     --------
     >>> compass_sample_count(2.5, 0.1)
     25
     """
-    period = validate.positive(period, "compass_period", unit="s")
+    period = validate.positive(period, f"{sensor}_period", unit="s")
     n = round(duration / period)
     if abs(n * period - duration) > 1e-9 * max(duration, period):
         which = f"segment {segment} " if segment is not None else "a segment "
-        raise ModelError(f"{which}lasts {duration:g} s, not a whole number of compass periods "
-                         f"({period:g} s); change the duration or the compass period")
+        raise ModelError(f"{which}lasts {duration:g} s, not a whole number of {sensor} periods "
+                         f"({period:g} s); change the duration or the {sensor} period")
     return int(n)
 
 

@@ -45,6 +45,9 @@ class TricycleNoise(NoiseModel):
     sigma_dt: float = 0.0
 
     robot_types: ClassVar[tuple[str, ...]] = ("tricycle", "car")
+    # σ per sample: D/T samples of a stretch of D seconds give var Δs = σ_v²·T·D, so a
+    # planned path needs the sample period T (NoiseModel.per_sample).
+    per_sample: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         require_non_negative(self)

@@ -15,15 +15,27 @@ noise                              family      vehicle         segments
 ``TricycleNoise``, ``SpeedNoise``  steering    tricycle, car   SteerArc
 =================================  ==========  ==============  ==========================
 
-Any family but the classical takes a :class:`~odomkit.noise.ParameterUncertainty` (the
-vehicle's bias) too, and every family a :class:`~odomkit.noise.LateralSlipNoise`. The
-vehicle is the family's first unless a ``robot`` is given (a unicycle, a steered vehicle,
-or a robot with its own geometry); a set of models that names no family (bias alone,
-steering noise, a lateral slip alone) needs the robot.
+The vehicle is the family's first unless a ``robot`` is given (a unicycle, a steered
+vehicle, or a robot with its own geometry). With a ``robot`` the path takes every set of
+models that ``odomkit track`` takes for that vehicle on a log (each model's own
+``check_robot``): a fitted robot's noise as ``fit-noise`` wrote it (a diff robot's
+WheelNoise, SpeedNoise, LateralSlipNoise and ParameterUncertainty), bias alone, a lateral
+slip alone. Without one the set must name its family (the table); SpeedNoise,
+ParameterUncertainty and LateralSlipNoise join any family but the classical (which takes
+a lateral slip only). A closed form exists for the table's white models alone
+(:attr:`PathModel.closed_form`); every other set is predicted by the track's engines on
+the path's steps. One exception: a diff path's segments (Arc, Straight, Spin) have no
+duration, so noise that grows with time (a GyroNoise) cannot be predicted on one.
 
-A compass path also needs the compass's sample period T (``compass_period``, default
-:data:`odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`): its steps are the compass samples,
-each reading with an error of variance σ_θθ/T, as a compass log's rows are in ``track``.
+Noise given *per sample* (:attr:`odomkit.noise.NoiseModel.per_sample`: a TricycleNoise's
+σ of each sample's speed, steering angle and period) means something only with the sample
+period T: a stretch of D seconds has D/T samples, each with its own error. A path with
+such noise needs ``sample_period``, and its steps are then the samples (D/T per segment,
+a whole number), as a log's rows are in ``track``, whatever ``partitions`` says. Any
+path with durations may be given one (the engines then step its samples). A compass path
+needs its compass's period (``compass_period``, default
+:data:`odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`; ``sample_period`` is the same period):
+its steps are the compass samples, each reading with an error of variance σ_θθ/T.
 """
 
 from __future__ import annotations
@@ -38,7 +50,7 @@ from numpy.typing import NDArray
 from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps, steering_body_steps
-from odomkit.noise import CompassNoise, NoiseModel, NoiseSet
+from odomkit.noise import CompassNoise, GyroNoise, NoiseModel, NoiseSet
 from odomkit.noise.kelly import DEFAULT_COMPASS_PERIOD, compass_sample_count
 from odomkit.path import Arc, KellyArc, Segment, Spin, SteerArc, Straight
 from odomkit.robot import ROBOT_TYPES, DiffDrive, Robot
@@ -49,25 +61,28 @@ __all__ = [
     "segment_motion",
     "path_steps",
     "compass_samples",
+    "segment_samples",
     "check_segments",
     "check_partitions",
     "check_wheel_base",
 ]
 
-# family -> (the models it may hold, the vehicles it describes: the first by default);
-# SpeedNoise, ParameterUncertainty and LateralSlipNoise (every family) are optional.
-_FAMILIES: dict[str, tuple[frozenset[str], tuple[str, ...]]] = {
-    "wheel": (frozenset({"WheelNoise", "ParameterUncertainty", "LateralSlipNoise"}), ("diff",)),
-    "classical": (frozenset({"ClassicalNoise", "LateralSlipNoise"}), ("diff",)),
-    "gyro": (frozenset({"GyroNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
-             ("gyro", "unicycle")),
-    "compass": (frozenset({"CompassNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
-                ("compass",)),
-    "steering": (frozenset({"TricycleNoise", "SpeedNoise", "ParameterUncertainty", "LateralSlipNoise"}),
-                 ("tricycle", "car")),
+# family -> the vehicles it describes (the first by default)
+_FAMILIES: dict[str, tuple[str, ...]] = {
+    "wheel": ("diff",), "classical": ("diff",), "gyro": ("gyro", "unicycle"), "compass": ("compass",),
+    "steering": ("tricycle", "car"),
+}
+# family -> the models its closed form takes (odomkit.propagate.predict): white noise only;
+# every other set goes to the track's engines.
+_CLOSED: dict[str, frozenset[str]] = {
+    "wheel": frozenset({"WheelNoise", "LateralSlipNoise"}),
+    "classical": frozenset({"ClassicalNoise", "LateralSlipNoise"}),
+    "gyro": frozenset({"GyroNoise", "SpeedNoise", "LateralSlipNoise"}),
+    "compass": frozenset({"CompassNoise", "SpeedNoise", "LateralSlipNoise"}),
 }
 _EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise), "
-             "with or without a ParameterUncertainty and a LateralSlipNoise; or a robot and its noise")
+             "with or without a SpeedNoise, a ParameterUncertainty and a LateralSlipNoise; or "
+             "robot= and any noise odomkit track takes for it")
 # The segments each vehicle drives.
 _SEGMENTS: dict[str, tuple[type, ...]] = {
     "diff": (Arc, Straight, Spin), "gyro": (KellyArc,), "unicycle": (KellyArc,),
@@ -93,12 +108,16 @@ class PathModel:
         Kelly's.
     compass_period : float or None
         Compass family: the compass's sample period T [s]; None for the others.
+    sample_period : float or None
+        The other families: the sample period T [s] whose samples are the path's steps
+        (required with per-sample noise); None where ``partitions`` cut the segments.
     """
 
     family: str
     noise: NoiseSet
     robot: Robot
     compass_period: float | None = None
+    sample_period: float | None = None
 
     @property
     def var_heading(self) -> float:
@@ -118,6 +137,13 @@ class PathModel:
         """Segments are a steered vehicle's wheel speed and steering angle (SteerArc)."""
         return self.robot.type_name in ("tricycle", "car")
 
+    @property
+    def closed_form(self) -> bool:
+        """The family has a closed form for these models: white noise of the family's own
+        (:mod:`odomkit.propagate.predict`), no bias, no other model beside it."""
+        names = {type(m).__name__ for m in self.noise.models}
+        return not self.noise.bias and self.family in _CLOSED and names <= _CLOSED[self.family]
+
 
 def check_partitions(partitions: int) -> int:
     """A positive whole number of steps per segment."""
@@ -133,13 +159,15 @@ def check_wheel_base(wheel_base: float | None) -> float:
 
 def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
                wheel_base: float | None = None, purpose: str = "prediction",
-               compass_period: float | None = None, robot: Robot | None = None) -> PathModel:
+               compass_period: float | None = None, robot: Robot | None = None,
+               sample_period: float | None = None) -> PathModel:
     """Validate a noise argument for a path and pick its family and vehicle.
 
     Parameters
     ----------
     noise : NoiseModel, sequence of NoiseModel, or NoiseSet
-        See the module table; SpeedNoise may be left out of the Kelly families.
+        See the module docstring: without ``robot`` a set that names its family (the
+        table); with ``robot`` any set ``odomkit track`` takes for that vehicle.
     wheel_base : float, optional
         B [m], required by the differential-drive families unless ``robot`` is given.
     purpose : str
@@ -149,44 +177,79 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); an error for the others.
     robot : Robot, optional
         The vehicle (default: the family's, see the module docstring).
+    sample_period : float, optional
+        The sample period T [s] of the odometry: a segment of D seconds has D/T samples,
+        which become the path's steps. Required with per-sample noise
+        (:attr:`~odomkit.noise.NoiseModel.per_sample`, a TricycleNoise); a compass's is
+        its ``compass_period``; a diff path (no durations) takes none.
 
     Examples
     --------
-    >>> from odomkit.noise import WheelNoise
+    >>> from odomkit.noise import SpeedNoise, WheelNoise
     >>> path_model(WheelNoise(0.001, 0.001), 0.4).family
     'wheel'
+    >>> m = path_model((WheelNoise(0.001, 0.001), SpeedNoise(1e-5)), 0.4)
+    >>> m.family, m.closed_form
+    ('wheel', False)
     """
     models = NoiseSet.of(noise)
     names = frozenset(type(m).__name__ for m in models.models)
     listed = ", ".join(type(m).__name__ for m in models.models) or "nothing"
-    family = models.family
-    if family is None and robot is not None:
-        family = next((f for f, (_, vehicles) in _FAMILIES.items() if robot.type_name in vehicles
-                       and f != "classical"), None)
-    elif family is None and "TricycleNoise" in names and names <= _FAMILIES["steering"][0]:
-        raise ModelError(f"noise ({listed}) is not a {purpose} model without a robot: it "
-                         "describes a steered vehicle; give the robot (a Tricycle or Car)")
-    if family not in _FAMILIES or not names <= _FAMILIES[family][0]:
-        raise ModelError(f"noise ({listed}) is not a {purpose} model"
-                         + (f" of a {robot.type_name} robot" if robot is not None else "")
-                         + f"; expected {_EXPECTED}")
-    vehicles = _FAMILIES[family][1]
-    if robot is None:
-        vehicle = vehicles[0]
-        robot = (DiffDrive(check_wheel_base(wheel_base)) if vehicle == "diff"
-                 else ROBOT_TYPES[vehicle]())
-    elif robot.type_name not in vehicles:
-        raise ModelError(f"noise ({listed}) is a {family} model, not one of a {robot.type_name} robot")
-    elif robot.type_name == "diff" and wheel_base is not None and wheel_base != robot.wheel_base:  # type: ignore[union-attr]
-        raise ModelError(f"wheel_base {wheel_base!r} m differs from the robot's "
-                         f"{robot.wheel_base!r} m; give one")  # type: ignore[union-attr]
-    models.check_robot(robot)
+    if robot is not None:
+        # The vehicle decides, as on a log: a set is a model of it when every model
+        # applies to it (checked below); the classical model keeps its own step map.
+        family = "classical" if models.family == "classical" and robot.type_name == "diff" else next(
+            (f for f, vehicles in _FAMILIES.items() if robot.type_name in vehicles), None)
+        if family is None:
+            raise ModelError(f"a {type(robot).__name__} has no planned-path model")
+        if robot.type_name == "diff" and wheel_base is not None and wheel_base != robot.wheel_base:  # type: ignore[union-attr]
+            raise ModelError(f"wheel_base {wheel_base!r} m differs from the robot's "
+                             f"{robot.wheel_base!r} m; give one")  # type: ignore[union-attr]
+    else:
+        family = models.family
+        if family is None and "TricycleNoise" in names:
+            raise ModelError(f"noise ({listed}) is not a {purpose} model without a robot: it "
+                             "describes a steered vehicle; give the robot (a Tricycle or Car)")
+        if family not in _FAMILIES:
+            raise ModelError(f"noise ({listed}) is not a {purpose} model; expected {_EXPECTED}")
+        vehicle = _FAMILIES[family][0]
+        robot = DiffDrive(check_wheel_base(wheel_base)) if vehicle == "diff" else ROBOT_TYPES[vehicle]()
+    try:
+        models.check_robot(robot)
+    except ModelError as exc:
+        raise ModelError(f"noise ({listed}) is not a {purpose} model of a {robot.type_name} robot "
+                         f"({exc}); expected {_EXPECTED}") from None
+    if robot.type_name == "diff" and models.get(GyroNoise) is not None:
+        # A log has time stamps; a diff path's segments are wheel travels only.
+        raise ModelError("GyroNoise grows with time, and a diff path's segments (Arc, Straight, "
+                         "Spin) have no duration; predict a gyro robot's path (KellyArc) instead")
+    own_map = [type(m).__name__ for m in models.models if m.step_map is not None]
+    if own_map and robot.measures_heading:
+        raise ModelError(f"{own_map[0]} rotates, then translates, by an integrated heading; a "
+                         f"{robot.type_name} robot measures its heading")
     if family == "compass":
-        period = DEFAULT_COMPASS_PERIOD if compass_period is None else compass_period
-        return PathModel(family, models, robot,
-                         validate.positive(period, "compass_period", unit="s"))
+        if sample_period is not None and compass_period is not None and sample_period != compass_period:
+            raise ModelError(f"sample_period {sample_period!r} s and compass_period "
+                             f"{compass_period!r} s differ; a compass's samples are its readings: give one")
+        period = next((p for p in (compass_period, sample_period) if p is not None), DEFAULT_COMPASS_PERIOD)
+        return PathModel(family, models, robot, validate.positive(period, "compass_period", unit="s"))
     if compass_period is not None:
         raise ModelError(f"compass_period applies to the compass model, not the {family} model")
+    if sample_period is not None:
+        if robot.type_name == "diff":
+            raise ModelError("sample_period needs segments with durations (KellyArc, SteerArc); "
+                             "a diff path's segments are wheel travels")
+        return PathModel(family, models, robot,
+                         sample_period=validate.positive(sample_period, "sample_period", unit="s"))
+    # A model with a step map of its own (classical) has its σ per step: on a diff path
+    # the steps are its partitions (Chong–Kleeman's model), on a log its rows, so on any
+    # other vehicle's path its samples.
+    per_sample = [type(m).__name__ for m in models.models
+                  if m.per_sample or (m.step_map is not None and family != "classical")]
+    if per_sample:
+        raise ModelError(f"{per_sample[0]} is white noise per sample: give the sample period T "
+                         "(sample_period [s], --sample-period), so that a segment of D seconds has "
+                         "D/T samples")
     return PathModel(family, models, robot)
 
 
@@ -200,6 +263,8 @@ def check_segments(segments: Iterable[Segment], model: PathModel) -> list[Segmen
             want = _SEGMENT_NAMES.get(model.robot.type_name) or _SEGMENT_NAMES[
                 "tricycle" if model.steered else "gyro"]
             raise ModelError(f"segment {k + 1} is {seg!r}; the {model.family} model needs {want}")
+    if model.sample_period is not None:
+        segment_samples(segs, model.sample_period)
     if model.compass_period is not None:
         compass_samples(segs, model.compass_period)
         for k, seg in enumerate(segs):
@@ -220,7 +285,21 @@ def compass_samples(segments: Sequence[Segment], period: float) -> list[int]:
     >>> compass_samples([KellyArc(1.0, 0.0, 2.0), KellyArc(1.0, 0.5, 0.5)], 0.1)
     [20, 5]
     """
-    return [compass_sample_count(seg.duration, period, k + 1)  # type: ignore[union-attr]
+    return segment_samples(segments, period, "compass")
+
+
+def segment_samples(segments: Sequence[Segment], period: float, sensor: str = "sample") -> list[int]:
+    """Samples (steps) of each segment with a duration (KellyArc, SteerArc) at the sample
+    period ``period`` [s]: duration/period, which must be a whole number
+    (:func:`odomkit.noise.kelly.compass_sample_count`; ``sensor`` names the period in
+    its message).
+
+    Examples
+    --------
+    >>> segment_samples([SteerArc(1.0, 0.1, 2.0), SteerArc(1.0, 0.0, 0.5)], 0.05)
+    [40, 10]
+    """
+    return [compass_sample_count(seg.duration, period, k + 1, sensor=sensor)  # type: ignore[union-attr]
             for k, seg in enumerate(segments)]
 
 
@@ -248,8 +327,10 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     segments : sequence of Segment, length S
     model : PathModel
     partitions : int
-        Steps per segment, n. The compass family ignores it: its steps are the compass
-        samples (:func:`compass_samples`), as the rows of a compass log are.
+        Steps per segment, n. Ignored with a sample period (``model.sample_period``: a
+        segment's steps are its samples, :func:`segment_samples`) and by the compass
+        family (its steps are the compass samples, :func:`compass_samples`), as the rows
+        of a log are.
     robot : Robot, optional
         The vehicle that drives the path (default ``model.robot``); a Monte Carlo of a
         robot with systematic errors drives the commanded wheel travels with its true
@@ -262,10 +343,11 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     Returns
     -------
     BodySteps
-        S·n steps: ``dd``, ``dtheta``, ``dt`` (Kelly and steering segments; zero for wheel
-        segments) and the raw inputs the noise models ask for (``d_left``/``d_right`` [m]
-        of a differential drive; ``travel`` [m] and ``steer`` [rad] of a steered vehicle;
-        ``yaw_rate`` [rad/s] of gyro and unicycle; ``heading`` (M + 1,) [rad] of a compass).
+        S·n steps (their samples with a sample period): ``dd``, ``dtheta``, ``dt`` (Kelly
+        and steering segments; zero for wheel segments) and the raw inputs the noise
+        models ask for (``d_left``/``d_right`` [m] of a differential drive; ``travel``
+        [m] and ``steer`` [rad] of a steered vehicle; ``yaw_rate`` [rad/s] of gyro and
+        unicycle; ``heading`` (M + 1,) [rad] of a compass).
 
     Examples
     --------
@@ -277,16 +359,18 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
     """
     if model.compass_period is not None:
         return _compass_steps(segments, model, float(theta0))
-    n = check_partitions(partitions)
+    counts = (segment_samples(segments, model.sample_period) if model.sample_period is not None
+              else [check_partitions(partitions)] * len(segments))
     robot = model.robot if robot is None else robot
     dd, dth, dt, d_left, d_right, travel, steer = [], [], [], [], [], [], []
-    for seg in segments:
+    for seg, n in zip(segments, counts, strict=True):
+        per = max(n, 1)  # a segment of no duration has no sample: no step
         if model.steered:
-            s_k = seg.speed * seg.duration / n  # type: ignore[union-attr]
+            s_k = seg.speed * seg.duration / per  # type: ignore[union-attr]
             travel.append(np.full(n, s_k))
             steer.append(np.full(n, seg.steer))  # type: ignore[union-attr]
             step_d, step_a = steering_body_steps(robot, s_k, seg.steer)  # type: ignore[arg-type, union-attr]
-            dt.append(np.full(n, seg.duration / n))  # type: ignore[union-attr]
+            dt.append(np.full(n, seg.duration / per))  # type: ignore[union-attr]
             dd.append(np.full(n, float(step_d)))
             dth.append(np.full(n, float(step_a)))
             continue
@@ -296,14 +380,14 @@ def path_steps(segments: Sequence[Segment], model: PathModel, partitions: int,
             left, right = scales[0] * left, scales[1] * right
             base = robot.effective_wheel_base  # type: ignore[union-attr]
             d, a = 0.5 * (left + right), (right - left) / base
-            d_left.append(np.full(n, left / n))
-            d_right.append(np.full(n, right / n))
+            d_left.append(np.full(n, left / per))
+            d_right.append(np.full(n, right / per))
             dt.append(np.zeros(n))
         else:
             d, a = segment_motion(seg, 1.0)
-            dt.append(np.full(n, seg.duration / n))  # type: ignore[union-attr]
-        dd.append(np.full(n, d / n))
-        dth.append(np.full(n, a / n))
+            dt.append(np.full(n, seg.duration / per))  # type: ignore[union-attr]
+        dd.append(np.full(n, d / per))
+        dth.append(np.full(n, a / per))
 
     def cat(parts: list[NDArray[np.float64]]) -> NDArray[np.float64]:
         return np.concatenate(parts) if parts else np.zeros(0)

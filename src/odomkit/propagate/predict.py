@@ -11,23 +11,35 @@ noise                              segments     closed form
 ``(SpeedNoise, GyroNoise)``        KellyArc     Kelly eq. (11), (13), (15)
 ``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10) sampled every T (see
                                                :func:`~odomkit.propagate.closed_kelly.compass_arc_cov`)
-``TricycleNoise`` (+ ``robot``)    SteerArc     none: ``recursion`` or ``transition``
+``TricycleNoise`` (+ ``robot``)    SteerArc     none: ``recursion`` or ``transition``, at a ``sample_period``
 =================================  ===========  ========================================
 
-Bias noise (:class:`~odomkit.noise.ParameterUncertainty`, a constant error over the run)
-joins any family but the classical and is predicted by the ``recursion`` and
-``transition`` engines (the same bias path as ``odomkit track``); the closed forms are
-white noise only. A :class:`~odomkit.noise.LateralSlipNoise` (sideways slip) joins every
+With a ``robot`` (the vehicle: a unicycle, a tricycle or car with its geometry, a robot
+whose bias sensitivities need its parameters) ``noise`` may be any set of models that
+``odomkit track`` propagates on that vehicle's logs, e.g. a fitted robot file's
+``read_robot(path)`` pair as it is (:func:`odomkit.propagate.paths.path_model`). The
+closed forms take the table's white models alone (and a lateral slip); bias noise
+(:class:`~odomkit.noise.ParameterUncertainty`, a constant error over the run), a
+:class:`~odomkit.noise.SpeedNoise` beside the wheels' and every other set are predicted
+by the ``recursion`` and ``transition`` engines: the very engines of ``odomkit track``
+(:func:`odomkit.propagate.recursion.iter_track_covariance`) on the path's steps
+(:func:`odomkit.propagate.paths.path_steps`), so a planned path and a log of it give the
+same covariance. A :class:`~odomkit.noise.LateralSlipNoise` (sideways slip) joins every
 family and every engine: its sum adds to the position block, in the closed forms as its
 integral over each arc (the exact sum over a compass's samples, or over the classical
-model's pieces). A ``robot`` names the vehicle (a unicycle, a tricycle or car with its
-geometry, a robot whose bias sensitivities need its parameters).
+model's pieces).
 
 Engines: ``closed`` composes the closed forms segment by segment; ``recursion`` and
-``transition`` cut each segment into ``partitions`` exact-arc steps and hand them to the
-step recursion (:mod:`odomkit.propagate.recursion`) or Kelly's transition-matrix
-solution (:mod:`odomkit.propagate.transition`). They converge to ``closed`` as the steps
+``transition`` cut each segment into ``partitions`` exact-arc steps and run the step
+recursion (:mod:`odomkit.propagate.recursion`) or Kelly's transition-matrix solution
+(:mod:`odomkit.propagate.transition`) on them. They converge to ``closed`` as the steps
 shrink, which is how the closed forms are cross-checked.
+
+Noise per *sample* (a :class:`~odomkit.noise.TricycleNoise`: σ of each sample's speed,
+steering angle and period) needs the odometry's sample period T (``sample_period``): a
+segment of D seconds has D/T samples, each with its own error, and those samples are the
+engines' steps (``partitions`` does not apply), as a log's rows are in ``track``. Without
+it the answer would depend on ``partitions`` (σ ∝ 1/√partitions), so it is refused.
 
 A compass is predicted as ``odomkit track`` propagates a compass log: read every
 ``compass_period`` T [s], each reading with an independent error of variance σ_θθ/T
@@ -165,8 +177,10 @@ def discretise_path(
     partitions: int = DEFAULT_PARTITIONS,
     pose0: ArrayLike = (0.0, 0.0, 0.0),
     robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
-    """Cut each segment into ``partitions`` equal exact-arc steps with their input noise.
+    """Cut each segment into ``partitions`` equal exact-arc steps with their input noise
+    (with ``sample_period``, into its samples: :func:`odomkit.propagate.paths.path_model`).
 
     The steps are :func:`odomkit.propagate.paths.path_steps`; each step's input
     covariance is the noise models' own (:meth:`odomkit.noise.NoiseSet.input_cov`):
@@ -189,23 +203,29 @@ def discretise_path(
     >>> dd.tolist(), round(float(q[0, 0, 0]), 15)  # var(Δd) = (k²·0.5 + k²·0.5)/4
     ([0.5, 0.5, 0.5, 0.5], 0.0025)
     """
-    model = path_model(noise, wheel_base, robot=robot)
+    model = path_model(noise, wheel_base, robot=robot, sample_period=sample_period)
     segs = check_segments(segments, model)
     if model.robot.measures_heading:
         raise ModelError("a compass path's steps are its compass samples, with no per-step "
                          "input covariance: use predict(..., engine='recursion') instead")
     steps = path_steps(segs, model, partitions)
     cov = model.noise.input_cov(steps, 0, len(steps))
-    dd, dth = steps.dd, steps.dtheta
+    return _path_poses(steps.dd, steps.dtheta, pose0, model), steps.dd, steps.dtheta, cov
+
+
+def _path_poses(dd: NDArray[np.float64], dth: NDArray[np.float64], pose0: ArrayLike,
+                model: PathModel) -> NDArray[np.float64]:
+    """The nominal poses of the path's steps by the noise's step map: the exact arc, or
+    the classical model's own (Chong–Kleeman eq. (1): rotate by α, then translate D along
+    the new heading)."""
     if model.noise.step_map("exact") == "exact":
-        return dead_reckon(dd, dth, pose0, "exact"), dd, dth, cov
-    # Chong–Kleeman eq. (1): rotate by α, then translate D along the new heading.
+        return dead_reckon(dd, dth, pose0, "exact")
     poses = np.empty((dd.size + 1, 3))
     poses[0] = np.asarray(pose0, dtype=float)
     poses[1:, 2] = poses[0, 2] + np.cumsum(dth)
     poses[1:, 0] = poses[0, 0] + np.cumsum(dd * np.cos(poses[1:, 2]))
     poses[1:, 1] = poses[0, 1] + np.cumsum(dd * np.sin(poses[1:, 2]))
-    return poses, dd, dth, cov
+    return poses
 
 
 # --- closed forms, one per family: (pose, cov, segment, model) -> cov at the segment end
@@ -272,11 +292,12 @@ _CLOSED_FORMS = {"wheel": _wheel_closed, "gyro": _gyro_closed, "compass": _compa
 def _track_engines(segs: list[Segment], model: PathModel, p0: NDArray[np.float64],
                    c0: NDArray[np.float64], engine: str, partitions: int) -> Prediction:
     """The track's engines (:func:`odomkit.propagate.recursion.iter_track_covariance`,
-    white and bias) on the path cut into equal steps: bias noise and steered vehicles."""
+    white and bias, any set of models the vehicle takes) on the path cut into equal steps
+    (or its samples): one engine for a log and a planned path."""
     from odomkit.propagate.recursion import iter_track_covariance
 
     steps = path_steps(segs, model, partitions)
-    poses = dead_reckon(steps.dd, steps.dtheta, p0, "exact")
+    poses = _path_poses(steps.dd, steps.dtheta, p0, model)
     cov_end = c0
     for _, chunk in iter_track_covariance(steps, poses, model.noise, c0, "exact", engine):
         cov_end = chunk[-1]
@@ -294,15 +315,18 @@ def predict(
     partitions: int | None = None,
     compass_period: float | None = None,
     robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> Prediction:
     """Predict the end pose of a path of segments and its covariance.
 
     Parameters
     ----------
     segments : iterable of Segment
-        Arc/Straight/Spin for the differential-drive models, KellyArc for gyro/compass.
-    noise : WheelNoise, ClassicalNoise, or a tuple (SpeedNoise, GyroNoise) or
-        (SpeedNoise, CompassNoise)
+        Arc/Straight/Spin for the differential-drive models, KellyArc for gyro/compass
+        (and a unicycle), SteerArc for a tricycle or car.
+    noise : WheelNoise, ClassicalNoise, a tuple (SpeedNoise, GyroNoise) or
+        (SpeedNoise, CompassNoise); with ``robot``, any set of models ``track`` takes
+        for it (e.g. the noise of ``read_robot``)
         Selects the model (see the module docstring).
     wheel_base : float, optional
         B [m]; required by the differential-drive models.
@@ -316,7 +340,8 @@ def predict(
         classical model the number of eq. (1) steps per segment (default 1), which
         changes its answer. ``recursion``/``transition``: steps per segment (default
         :data:`DEFAULT_PARTITIONS`; the classical model then takes that many steps).
-        The compass model ignores it: its steps are its samples.
+        Ignored with a ``sample_period`` and by the compass model: the steps are the
+        samples.
     compass_period : float, optional
         Compass model only: the compass's sample period T [s] (default
         :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`); every segment must last a
@@ -325,6 +350,10 @@ def predict(
     robot : Robot, optional
         The vehicle (:func:`odomkit.propagate.paths.path_model`): required for a tricycle
         or car (SteerArc segments), optional otherwise.
+    sample_period : float, optional
+        The odometry's sample period T [s]: every segment (KellyArc, SteerArc) lasts a
+        whole number of periods, and its samples are the engines' steps. Required with
+        per-sample noise (a TricycleNoise); a compass's is its ``compass_period``.
 
     Returns
     -------
@@ -346,43 +375,38 @@ def predict(
     >>> p = predict([Arc(3.0, 1.0)], WheelNoise(0.001, 0.001), wheel_base=0.4)
     >>> [round(v, 6) for v in p.to_dict()["pose"]], [float(f"{s:.5g}") for s in p.std]
     ([-0.38357, -0.286535, 1.283185], [0.0014376, 0.0024666, 0.005])
+
+    A tricycle (σ per sample of its 20 Hz log) with a steering offset it is unsure of:
+
+    >>> from odomkit.noise import ParameterUncertainty, TricycleNoise
+    >>> from odomkit.path import SteerArc
+    >>> from odomkit.robot import Tricycle
+    >>> p = predict([SteerArc(0.5, 0.2, 10.0)], (TricycleNoise(0.02, 0.01),
+    ...             ParameterUncertainty(sigma_steering_offset=0.005)), robot=Tricycle(0.5),
+    ...             engine="recursion", sample_period=0.05)
+    >>> [float(f"{s:.3g}") for s in p.std]
+    [0.108, 0.0258, 0.0498]
     """
     if engine not in ENGINES:
         raise ModelError(f"unknown engine {engine!r}; expected one of {', '.join(ENGINES)}")
-    model = path_model(noise, wheel_base, compass_period=compass_period, robot=robot)
+    model = path_model(noise, wheel_base, compass_period=compass_period, robot=robot,
+                       sample_period=sample_period)
     segs = check_segments(segments, model)
     p0 = validate.pose(pose0)
     c0 = np.zeros((3, 3)) if cov0 is None else check_covariance(cov0)
     b = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
-    if engine == "closed" and (model.noise.bias or model.family not in (*_CLOSED_FORMS, "classical")):
-        what = "bias noise" if model.noise.bias else f"the {model.family} model"
+    if engine == "closed" and not model.closed_form:
+        listed = ", ".join(type(m).__name__ for m in model.noise.models)
+        what = ("bias noise" if model.noise.bias else f"the {model.family} model"
+                if model.family == "steering" else f"noise ({listed})")
         raise ModelError(f"{what} has no closed form here; use engine 'recursion' or 'transition'")
     if model.compass_period is not None:
         c0 = _compass_start(c0, model)
         if engine != "closed":
             return _compass_engines(segs, model, p0, c0, engine)
-    if engine != "closed" and (model.noise.bias or model.steered):
-        n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)
-        return _track_engines(segs, model, p0, c0, engine, n)
-
     if engine != "closed":
         n = DEFAULT_PARTITIONS if partitions is None else check_partitions(partitions)
-        poses, dd, dth, cov_in = discretise_path(segs, model.noise, wheel_base, n, p0, model.robot)
-        method = model.noise.step_map("exact")
-        steps = path_steps(segs, model, n)
-        var_lateral = model.noise.lateral_variances(steps, 0, len(steps))
-        if engine == "recursion":
-            from odomkit.propagate.recursion import propagate_recursion
-
-            covs = propagate_recursion(poses[:-1, 2], dd, dth, cov_in, c0, method=method,
-                                       var_lateral=var_lateral)
-        else:
-            from odomkit.propagate.transition import propagate_transition
-
-            covs = propagate_transition(poses, dd, dth, cov_in, c0, method=method,
-                                        var_lateral=var_lateral)
-        cov_end = np.asarray(covs[-1], dtype=float)
-        return Prediction(poses[-1].copy(), 0.5 * (cov_end + cov_end.T), model.family, engine)
+        return _track_engines(segs, model, p0, c0, engine, n)
 
     pose, cov = p0.copy(), c0
     slip = (model.noise.get(LateralSlipNoise) or LateralSlipNoise(0.0)).alpha_lateral

@@ -4,7 +4,8 @@ Runs are grouped into fixed blocks of :data:`BLOCK_RUNS`; block ``b`` draws from
 stream ``SeedSequence(seed, spawn_key=(b,))`` (the b-th child of ``SeedSequence(seed).spawn``)
 in a fixed order: 3 normals per run for the initial pose, then (with bias noise) p normals
 per run for its bias parameters (one draw per run, :mod:`odomkit.simulate.plan`), then,
-partition after partition along the whole path, 2 normals per run (3 with a lateral slip:
+partition after partition along the whole path (K per segment, or a segment's samples
+at a sample period), 2 normals per run (3 with a lateral slip:
 the third moves the partition across its chord). A task is a list of
 blocks; how blocks are grouped into tasks, and tasks onto threads
 (:mod:`odomkit.simulate.engine`) or Dask workers (:mod:`odomkit.simulate.distributed`),
@@ -73,19 +74,23 @@ def run_block(plan: Plan, seed: int, block: int, n_runs: int, engine: str,
     # and without a slip the stream is the one it always was.
     rows = 2 if plan.lateral is None else 3
     buf = np.empty((min(partition_chunk, plan.partitions), rows, n_runs))
-    k = plan.partitions
+    # Kernel steps of each segment: K, or its samples at a sample period (Plan.counts).
+    counts = [plan.partitions] * n_seg if plan.counts is None else [int(c) for c in plan.counts]
+    done = 0  # kernel steps of the segments before
     for j in range(n_seg):
         coef = plan.coefs[j]
+        k = counts[j]
         slip = None if plan.lateral is None else float(plan.lateral[j])
         for start in range(0, k, partition_chunk):
             z = buf[: min(partition_chunk, k - start)]
             rng.standard_normal(out=z)
             # the numba kernel resyncs its heading vector at global partition indices
-            first = start if plan.kind == "compass" else j * k + start
+            first = start if plan.kind == "compass" else done + start
             if shifts is None and slip is None:
                 advance(state, z, coef, first)
             else:
                 advance(state, z, coef, first, None if shifts is None else shifts[j], slip)
+        done += k
         if ends is not None:
             ends[:, j, :] = state[:3].T
     return state[:3].T.copy(), ends

@@ -190,6 +190,7 @@ def simulate_runs(
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
     robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> MonteCarloRuns:
     """Simulate ``runs`` noisy runs of ``path`` and return their poses.
 
@@ -208,7 +209,8 @@ def simulate_runs(
         ``psd_compass/T`` (not integrated), exact arcs between readings; the final θ is
         the last reading, and the first reading replaces the initial θ variance. A
         :class:`~odomkit.noise.ParameterUncertainty` joins any of them but the classical:
-        each run draws its bias parameters once (:mod:`odomkit.simulate.plan`).
+        each run draws its bias parameters once (:mod:`odomkit.simulate.plan`). With
+        ``robot``, any set of models ``odomkit track`` takes for that vehicle.
     wheel_base : float, optional
         Nominal wheel base B [m] of a differential drive (required for those models).
     runs, partitions : int
@@ -244,6 +246,11 @@ def simulate_runs(
     robot : Robot, optional
         The vehicle (required for a tricycle or car; see
         :func:`odomkit.propagate.paths.path_model`).
+    sample_period : float, optional
+        The odometry's sample period T [s]: each segment (KellyArc, SteerArc) is cut into
+        its D/T samples, each with its own noise, instead of K partitions (required with
+        per-sample noise, a TricycleNoise; ``MonteCarloRuns.partitions`` gives the most
+        samples of a segment).
 
     Returns
     -------
@@ -265,8 +272,9 @@ def simulate_runs(
     check_scheduler(scheduler)
     check_size(runs, partitions, len(path), segment_ends=segment_ends, max_work=max_work)
     plan = make_plan(path, noise, wheel_base, partitions, pose0, cov0, systematic, compass_period,
-                     robot)
-    # A compass path may be cut finer than asked (whole steps per compass reading).
+                     robot, sample_period)
+    # A compass path may be cut finer than asked (whole steps per compass reading), a
+    # sampled path into as many steps as it has samples.
     check_size(runs, plan.partitions, len(path), segment_ends=segment_ends, max_work=max_work)
     seed_used = _resolve_seed(seed)
     engine_used = _pick_engine(engine)

@@ -26,20 +26,22 @@ __all__ = ["monte_carlo", "simulate_sweep", "theory_summary"]
 def _predicted(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
                pose0: ArrayLike, cov0: ArrayLike | None, partitions: int,
                compass_period: float | None, robot: Robot | None = None,
+               sample_period: float | None = None,
                ) -> tuple[np.ndarray, np.ndarray, dict[str, Any]]:
     """(pose, cov, JSON summary) from :func:`odomkit.propagate.predict.predict`: the
-    closed form, or (bias noise, a steered vehicle: no closed form) the step recursion on
-    the same K steps per segment that are simulated."""
+    closed form, or (no closed form: bias noise, a steered vehicle, a model beside the
+    family's) the step recursion on the same K steps per segment that are simulated (the
+    same samples, at a sample period)."""
     from odomkit.propagate.predict import predict
 
     # The classical model's answer depends on the number of steps: predict the same
     # K steps per segment that are simulated. The consistent models ignore it.
     pieces = partitions if NoiseSet.of(noise).family == "classical" else None
-    model = resolve_model(noise, wheel_base, compass_period, robot)
-    engine: Literal["closed", "recursion"] = "recursion" if model.noise.bias or model.steered else "closed"
+    model = resolve_model(noise, wheel_base, compass_period, robot, sample_period)
+    engine: Literal["closed", "recursion"] = "closed" if model.closed_form else "recursion"
     out = predict(path, noise, wheel_base=wheel_base if robot is None else None, pose0=pose0,
                   cov0=cov0, engine=engine, partitions=partitions if engine == "recursion" else pieces,
-                  compass_period=compass_period, robot=robot)
+                  compass_period=compass_period, robot=robot, sample_period=sample_period)
     return np.asarray(out.pose, dtype=float), np.asarray(out.cov, dtype=float), out.to_dict()
 
 
@@ -80,6 +82,7 @@ def monte_carlo(
     compass_period: float | None = None,
     max_work: float = MAX_WORK,
     robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` runs of ``path`` and check them against the linear prediction.
 
@@ -88,7 +91,8 @@ def monte_carlo(
     theory : (pose, cov), optional
         Predicted final pose (3,) and covariance (3, 3); by default the closed form of
         :func:`odomkit.propagate.predict.predict` for the same path, noise and start
-        (with bias noise or a steered vehicle, its step recursion on the simulated steps).
+        (where there is none, as with bias noise or a steered vehicle, its step recursion
+        on the simulated steps).
         The predicted mean is the nominal (noise-free) end pose. A given heading may be
         wrapped: it is moved by whole turns onto the branch of the nominal continuous end
         heading (θ0 plus the segments' turns).
@@ -125,10 +129,11 @@ def monte_carlo(
     cov0 = _cov_matrix(cov0)
     if theory is None:
         pose_p, cov_p, summary = _predicted(path, noise, wheel_base, pose0, cov0, partitions,
-                                            compass_period, robot)
+                                            compass_period, robot, sample_period)
     else:
         pose_p, cov_p = _theory_arrays(theory)
-        pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period, robot)
+        pose_p[2] = _nominal_branch(path, noise, wheel_base, pose0, pose_p[2], compass_period, robot,
+                                    sample_period)
         summary = theory_summary(pose_p, cov_p)
     # NaN marks a component the theory leaves undefined; inf, or nothing defined, is overflow.
     if np.isinf(cov_p).any() or not np.isfinite(np.diag(cov_p)).any():
@@ -138,9 +143,9 @@ def monte_carlo(
                        pose0=pose0, cov0=cov0, systematic=systematic, workers=workers,
                        chunk_runs=chunk_runs, scheduler=scheduler, engine=engine,
                        progress=progress, compass_period=compass_period, max_work=max_work,
-                       robot=robot)
-    # θ continuous in every statistic (DESIGN): the simulated mean θ stays continuous;
-    # only the theory's pose is shown wrapped
+                       robot=robot, sample_period=sample_period)
+    # θ continuous in every statistic (docs/reference/commands/simulate.md): the simulated
+    # mean θ stays continuous; only the theory's pose is shown wrapped
     result = compare(mc.final, pose_p, cov_p, alpha)
     head = {"theory": summary, "simulation": result.pop("simulation"), "z": result.pop("z"),
             "verdict": result.pop("verdict")}
@@ -151,12 +156,12 @@ def monte_carlo(
 
 def _nominal_branch(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None,
                     pose0: ArrayLike, theta: float, compass_period: float | None,
-                    robot: Robot | None = None) -> float:
+                    robot: Robot | None = None, sample_period: float | None = None) -> float:
     """``theta`` moved by whole turns onto the branch of the path's nominal, continuous
     end heading θ0 + ΣΔθ: a theory may give its heading wrapped, the runs are continuous."""
     from odomkit.propagate.paths import segment_motion
 
-    model = resolve_model(noise, wheel_base, compass_period, robot)
+    model = resolve_model(noise, wheel_base, compass_period, robot, sample_period)
     base = model.robot.wheel_base if model.diff else 1.0  # type: ignore[union-attr]
     end = float(np.asarray(pose0, dtype=float)[2]) + sum(segment_motion(s, base, model.robot)[1]
                                                          for s in path)
@@ -166,8 +171,9 @@ def _nominal_branch(path: Sequence[Segment], noise: NoiseArg, wheel_base: float 
 def _theory_arrays(theory: Any) -> tuple[np.ndarray, np.ndarray]:
     try:
         pose, cov = theory
-        pose = np.asarray(pose, dtype=float).reshape(3)
-        cov = np.asarray(cov, dtype=float).reshape(3, 3)
+        # copies: the heading is moved onto the runs' branch (a Prediction's arrays are read-only)
+        pose = np.array(pose, dtype=float).reshape(3)
+        cov = np.array(cov, dtype=float).reshape(3, 3)
     except (TypeError, ValueError) as exc:
         raise ModelError("theory must be (pose (3,), cov (3, 3))") from exc
     return pose, cov

@@ -13,6 +13,11 @@ offset moves every reading (``Plan.bias_heading`` = ∂θ/∂β · σ).
 Lateral slip (:class:`~odomkit.noise.LateralSlipNoise`): every partition of segment j also
 moves across its own (noisy) chord by ``Plan.lateral[j]`` = √(α_lat·|Δd|) times a third
 standard normal (:mod:`odomkit.simulate.blocks` draws three per partition then).
+
+A sample period T (``sample_period``; required with per-sample noise such as a
+:class:`~odomkit.noise.TricycleNoise`, :func:`odomkit.propagate.paths.path_model`) makes
+the partitions the samples: segment j is cut into its D_j/T samples (``Plan.counts``),
+each with its own noise, as the rows of a log at that period are.
 """
 
 from __future__ import annotations
@@ -29,7 +34,7 @@ from odomkit.errors import ModelError
 from odomkit.kinematics import BodySteps, steering_body_steps
 from odomkit.noise import NoiseSet
 from odomkit.path import Arc, KellyArc, Segment, Spin, Straight
-from odomkit.propagate.paths import PathModel, check_segments, compass_samples, path_model
+from odomkit.propagate.paths import PathModel, check_segments, compass_samples, path_model, segment_samples
 from odomkit.propagate.plan import NoiseArg
 from odomkit.robot import DiffDrive, Robot, SystematicErrors
 
@@ -50,7 +55,9 @@ class Plan:
     by ``bias_heading @ zβ``. Both None without bias noise. ``lateral[j]`` is the σ [m]
     of the sideways slip of one kernel step of segment j (along the step's chord, times
     a third normal per step); None without a lateral slip (or with a zero one), so that
-    the draws, and every number, stay as without the model.
+    the draws, and every number, stay as without the model. ``counts`` (S,), when set,
+    is the number of kernel steps of each segment (its samples at a sample period);
+    ``partitions`` is then the largest.
     """
 
     kind: str
@@ -61,6 +68,7 @@ class Plan:
     bias: NDArray[np.float64] | None = None  # (S, 2, p)
     bias_heading: NDArray[np.float64] | None = None  # (p,)
     lateral: NDArray[np.float64] | None = None  # (S,)
+    counts: NDArray[np.int64] | None = None  # (S,)
 
 
 def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
@@ -75,7 +83,8 @@ def _cov_factor(cov0: ArrayLike | None) -> NDArray[np.float64]:
 
 
 def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
-                  compass_period: float | None = None, robot: Robot | None = None) -> PathModel:
+                  compass_period: float | None = None, robot: Robot | None = None,
+                  sample_period: float | None = None) -> PathModel:
     """The odometry model a noise argument selects, as in ``predict``
     (:func:`odomkit.propagate.paths.path_model`).
 
@@ -86,18 +95,19 @@ def resolve_model(noise: NoiseArg, wheel_base: float | None = 1.0,
     'wheel'
     """
     return path_model(noise, wheel_base if robot is None else None, purpose="simulation",
-                      compass_period=compass_period, robot=robot)
+                      compass_period=compass_period, robot=robot, sample_period=sample_period)
 
 
-def _partition_steps(model: PathModel, path: Sequence[Segment], k: int, robot: Robot,
+def _partition_steps(model: PathModel, path: Sequence[Segment], counts: Sequence[int], robot: Robot,
                      scales: tuple[float, float]) -> BodySteps:
-    """One partition (1/k) of every segment, as the steps the noise models are asked
-    about: a differential drive's commanded wheel travels (nominal wheel base) scaled by
-    the true wheel sizes, Kelly's speed·Δt and yaw rate·Δt, or a steered vehicle's wheel
-    travel and steering angle."""
+    """One partition (1/k_j, k_j = ``counts[j]``) of every segment, as the steps the noise
+    models are asked about: a differential drive's commanded wheel travels (nominal wheel
+    base) scaled by the true wheel sizes, Kelly's speed·Δt and yaw rate·Δt, or a steered
+    vehicle's wheel travel and steering angle."""
     dd, dth, dt, d_left, d_right = (np.empty(len(path)) for _ in range(5))
     travel, steer = np.empty(len(path)), np.empty(len(path))
-    for j, seg in enumerate(path):
+    for j, (seg, count) in enumerate(zip(path, counts, strict=True)):
+        k = max(count, 1)  # a segment of no duration has no sample (the kernel takes none)
         if model.steered:
             dt[j] = seg.duration / k  # type: ignore[union-attr]
             travel[j], steer[j] = seg.speed * dt[j], seg.steer  # type: ignore[union-attr]
@@ -139,7 +149,8 @@ def _lateral_factor(model: PathModel, steps: BodySteps) -> NDArray[np.float64] |
     return np.sqrt(var)
 
 
-def _coefs(model: PathModel, path: Sequence[Segment], k: int, systematic: SystematicErrors | None
+def _coefs(model: PathModel, path: Sequence[Segment], counts: Sequence[int],
+           systematic: SystematicErrors | None
            ) -> tuple[NDArray[np.float64], NDArray[np.float64] | None, NDArray[np.float64] | None]:
     """(S, 6) kernel coefficients: the mean body motion of one partition of each segment
     and a factor A (A Aᵀ = Q) of its white noise, as the noise models give them
@@ -153,7 +164,7 @@ def _coefs(model: PathModel, path: Sequence[Segment], k: int, systematic: System
         robot = DiffDrive(model.robot.effective_wheel_base * sys_err.E_b)  # type: ignore[union-attr]
     elif systematic is not None:
         raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
-    steps = _partition_steps(model, path, k, robot, scales)
+    steps = _partition_steps(model, path, counts, robot, scales)
     factor = model.noise.input_factor(steps, 0, len(steps))
     coefs = np.empty((len(path), 6))
     coefs[:, 0], coefs[:, 3] = steps.dd, steps.dtheta
@@ -197,11 +208,13 @@ def _compass_coefs(model: PathModel, path: Sequence[Segment], k: int, theta0: fl
 def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None, partitions: int,
               pose0: ArrayLike = (0.0, 0.0, 0.0), cov0: ArrayLike | None = None,
               systematic: SystematicErrors | None = None,
-              compass_period: float | None = None, robot: Robot | None = None) -> Plan:
+              compass_period: float | None = None, robot: Robot | None = None,
+              sample_period: float | None = None) -> Plan:
     """Translate path, noise and robot into per-segment kernel coefficients.
 
     ``robot`` names the vehicle (:func:`odomkit.propagate.paths.path_model`; required for a
-    tricycle or car). A compass (``compass_period`` T [s], default
+    tricycle or car). A ``sample_period`` T [s] cuts each segment into its samples
+    instead of ``partitions`` (required with per-sample noise). A compass (``compass_period`` T [s], default
     :data:`~odomkit.noise.kelly.DEFAULT_COMPASS_PERIOD`) starts from its first reading:
     the θ row and column of ``cov0`` give way to that reading's error, variance σ_θθ/T,
     independent of the start position (as in ``predict`` and ``track``).
@@ -216,7 +229,7 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
     if robot is None and family in ("wheel", "classical") and (
             wheel_base is None or not (math.isfinite(wheel_base) and wheel_base > 0)):
         raise ModelError(f"the {family} model needs a positive wheel_base [m], got {wheel_base!r}")
-    model = resolve_model(noise, wheel_base, compass_period, robot)
+    model = resolve_model(noise, wheel_base, compass_period, robot, sample_period)
     if model.diff:
         for j, seg in enumerate(path):
             if not isinstance(seg, Arc | Straight | Spin):
@@ -227,8 +240,8 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
             if not isinstance(seg, KellyArc):
                 raise ModelError(f"segment {j + 1} ({seg!r}) is not a speed/yaw-rate segment; "
                                  "expected arc:V,OMEGA,T or straight:V,T")
-    else:
-        check_segments(path, model)
+    if model.steered or model.sample_period is not None:
+        check_segments(path, model)  # a steered vehicle's kind; whole samples
     if model.compass_period is not None:
         if systematic is not None:
             raise ModelError("systematic errors (E_d, E_b, E_s) apply to the diff model only")
@@ -243,6 +256,15 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
                 model.noise.bias_variances(model.robot))
         return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start),
                     bias, heading, lateral)
-    coefs, bias, lateral = _coefs(model, path, k, systematic)
-    kind = "classical" if model.family == "classical" else "increment"
+    if model.sample_period is not None:
+        counts = np.array(segment_samples(path, model.sample_period), dtype=np.int64)
+        coefs, bias, lateral = _coefs(model, path, counts.tolist(), systematic)
+    # the classical model moves by its own map (rotate, then translate), on any vehicle
+    kind = "classical" if model.noise.step_map("exact") == "classical" else "increment"
+    if model.sample_period is not None:
+        counts = np.array(segment_samples(path, model.sample_period), dtype=np.int64)
+        coefs, bias, lateral = _coefs(model, path, counts.tolist(), systematic)
+        return Plan(kind, coefs, max(1, int(counts.max())), p0, _cov_factor(cov0), bias,
+                    lateral=lateral, counts=counts)
+    coefs, bias, lateral = _coefs(model, path, [k] * len(path), systematic)
     return Plan(kind, coefs, k, p0, _cov_factor(cov0), bias, lateral=lateral)

@@ -8,8 +8,8 @@ Internal to :mod:`odomkit.workflows` (:func:`score_logs` is re-exported by
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import replace
+from collections.abc import Iterable, Iterator, Sequence
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -31,14 +31,25 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["HEADLESS", "score_by_window", "score_logs", "several_lengths_notes", "START_HEADING_SHARE",
-           "start_heading_note", "STILL", "white_only", "window_specs"]
+__all__ = ["HEADLESS", "LoadedLog", "score_by_window", "score_loaded", "score_logs", "several_lengths_notes",
+           "START_HEADING_SHARE", "start_heading_note", "STILL", "white_only", "window_specs"]
+
+
+@dataclass(frozen=True)
+class LoadedLog:
+    """One log to score, in memory: the log, its truth (its own noise, ``sigma``,
+    ``heading_sigma`` and ``time_sigma``, is what the window ends are scored with) and the
+    longest gap between the truth's fixes to interpolate across [s] (None: no limit)."""
+
+    log: OdometryLog
+    truth: Truth
+    max_gap: float | None = 0.5
 
 
 def score_logs(
-    logs: Sequence[str | Path],
+    logs: str | Path | Sequence[str | Path],
     robot_path: str | Path,
-    truth: Sequence[TruthOptions],
+    truth: TruthOptions | Sequence[TruthOptions] | None = None,
     *,
     log_options: LogOptions | None = None,
     window: str | None = None,
@@ -56,8 +67,14 @@ def score_logs(
 
     ``errors_only``: a robot file without ``[noise]`` gives the whole runs' errors alone
     (no window ends, NEES or coverage; a windowed test is still refused) instead of an error.
+    ``logs`` may be one path; ``truth`` one :class:`TruthOptions` for every log, or None for
+    each log's own truth (:func:`odomkit.workflows.results.truths_per_log`).
     """
-    return score_by_window(logs, robot_path, truth, window_specs(window), log_options=log_options,
+    from odomkit.workflows.results import paths_given, truths_per_log
+
+    files = paths_given(logs, "log", "odomkit.workflows.evaluate.evaluate_in_memory")
+    return score_by_window(files, robot_path, truths_per_log(truth, len(files)), window_specs(window),
+                           log_options=log_options,
                            min_travel=min_travel, align=align, rpe_distances=rpe_distances, method=method,
                            progress=progress, errors_only=errors_only)[0]
 
@@ -77,29 +94,75 @@ def score_by_window(
     errors_only: bool,
 ) -> list[list[Scored]]:
     """:func:`score_logs` for each window length of ``specs``: each log is read and its whole
-    run dead-reckoned once, then cut into the windows of each length."""
+    run dead-reckoned once, then cut into the windows of each length (:func:`score_loaded`,
+    one log read at a time)."""
     from odomkit.io.robotfile import read_robot
     from odomkit.workflows.logs import LogOptions, load_log
     from odomkit.workflows.truth import resolved_truth
 
     robot, noise = read_robot(robot_path)
-    if not noise and (specs != [None] or not errors_only):
+    _need_noise(noise, specs, errors_only, str(robot_path))
+    options = resolved_truth(robot_path, truth)
+
+    def loaded() -> Iterator[LoadedLog]:
+        for path, opts in zip(logs, options, strict=True):
+            log = load_log(path, robot, log_options or LogOptions())
+            yield LoadedLog(log, require_truth(opts, log), opts.max_gap)
+
+    return score_loaded(loaded(), len(logs), robot, noise, specs, min_travel=min_travel, align=align,
+                        rpe_distances=rpe_distances, method=method, progress=progress,
+                        errors_only=errors_only, robot_path=str(robot_path))
+
+
+def _need_noise(noise: Sequence[NoiseModel], specs: Sequence[WindowSpec | None], errors_only: bool,
+                robot_path: str | None) -> None:
+    """The error where there is no noise model but a covariance is to be scored (windows, or
+    not ``errors_only``): of the robot file ``robot_path``, or of the noise given in memory."""
+    if noise or (list(specs) == [None] and errors_only):
+        return
+    if robot_path is not None:
         raise InputError("the robot file has no [noise] table: the windowed test scores a predicted "
                          "covariance (add one: fit-noise writes it); without --window evaluate gives the "
-                         "errors alone", source=str(robot_path))
-    truth = resolved_truth(robot_path, truth)
-    noise_arg = None if not noise else noise if len(noise) > 1 else noise[0]
+                         "errors alone", source=robot_path)
+    raise InputError("no noise model given: the windowed test scores a predicted covariance (give the "
+                     "noise, e.g. fit_noise_in_memory's); without a window evaluate gives the errors alone")
+
+
+def score_loaded(
+    logs: Iterable[LoadedLog],
+    count: int,
+    robot: Robot,
+    noise: Sequence[NoiseModel],
+    specs: Sequence[WindowSpec | None],
+    *,
+    min_travel: float,
+    align: str,
+    rpe_distances: Sequence[float],
+    method: str,
+    progress: Progress,
+    errors_only: bool,
+    robot_path: str | None = None,
+) -> list[list[Scored]]:
+    """:func:`score_by_window` of logs in memory, one :class:`Scored` per log for each length
+    of ``specs``: the one scoring both ``odomkit evaluate`` (logs read from files, one at a
+    time, ``count`` of them) and :func:`odomkit.workflows.evaluate.evaluate_in_memory` use.
+
+    ``noise`` empty: the whole runs' errors alone where ``errors_only`` and no window is
+    asked for (a warning says so, naming ``robot_path``, the robot file, where given), else
+    an error."""
+    _need_noise(noise, specs, errors_only, robot_path)
+    noise_arg = None if not noise else tuple(noise) if len(noise) > 1 else noise[0]
     per_log = []
-    with stage(progress, len(logs), "logs"):
-        for path, opts in zip(logs, truth, strict=True):
-            log = load_log(path, robot, log_options or LogOptions())
-            found = require_truth(opts, log)
-            per_log.append(_score_log(log, robot, noise_arg, found, opts, specs, min_travel=min_travel,
-                                      align=align, rpe_distances=rpe_distances, method=method))
+    with stage(progress, count, "logs"):
+        for one in logs:
+            per_log.append(_score_log(one.log, robot, noise_arg, one.truth, one.max_gap, specs,
+                                      min_travel=min_travel, align=align, rpe_distances=rpe_distances,
+                                      method=method))
             progress.advance()
     by_spec = [[one[i] for one in per_log] for i in range(len(specs))]
     if noise_arg is None:
-        note = (f"{robot_path}: the robot file has no [noise] table: the errors alone, no NEES or coverage "
+        note = ("no noise model given: the errors alone, no NEES or coverage" if robot_path is None else
+                f"{robot_path}: the robot file has no [noise] table: the errors alone, no NEES or coverage "
                 "(fit-noise writes one)")
         return [[replace(scored[0], warnings=[note, *scored[0].warnings]), *scored[1:]] for scored in by_spec]
     return [_windowless_left_out(scored) for scored in by_spec]
@@ -129,18 +192,19 @@ STILL = "window(s) travelled less than {:g} m (standing still or turning on the 
 HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
 
 
-def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, opts: TruthOptions,
+def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, max_gap: float | None,
                specs: Sequence[WindowSpec | None], *, min_travel: float, align: str,
                rpe_distances: Sequence[float], method: str) -> list[Scored]:
     """Whole-run figures from truth at the first row, and the window ends of one log, for
-    each window length of ``specs`` (the whole run once)."""
+    each window length of ``specs`` (the whole run once); ``max_gap`` [s] as
+    :func:`odomkit.truth.truth_at` takes it."""
     from odomkit.integrate import dead_reckon
     from odomkit.kinematics import body_steps
     from odomkit.track import dead_reckon_log
     from odomkit.truth import no_overlap, truth_at
     from odomkit.windows import cumulative_travel, run_start
 
-    samples = truth_at(truth, log.t, opts.max_gap)
+    samples = truth_at(truth, log.t, max_gap)
     rows = np.flatnonzero(samples.valid)
     if rows.size < 2:
         raise InputError(no_overlap(truth, log.t), source=log.source)
@@ -149,11 +213,11 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
     # Without truth heading the start heading aligns the odometry's own path to the fixes.
     odometry = (None if truth.has_heading
                 else dead_reckon(steps.dd, steps.dtheta, np.zeros(3), method))  # type: ignore[arg-type]
-    first, pose0, cov0 = run_start(log.t, truth, samples.valid, odometry, opts.max_gap)
+    first, pose0, cov0 = run_start(log.t, truth, samples.valid, odometry, max_gap)
     # The whole run, dead-reckoned from the truth at its first usable row.
     track = dead_reckon_log(log.from_row(first), robot, method, pose0, noise=noise, cov0=cov0)  # type: ignore[arg-type]
     whole = score_rows(log.source, track.poses, track.cov, samples.poses[first:], samples.valid[first:],
-                        align=align, truth_sigma=opts.sigma or 0.0, rpe_distances=rpe_distances,
+                        align=align, truth_sigma=truth.sigma, rpe_distances=rpe_distances,
                         min_travel=0.0, honesty_from_rows=False, t=track.t)
     fitted = not truth.has_heading
     whole = replace(whole, rows_skipped=whole.rows_skipped + first, start_time=float(log.t[first]),
@@ -302,6 +366,6 @@ def white_only(logs: Sequence[str | Path], robot: Robot, white: Sequence[NoiseMo
     for path, opts in zip(logs, truth, strict=True):
         log = load_log(path, robot, log_options or LogOptions())
         noise = list(white) if len(white) > 1 else white[0]
-        out.append(_score_log(log, robot, noise, require_truth(opts, log), opts, [spec],
+        out.append(_score_log(log, robot, noise, require_truth(opts, log), opts.max_gap, [spec],
                               min_travel=min_travel, align="none", rpe_distances=(), method=method)[0])
     return out

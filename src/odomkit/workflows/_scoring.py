@@ -19,6 +19,11 @@ from numpy.typing import NDArray
 
 from odomkit.errors import InputError
 
+# Defined in the core with the note they make (odomkit.evaluate.singular_nees_note, which
+# evaluate_track issues too); named here for the workflows that import them from here.
+from odomkit.evaluate import NEAR_SINGULAR as NEAR_SINGULAR
+from odomkit.evaluate import NO_ERROR as NO_ERROR
+
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.truth import Truth
@@ -99,7 +104,7 @@ def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] 
     own noise, ``truth_sigma`` [m] per axis and ``truth_heading_sigma`` [rad], is added to
     the covariance the rows are scored against (``honesty_from_rows``)."""
     from odomkit.angles import wrap_angle
-    from odomkit.evaluate import align_track, relative_pose_errors
+    from odomkit.evaluate import align_track, relative_pose_errors, singular_nees_note
 
     notes: list[str] = []
     n = poses.shape[0]
@@ -135,7 +140,7 @@ def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] 
         he, hc = est[:, :2] - ref[:, :2], P[:, :2, :2] + truth_sigma**2 * np.eye(2)
         # θ NaN where the truth has no heading: those rows have no heading NEES.
         hh, hv = wrap_angle(est[:, 2] - ref[:, 2]), P[:, 2, 2] + truth_heading_sigma**2
-        note = _singular_note(he, hc)
+        note = singular_nees_note(he, hc)
         if note:
             notes.append(f"{label}: {note}")
     else:
@@ -145,54 +150,6 @@ def score_rows(label: str, poses: NDArray[np.float64], cov: NDArray[np.float64] 
     kept = None if t is None else TrackRows(np.asarray(t, dtype=float)[rows], est, ref, P)
     return Scored(label, int(rows.size), int(n - rows.size), err, path, rpe, he, hc, 0, notes, rows=kept,
                   heading_errors=hh, heading_var=hv)
-
-
-#: A scored covariance whose smallest eigenvalue is below this fraction of its largest
-#: (standard deviations 1000× apart) is nearly singular (:func:`_singular_note`).
-NEAR_SINGULAR = 1e-6
-#: A position error [m] below this counts as none (a track started at the truth pose it is
-#: compared with), so a singular covariance there loses nothing.
-NO_ERROR = 1e-9
-
-
-def _singular_note(errors: NDArray[np.float64], cov: NDArray[np.float64]) -> str | None:
-    """One line on scored rows whose covariance (n, 2, 2) is singular or nearly so, where
-    they matter, else None.
-
-    A singular covariance has no NEES (:func:`odomkit.evaluate.nees` leaves the row out of
-    the NEES and coverage): none is lost where the error is zero too (below
-    :data:`NO_ERROR`: a track compared with the truth pose it started from), but a nonzero
-    error's NEES would be infinite, and those rows are counted. A nearly singular one
-    (:data:`NEAR_SINGULAR`) is kept: its NEES is well defined and true, but where the
-    covariance comes from a pose known exactly (a track started at a truth pose with zero
-    covariance) the error is mostly the truth's own noise, which the covariance lacks, and
-    a few such rows make the whole mean; they are counted where they make more than half
-    of the NEES summed over the rows.
-    """
-    from odomkit.evaluate import nees
-
-    if cov.shape[0] == 0:
-        return None
-    values = nees(errors, cov)
-    singular = ~np.isfinite(values)
-    lam = np.linalg.eigvalsh(cov)  # ascending, per row
-    near = ~singular & (lam[:, 0] < NEAR_SINGULAR * lam[:, 1])
-    off = singular & (np.hypot(errors[:, 0], errors[:, 1]) > NO_ERROR)
-    total = float(np.sum(values[~singular]))
-    share = float(np.sum(values[near])) / total if total > 0 else 0.0
-    parts = []
-    if off.any():
-        parts.append(f"{int(off.sum())} of {values.size} rows have a singular covariance but an error (an "
-                     "infinite NEES) and are left out of the NEES and coverage")
-    if share > 0.5:
-        parts.append(f"{100 * share:.4g} % of the summed NEES comes from {int(near.sum())} of {values.size} "
-                     "rows whose covariance is nearly singular (standard deviations over 1000x apart)")
-    if not parts:
-        return None
-    return ("; ".join(parts) + ", as at the start of a track started from a truth pose with zero "
-            "covariance: the truth's own noise alone falls far outside their ellipse, so their NEES "
-            "judges the truth, not the covariance; give the truth's noise with --truth-sigma, or start "
-            "the track with --initial-cov")
 
 
 def _headings(scored: Sequence[Scored]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -220,7 +177,8 @@ def _heading_summary(scored: Sequence[Scored]) -> dict[str, Any]:
 
 
 def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[str, Any]:
-    """The output keys of DESIGN.md pooled over ``scored`` (without ``per_log``).
+    """The output keys of ``odomkit evaluate`` (docs/reference/commands/evaluate.md) pooled
+    over ``scored`` (without ``per_log``).
 
     Pooled: ``ate_rmse`` and each ``rpe`` are the RMS over every sample of every log,
     ``max_position_error`` the largest, ``final_position_error`` the mean of the logs'
@@ -263,7 +221,8 @@ def summarise(scored: Sequence[Scored], rpe_distances: Sequence[float]) -> dict[
 
 def _window_ends(s: Scored) -> dict[str, Any]:
     """``window_ends`` of a log scored in windows: each window's ``start`` and ``end`` [s, log
-    time], its end's position ``error`` [m] (truth − odometry, x and y) and ``nees``, its
+    time], its end's position ``error`` [m] (truth − odometry, x and y: the opposite sign of
+    :func:`odomkit.evaluate.pose_errors`) and ``nees``, its
     ``heading_error`` [rad] and ``nees_heading`` (None where the truth has no heading), and
     the σ of its start heading ``start_heading_sigma`` [rad] (fitted to position-only truth, or
     the truth's heading noise), so that an outlier can be found and looked at (a window that
@@ -458,10 +417,13 @@ def _pooled_notes(scored: Sequence[Scored], noun: str = "logs") -> list[str]:
     return grouped_warnings(notes, noun, [s.label for s in scored])
 
 
-def issue_notes(notes: Sequence[str]) -> None:
-    """Raise each of ``notes`` as a UserWarning, which the CLI prints on stderr."""
+def issue_notes(notes: Sequence[str], stacklevel: int = 3) -> None:
+    """Raise each of ``notes`` as a UserWarning, which the CLI prints on stderr (once: it
+    collects them, :func:`odomkit.workflows.results.collected_warnings`, and adds those not
+    in a result's ``warnings`` to it); ``stacklevel`` 3 names the caller of the function that
+    calls this."""
     for text in notes:
-        warnings.warn(text, stacklevel=3)
+        warnings.warn(text, stacklevel=stacklevel)
 
 
 #: Fewer window ends than this make a coverage figure too coarse to judge a model by.

@@ -55,7 +55,7 @@ CUBIC_HINT = "try --fit-steering-cubic (a steering ratio that varies with the an
 
 
 def calibrate_files(
-    run_paths: Sequence[str | Path],
+    run_paths: str | Path | Sequence[str | Path],
     robot_path: str | Path,
     *,
     method: str = "exact",
@@ -69,7 +69,7 @@ def calibrate_files(
     velocity_window: int = 10,
     overwrite: bool = False,
     log_options: LogOptions | None = None,
-    truth: Sequence[TruthOptions] | None = None,
+    truth: TruthOptions | Sequence[TruthOptions] | None = None,
     own_truth: TruthOptions | None = None,
     plot: str | Path | None = None,
     steering_cubic: bool = False,
@@ -81,7 +81,7 @@ def calibrate_files(
     Parameters
     ----------
     run_paths : log files with ground truth (any format
-        :func:`odomkit.workflows.logs.load_log` reads).
+        :func:`odomkit.workflows.logs.load_log` reads), or one.
     robot_path : robot file (TOML) with the parameters the odometry used.
     method : {"exact", "umbmark"}
     source : {"endpoints", "trajectory"}, optional
@@ -100,7 +100,8 @@ def calibrate_files(
         ``controller_period`` [s] and averaging ``velocity_window`` updates
         (:func:`odomkit.calibrate.export.twist_covariance`).
     log_options : :class:`odomkit.workflows.logs.LogOptions`.
-    truth : one :class:`odomkit.workflows.truth.TruthOptions` per run (``--truth``), optional
+    truth : one :class:`odomkit.workflows.truth.TruthOptions` per run (``--truth``; or one for
+        every run), optional
         Exact only: compare every truth fix, on the truth's own clock, with the odometry
         and fit each run's start pose with the robot's parameters
         (:func:`odomkit.calibrate.positions.calibrate_positions`; position-only, noisy truth
@@ -122,6 +123,11 @@ def calibrate_files(
     dict with the calibration summary (JSON-ready), ``robot`` (the corrected parameters
     as in the robot file) and ``outputs`` (paths written).
     """
+    from odomkit.workflows.results import paths_given, truths_per_log
+
+    run_paths = paths_given(run_paths, "run")
+    if truth is not None:
+        truth = truths_per_log(truth, len(run_paths), "run")
     truth_paths = [t.path for t in truth or () if t.path is not None]
     check_outputs({"--out-robot": out_robot, "--ros-yaml": ros_yaml, "--plot": plot}, overwrite=overwrite,
                   inputs=[robot_path, *run_paths, *truth_paths])
@@ -694,7 +700,7 @@ def file_wheel_radius(robot_path: str | Path) -> float | None:
 
 
 def noise_files(
-    run_paths: Sequence[str | Path], robot_path: str | Path, *,
+    run_paths: str | Path | Sequence[str | Path], robot_path: str | Path, *,
     log_options: LogOptions | None = None, plot: str | Path | None = None,
     overwrite: bool = False, progress: Progress = NO_PROGRESS, **kwargs: Any,
 ) -> dict[str, Any]:
@@ -705,6 +711,9 @@ def noise_files(
     the first-order regime) are also issued as :class:`UserWarning`\\ s. ``progress``
     (:mod:`odomkit.progress`) sees two stages: ``"runs"``, a unit per run read, then
     ``"fitting"``."""
+    from odomkit.workflows.results import paths_given
+
+    run_paths = paths_given(run_paths, "run")
     check_outputs({"--plot": plot}, overwrite=overwrite, inputs=[robot_path, *run_paths])
     if plot is not None:
         from odomkit.plot import check_plot_file

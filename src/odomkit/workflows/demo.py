@@ -15,6 +15,7 @@ experiments, MIT licence; :data:`odomkit.data.OPTIODOM_EXPERIMENTS`).
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -86,6 +87,16 @@ def _window_bases(experiments: Sequence[OptiOdomExperiment], calibrated: DiffDri
             if basis is not None:
                 out.append(basis)
     return out
+
+
+def _whole_run(track: Track, truth: np.ndarray) -> dict[str, float | None]:
+    """:func:`odomkit.evaluate.evaluate_track` of one whole run, its warning left out: each
+    run starts at the OptiTrack pose with zero covariance, so its first rows' NEES judges the
+    truth's noise (the warning's point), and the page already shows whole-run containment
+    as one correlated sample beside the windowed test to trust."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return evaluate_track(track.poses, truth, track.cov).to_dict()
 
 
 def _score(bases: Sequence[WindowBasis], variances: np.ndarray) -> dict[str, Any]:
@@ -195,7 +206,7 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
         write_track_csv(out / f"{stem}_track.csv", track, overwrite=True)
         write_tum(out / f"{stem}.tum", track, overwrite=True)
         summary["runs"][stem] = {"direction": direction, "path_length": track.path_length,
-                                 **evaluate_track(track.poses, truth, track.cov).to_dict()}
+                                 **_whole_run(track, truth)}
         tracks.append((stem, track, truth))
 
     side = float(experiment.metadata.side or 0.75)
@@ -215,8 +226,7 @@ def run_demo(out_dir: str | Path, overwrite: bool = False) -> dict[str, Any]:
     # statistic to trust), before and after calibration.
     for stem, run, truth in zip(stems, runs, truths, strict=True):
         track = dead_reckon_log(run, calibrated, "exact", noise=noise[0])
-        ev = evaluate_track(track.poses, truth, track.cov)
-        summary["runs"][stem]["calibrated"] = ev.to_dict()
+        summary["runs"][stem]["calibrated"] = _whole_run(track, truth)
     write_robot(out / "calibrated_robot.toml", calibrated, noise, overwrite=True)
     write_ros2_yaml(out / "diff_drive_controller.yaml", calibrated,
                     wheel_radius=experiment.metadata.wheel_diameters[0] / 2, overwrite=True)

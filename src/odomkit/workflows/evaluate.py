@@ -1,6 +1,6 @@
 """``odomkit evaluate``: how wrong a track is, and how honest its covariance.
 
-Two forms (DESIGN.md, "``odomkit evaluate``"):
+Two forms (docs/reference/commands/evaluate.md):
 
 * :func:`evaluate_tracks` scores tracks written by ``odomkit track --out`` against truth
   (a truth file, or the track's own ``gt_*`` columns): every row inside the truth is an
@@ -9,11 +9,15 @@ Two forms (DESIGN.md, "``odomkit evaluate``"):
   row (the whole-run figures: ATE, RPE, drift), and once per non-overlapping window from
   the truth at its start, scoring each window end against its predicted covariance (the
   honesty test: window ends are independent samples, the rows of one run are not).
+* :func:`evaluate_in_memory` is the same for logs, truths and noise already in memory
+  (:class:`~odomkit.log.OdometryLog`, :class:`~odomkit.truth.Truth`, noise models): the one
+  scoring both use (:func:`~odomkit.workflows._score_logs.score_loaded`), so that the same
+  inputs give the same dict.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -22,7 +26,9 @@ import numpy as np
 from odomkit.errors import InputError
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.workflows._score_logs import (
+    LoadedLog,
     score_by_window,
+    score_loaded,
     score_logs,
     several_lengths_notes,
     white_only,
@@ -43,11 +49,16 @@ from odomkit.workflows._scoring import (
 
 if TYPE_CHECKING:
     from odomkit.io.trackio import TrackFile
+    from odomkit.log import OdometryLog
+    from odomkit.noise import NoiseModel
+    from odomkit.robot import Robot
+    from odomkit.truth import Truth
+    from odomkit.windows import WindowSpec
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["CONTAINMENT_NOTE", "evaluate_logs", "evaluate_tracks", "score_logs", "Scored", "summarise",
-           "TrackRows", "WHOLE_RUN_NOTE", "WINDOWED_NOTE"]
+__all__ = ["CONTAINMENT_NOTE", "evaluate_in_memory", "evaluate_logs", "evaluate_tracks", "score_logs",
+           "Scored", "summarise", "TrackRows", "WHOLE_RUN_NOTE", "WINDOWED_NOTE"]
 
 #: The one line every text report carries about what a single run's containment means.
 CONTAINMENT_NOTE = (
@@ -65,8 +76,8 @@ WHOLE_RUN_NOTE = (
 
 
 def evaluate_tracks(
-    tracks: Sequence[str | Path],
-    truth: Sequence[TruthOptions],
+    tracks: str | Path | Sequence[str | Path],
+    truth: TruthOptions | Sequence[TruthOptions] | None = None,
     *,
     align: str = "none",
     rpe_distances: Sequence[float] = (1.0,),
@@ -79,9 +90,9 @@ def evaluate_tracks(
 
     Parameters
     ----------
-    tracks : track CSV paths
-    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per track; ``path`` None
-        uses the track's ``gt_*`` columns.
+    tracks : track CSV paths (or one)
+    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per track, or one for every
+        track; ``path`` None (and ``truth`` None) uses the track's ``gt_*`` columns.
     align : {"none", "start", "se2"}
     rpe_distances : true travel of each RPE [m]
     min_travel : a track whose truth travels less [m] is an error (nothing to score)
@@ -92,8 +103,13 @@ def evaluate_tracks(
 
     Returns
     -------
-    dict with the keys of DESIGN.md, ``per_log`` and ``warnings``.
+    dict with the keys of docs/reference/commands/evaluate.md (the JSON of ``odomkit evaluate
+    TRACK``), ``per_log`` and ``warnings``.
     """
+    from odomkit.workflows.results import paths_given, truths_per_log
+
+    tracks = paths_given(tracks, "track")
+    truth = truths_per_log(truth, len(tracks), "track")
     _check_plot(plot, overwrite, [*tracks, *(t.path for t in truth if t.path is not None)])
     scored = []
     with stage(progress, len(tracks), "tracks"):
@@ -140,9 +156,9 @@ def _read_estimate(path: Path) -> TrackFile:
 
 
 def evaluate_logs(
-    logs: Sequence[str | Path],
+    logs: str | Path | Sequence[str | Path],
     robot_path: str | Path,
-    truth: Sequence[TruthOptions],
+    truth: TruthOptions | Sequence[TruthOptions] | None = None,
     *,
     log_options: LogOptions | None = None,
     window: str | Sequence[str] | None = None,
@@ -160,12 +176,16 @@ def evaluate_logs(
     length on its own (windows of different lengths overlap, so their ends are not
     independent samples of one test, and the χ² bounds would not hold for them pooled).
 
+    For logs, truths and noise already in memory: :func:`evaluate_in_memory`, which this
+    calls the scoring of, log by log as each is read.
+
     Parameters
     ----------
-    logs : log paths
+    logs : log paths (or one)
     robot_path : robot file with a ``[noise]`` table (without one: the whole runs' errors
         alone, and ``--window`` is refused)
-    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per log
+    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per log, or one for every
+        log; None: each log's own truth (its ``gt_*`` columns, an OptiOdom or Snowhite log's)
     log_options : how to read the logs
     window : ``"30s"`` or ``"5m"``, or several such lengths, each scored on its own; None for
         one window per log from its first row
@@ -182,25 +202,26 @@ def evaluate_logs(
 
     Returns
     -------
-    dict with the keys of DESIGN.md, ``window`` (the length scored, ``"30 s"`` or ``"5 m"``;
-    None without one), ``per_log`` and ``warnings``. With several lengths the keys are the
-    first length's (as a caller that asks for one reads them, and ``window`` names it), and
-    ``by_window`` {length: the keys of that length alone}; ``warnings`` then has the whole
-    runs' once and each length's own with the length before it (``"10 s windows: ..."``).
+    dict with the keys of docs/reference/commands/evaluate.md (the JSON of ``odomkit evaluate
+    --robot``), ``window`` (the length scored, ``"30 s"`` or ``"5 m"``; None without one),
+    ``per_log`` and ``warnings``, also issued as UserWarnings. With several lengths the keys
+    are the first length's (as a caller that asks for one reads them, and ``window`` names
+    it), and ``by_window`` {length: the keys of that length alone}; ``warnings`` then has the
+    whole runs' once and each length's own with the length before it (``"10 s windows: ..."``).
+    ``nees_position_mean`` here is the mean over window ends, each restarted from the truth
+    (one per log without ``window``), not over a track's rows as in ``odomkit track --json``'s
+    ``ground_truth`` (:func:`odomkit.evaluate.evaluate_track`).
     """
+    from odomkit.workflows.results import paths_given, truths_per_log
+
+    logs = paths_given(logs, "log", "odomkit.workflows.evaluate.evaluate_in_memory")
+    truth = truths_per_log(truth, len(logs))
     _check_plot(plot, overwrite, [*logs, robot_path, *(t.path for t in truth if t.path is not None)])
     specs = window_specs(window)
     by_spec = score_by_window(logs, robot_path, truth, specs, log_options=log_options,
                               min_travel=min_travel, align=align, rpe_distances=rpe_distances,
                               method=method, progress=progress, errors_only=True)
-    reports = [pooled_report(scored, rpe_distances, None if spec is None else str(spec))
-               for spec, scored in zip(specs, by_spec, strict=True)]
-    _unscored_lengths(specs, by_spec, reports)
-    out = dict(reports[0])
-    if len(reports) > 1:
-        out["warnings"] = several_lengths_notes(by_spec, reports)
-        out["by_window"] = {r["window"]: r for r in reports}
-    issue_notes(out["warnings"])
+    out = _pooled(specs, by_spec, rpe_distances)
     scored = by_spec[0]
     window = None if specs[0] is None else str(specs[0])
     if plot is not None:
@@ -226,6 +247,112 @@ def evaluate_logs(
             counts[f"{name}, heading"] = sum(end["nees_heading"] is not None for one in out["per_log"]
                                              for end in one.get("window_ends", ()))
         out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, counts, window))}
+    return out
+
+
+def evaluate_in_memory(
+    logs: OdometryLog | Sequence[OdometryLog],
+    robot: Robot,
+    noise: NoiseModel | Sequence[NoiseModel] | None,
+    truths: Truth | Sequence[Truth | None] | None = None,
+    *,
+    truth_noise: Mapping[str, float] | None = None,
+    window: str | Sequence[str] | None = None,
+    min_travel: float = 0.05,
+    max_gap: float | None = 0.5,
+    align: str = "none",
+    rpe_distances: Sequence[float] = (1.0,),
+    method: str = "exact",
+    progress: Progress = NO_PROGRESS,
+) -> dict[str, Any]:
+    """:func:`evaluate_logs` for logs already in memory: the honesty test, dead reckoning
+    restarted from truth in each window and scored at its end, and the whole-run errors.
+
+    The same scoring as ``odomkit evaluate LOG --robot ROBOT`` (one path: both call
+    :func:`~odomkit.workflows._score_logs.score_loaded`), with the command's defaults; the
+    same inputs give the same dict.
+
+    Parameters
+    ----------
+    logs : OdometryLog or sequence of OdometryLog
+        The logs (read by :mod:`odomkit.io` readers, or built from arrays).
+    robot : Robot
+    noise : NoiseModel, sequence of NoiseModel, or None
+        The noise whose covariance is tested (a robot file's ``[noise]``, or
+        :func:`odomkit.workflows.fit_noise.fit_noise_in_memory`'s ``noise``); None or empty:
+        the whole runs' errors alone (a ``window`` is then refused).
+    truths : Truth, sequence of Truth or None, or None
+        One per log (None: the log's own ground truth, :func:`odomkit.truth.truth_from_log`),
+        or one for every log; on the log's clock.
+    truth_noise : mapping, optional
+        The truth's own noise, added at every window's start and end: ``sigma`` [m],
+        ``heading_sigma`` [rad], ``time_sigma`` [s], as a robot file's ``[truth]`` holds it
+        (:func:`odomkit.io.robotfile.read_truth_table`, or ``fit_noise_in_memory``'s
+        ``truth``); it replaces each truth's own. None: each truth's own fields (zero by
+        default).
+    window : ``"30s"`` or ``"5m"``, or several lengths, each scored on its own; None: one
+        window per log from its first row
+    min_travel : windows whose odometry travels less [m] are left out and counted
+    max_gap : longest gap between the truth's fixes to interpolate across [s] (None: no limit)
+    align, rpe_distances, method, progress : as :func:`evaluate_logs`
+
+    Returns
+    -------
+    dict
+        As :func:`evaluate_logs` (the JSON of ``odomkit evaluate --robot``, without
+        ``outputs``); ``per_log`` names each log by its ``source``. Its ``warnings`` are also
+        issued as UserWarnings.
+
+    Examples
+    --------
+    >>> from odomkit.data import builtin_data_path
+    >>> from odomkit.io.optiodom import read_run
+    >>> from odomkit.io.robotfile import read_robot
+    >>> robot, noise = read_robot(builtin_data_path("optiodom_diff.toml"))
+    >>> log = read_run(builtin_data_path("230620202042_run-01.csv"))
+    >>> import warnings
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore")
+    ...     out = evaluate_in_memory(log, robot, noise, window="10s")
+    >>> out["windows"], out["coverage_overall"]
+    (9, 'optimistic')
+    """
+    from odomkit.workflows.results import logs_given, truths_given
+
+    given = logs_given(logs, "odomkit.workflows.evaluate.evaluate_logs")
+    truth = truths_given(truths, given, truth_noise)
+    models: tuple[NoiseModel, ...] = () if noise is None else _noise_tuple(noise)
+    specs = window_specs(window)
+    by_spec = score_loaded((LoadedLog(log, found, max_gap) for log, found in zip(given, truth, strict=True)),
+                           len(given), robot, models, specs, min_travel=min_travel, align=align,
+                           rpe_distances=rpe_distances, method=method, progress=progress, errors_only=True)
+    return _pooled(specs, by_spec, rpe_distances)
+
+
+def _noise_tuple(noise: NoiseModel | Sequence[NoiseModel]) -> tuple[NoiseModel, ...]:
+    """One noise model or several as a tuple (a NoiseSet's models too)."""
+    from odomkit.noise import NoiseModel, NoiseSet
+
+    if isinstance(noise, NoiseModel):
+        return (noise,)
+    if isinstance(noise, NoiseSet):
+        return tuple(noise.models)
+    return tuple(noise)
+
+
+def _pooled(specs: Sequence[WindowSpec | None], by_spec: Sequence[list[Scored]],
+            rpe_distances: Sequence[float]) -> dict[str, Any]:
+    """The report of :func:`evaluate_logs` and :func:`evaluate_in_memory`: each window
+    length's pooled figures (the first's at the top, all in ``by_window`` with several),
+    an error where no length scored a window end, and the warnings, issued."""
+    reports = [pooled_report(scored, rpe_distances, None if spec is None else str(spec))
+               for spec, scored in zip(specs, by_spec, strict=True)]
+    _unscored_lengths(specs, by_spec, reports)
+    out = dict(reports[0])
+    if len(reports) > 1:
+        out["warnings"] = several_lengths_notes(by_spec, reports)
+        out["by_window"] = {r["window"]: r for r in reports}
+    issue_notes(out["warnings"], stacklevel=4)  # the caller of evaluate_logs or evaluate_in_memory
     return out
 
 

@@ -80,7 +80,8 @@ def track_figure(path: str | Path, run: TrackRun, robot: Robot) -> Path:
 def predict_figure(path: str | Path, segments: Sequence[Segment], noise: NoiseArg,
                    wheel_base: float | None, *,
                    pose0: ArrayLike, cov0: ArrayLike | None, end_pose: ArrayLike, end_cov: ArrayLike,
-                   compass_period: float | None = None, partitions: int | None = None) -> Path:
+                   compass_period: float | None = None, partitions: int | None = None,
+                   robot: Robot | None = None, sample_period: float | None = None) -> Path:
     """``odomkit predict --plot``: the planned path with its 95 % ellipses and the six
     covariance elements over the distance travelled.
 
@@ -93,7 +94,8 @@ def predict_figure(path: str | Path, segments: Sequence[Segment], noise: NoiseAr
     from odomkit.propagate.paths import check_segments, path_model, path_steps
     from odomkit.propagate.recursion import track_covariance
 
-    model = path_model(noise, wheel_base, compass_period=compass_period)
+    model = path_model(noise, None if robot is not None else wheel_base, compass_period=compass_period,
+                       robot=robot, sample_period=sample_period)
     segs = check_segments(segments, model)
     p0 = np.asarray(pose0, dtype=float)
     c0 = np.zeros((3, 3)) if cov0 is None else np.asarray(cov0, dtype=float)

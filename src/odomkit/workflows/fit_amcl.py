@@ -118,8 +118,8 @@ def _updates(odom: OdometryPoses, truth: Truth, opts: TruthOptions, model: str, 
 
 
 def fit_amcl_files(
-    odometry: Sequence[str | Path],
-    truth: Sequence[TruthOptions],
+    odometry: str | Path | Sequence[str | Path],
+    truth: TruthOptions | Sequence[TruthOptions] | None = None,
     *,
     robot_path: str | Path | None = None,
     log_options: LogOptions | None = None,
@@ -136,9 +136,10 @@ def fit_amcl_files(
 
     Parameters
     ----------
-    odometry : pose tracks, or logs when ``robot_path`` is given
-    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per file (``path`` None: the
-        file's own truth, ``gt_*`` columns or an OptiOdom log's)
+    odometry : pose tracks, or logs when ``robot_path`` is given (or one)
+    truth : one :class:`~odomkit.workflows.truth.TruthOptions` per file, or one for every
+        file (``path`` None: the file's own truth, ``gt_*`` columns or an OptiOdom log's);
+        None: each file's own
     robot_path : robot file: the files are raw logs, dead-reckoned with it
     log_options : how to read the logs (with ``robot_path`` only)
     model : {"diff", "omni"}
@@ -160,9 +161,11 @@ def fit_amcl_files(
     from odomkit.io.files import check_outputs
     from odomkit.io.ros import nav2_amcl_yaml
     from odomkit.workflows.logs import LogOptions
-    from odomkit.workflows.results import check_result, numeric_guard
+    from odomkit.workflows.results import check_result, numeric_guard, paths_given, truths_per_log
     from odomkit.workflows.truth import load_truth
 
+    odometry = paths_given(odometry, "file")
+    truth = truths_per_log(truth, len(odometry), "file")
     if model not in AMCL_MODELS:
         raise InputError(f"--model must be one of {', '.join(AMCL_MODELS)}, got {model!r}")
     for flag, value in (("--update-min-d", update_min_d), ("--update-min-a", update_min_a)):

@@ -17,6 +17,7 @@ from odomkit import validate
 from odomkit.errors import ModelError
 from odomkit.io.ros import ros_pose_covariance
 from odomkit.path import Segment
+from odomkit.robot import Robot
 from odomkit.workflows.results import check_result, numeric_guard
 
 if TYPE_CHECKING:
@@ -61,10 +62,13 @@ def run_predict(
     compass_period: float | None = None,
     plot: str | Path | None = None,
     overwrite: bool = False,
+    robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> dict[str, Any]:
     """Predict the end pose of ``segments`` and its covariance: the ``--json`` object.
 
-    Parameters are those of :func:`odomkit.propagate.predict.predict`. Returns
+    Parameters are those of :func:`odomkit.propagate.predict.predict` (``robot`` and
+    ``noise`` as a robot file gives them, ``read_robot``). Returns
     :meth:`~odomkit.propagate.predict.Prediction.to_dict` plus ``ros_pose_covariance``.
     With ``plot`` (.png, .svg or .pdf; replaced only when ``overwrite``) it also draws
     :func:`odomkit.workflows.figures.predict_figure` and adds ``outputs``.
@@ -84,10 +88,17 @@ def run_predict(
         raise ModelError(f"--partitions {partitions} × {len(segments)} segment(s) = "
                          f"{partitions * len(segments):.3g} steps, above the limit {MAX_STEPS:.0e} "
                          "(memory); lower --partitions (the closed engine needs none)")
+    if sample_period is not None:
+        validate.positive(sample_period, "--sample-period", unit="s")
+        samples = sum(float(getattr(s, "duration", 0.0)) for s in segments) / sample_period
+        if samples > MAX_STEPS:
+            raise ModelError(f"the path lasts {samples:.3g} sample periods, above the limit "
+                             f"{MAX_STEPS:.0e} steps (memory); is --sample-period in seconds?")
     with numeric_guard("the prediction"):
         result = predict(segments, noise, wheel_base=wheel_base, pose0=pose0, cov0=cov0,
                          engine=engine,  # type: ignore[arg-type]
-                         partitions=partitions, compass_period=compass_period)
+                         partitions=partitions, compass_period=compass_period, robot=robot,
+                         sample_period=sample_period)
     check_result("the prediction", {"the pose": result.pose}, {"the covariance": result.cov})
     out = add_ros_pose_covariance(result.to_dict())
     if plot is not None:
@@ -95,5 +106,6 @@ def run_predict(
 
         out["outputs"] = {"plot": str(predict_figure(
             plot, segments, noise, wheel_base, pose0=pose0, cov0=cov0, end_pose=result.pose,
-            end_cov=result.cov, compass_period=compass_period, partitions=partitions))}
+            end_cov=result.cov, compass_period=compass_period, partitions=partitions, robot=robot,
+            sample_period=sample_period))}
     return out

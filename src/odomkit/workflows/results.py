@@ -12,18 +12,26 @@ the first number that is not finite.
 
 from __future__ import annotations
 
+import os
 import re
 import warnings
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from odomkit.errors import ModelError
+from odomkit.errors import InputError, ModelError
 
-__all__ = ["check_result", "collected_warnings", "grouped_warnings", "listed", "numeric_guard", "RESULT_RTOL",
-           "short_names"]
+if TYPE_CHECKING:
+    from odomkit.log import OdometryLog
+    from odomkit.truth import Truth
+    from odomkit.workflows.truth import TruthOptions
+
+__all__ = ["check_result", "collected_warnings", "grouped_warnings", "listed", "logs_given", "numeric_guard",
+           "paths_given", "RESULT_RTOL", "short_names", "truths_given", "truths_per_log"]
 
 #: Asymmetry and negative eigenvalue a computed covariance may show, relative to its largest
 #: entry: rounding of long recursions and prefix sums (~1e-13), far below any real defect.
@@ -217,4 +225,142 @@ def grouped_warnings(texts: Sequence[str], noun: str = "logs", among: Sequence[s
             out.append(f"{len(named)} {noun} ({listed(short_names(named, files))}): {text}")
         else:
             out.append(text)
+    return out
+
+
+def paths_given(given: str | os.PathLike[str] | Sequence[str | os.PathLike[str]], what: str = "log",
+                in_memory: str | None = None) -> list[str | Path]:
+    """The files a workflow function was given, as a list: a sequence of paths, or one path
+    (``str`` or :class:`~pathlib.Path`) as a list of one (a ``str`` is never read as the
+    sequence of its characters). ``what`` names a file in messages (``"log"``); ``in_memory``
+    names the function that takes objects instead (``"odomkit.workflows.evaluate.evaluate_in_memory"``),
+    for the message when one is given here.
+
+    Raises
+    ------
+    InputError
+        One line where nothing is given, or an item is not a path.
+
+    Examples
+    --------
+    >>> paths_given("run.csv")
+    ['run.csv']
+    >>> paths_given(["a.csv", "b.csv"])
+    ['a.csv', 'b.csv']
+    """
+    if isinstance(given, str | os.PathLike):
+        return [given if isinstance(given, str) else Path(given)]
+    try:
+        items = list(given)
+    except TypeError:
+        items = [given]  # type: ignore[list-item]  # reported as not a path below
+    if not items:
+        raise InputError(f"no {what}: give a {what} file's path or a list of them")
+    for item in items:
+        if not isinstance(item, str | os.PathLike):
+            kind = type(item).__name__
+            instead = f"; for {kind} objects in memory use {in_memory}" if in_memory else ""
+            raise InputError(f"each {what} must be a file path (str or pathlib.Path), got a {kind}{instead}")
+    return [x if isinstance(x, str) else Path(x) for x in items]
+
+
+def truths_per_log(truth: TruthOptions | Sequence[TruthOptions] | None, count: int,
+                   what: str = "log") -> list[TruthOptions]:
+    """One :class:`~odomkit.workflows.truth.TruthOptions` per file of a workflow function:
+    None gives each file its own truth (``TruthOptions()``: its ``gt_*`` columns, an OptiOdom
+    or Snowhite log's), one ``TruthOptions`` is every file's, and a sequence must hold one per
+    file (the i-th for the i-th), else one line."""
+    from odomkit.workflows.truth import TruthOptions
+
+    if truth is None:
+        return [TruthOptions()] * count
+    if isinstance(truth, TruthOptions):
+        return [truth] * count
+    items = list(truth)
+    bad = [type(t).__name__ for t in items if not isinstance(t, TruthOptions)]
+    if bad:
+        raise InputError(f"truth must be TruthOptions (or a list of them, or None for each {what}'s own), "
+                         f"got a {bad[0]}")
+    if len(items) != count:
+        raise InputError(f"give one TruthOptions per {what}: {count} {what}(s), {len(items)} TruthOptions "
+                         f"(or one TruthOptions for every {what}, or None for each {what}'s own truth)")
+    return items
+
+
+def logs_given(logs: OdometryLog | Sequence[OdometryLog], files: str) -> list[OdometryLog]:
+    """The logs a workflow function takes in memory, as a list: one :class:`~odomkit.log.OdometryLog`
+    or a sequence of them; one line otherwise, naming ``files``, the function that takes
+    paths instead (``"odomkit.workflows.evaluate.evaluate_logs"``)."""
+    from odomkit.log import OdometryLog
+
+    if isinstance(logs, OdometryLog):
+        return [logs]
+    if isinstance(logs, str | os.PathLike):
+        raise InputError(f"expected OdometryLog objects, got a path ({logs}); for log files use {files}")
+    try:
+        items = list(logs)
+    except TypeError:
+        items = [logs]  # type: ignore[list-item]  # reported as not a log below
+    if not items:
+        raise InputError("no log: give an OdometryLog or a list of them")
+    for item in items:
+        if not isinstance(item, OdometryLog):
+            kind = "a path" if isinstance(item, str | os.PathLike) else f"a {type(item).__name__}"
+            raise InputError(f"each log must be an OdometryLog (odomkit.log), got {kind}; for log files use "
+                             f"{files}")
+    return items
+
+
+#: The keys of a robot file's ``[truth]`` table that are the truth's own noise
+#: (:func:`truths_given`'s ``truth_noise``): position σ [m], heading σ [rad], time σ [s].
+_TRUTH_NOISE_KEYS = ("sigma", "heading_sigma", "time_sigma")
+
+
+def truths_given(truths: Truth | Sequence[Truth | None] | None, logs: Sequence[OdometryLog],
+                 truth_noise: Mapping[str, float] | None = None) -> list[Truth]:
+    """One :class:`~odomkit.truth.Truth` per log of a workflow function that takes logs in
+    memory: None (or a None in the sequence) is the log's own truth
+    (:func:`odomkit.truth.truth_from_log`: its ground truth, an OptiOdom or Snowhite log's),
+    one ``Truth`` is every log's, a sequence holds one per log (the i-th for the i-th); one
+    line where a log has none or the count differs.
+
+    ``truth_noise``, a robot file's ``[truth]`` table (``sigma`` [m], ``heading_sigma``
+    [rad], ``time_sigma`` [s]; what :func:`odomkit.workflows.fit_noise.fit_noise_in_memory`
+    returns as ``truth``), replaces those of every truth; None keeps each truth's own."""
+    from odomkit.truth import Truth, truth_from_log
+
+    if truths is None or isinstance(truths, Truth):
+        items: list[Truth | None] = [truths] * len(logs)
+    else:
+        try:
+            items = list(truths)
+        except TypeError:
+            items = [truths]  # type: ignore[list-item]  # reported as not a Truth below
+        if len(items) != len(logs):
+            raise InputError(f"give one Truth per log: {len(logs)} log(s), {len(items)} truth(s) (or one "
+                             "Truth for every log, or None for each log's own ground truth)")
+    noise = dict(truth_noise or {})
+    unknown = sorted(set(noise) - set(_TRUTH_NOISE_KEYS))
+    if unknown:
+        more = ("; a clock offset is not noise: move the truth's clock (Truth.t - offset) before" if
+                "time_offset" in unknown else "")
+        raise InputError(f"truth_noise takes {', '.join(_TRUTH_NOISE_KEYS)} (a robot file's [truth]), got "
+                         f"{', '.join(unknown)}{more}")
+    out = []
+    for log, truth in zip(logs, items, strict=True):
+        if truth is not None and not isinstance(truth, Truth):
+            raise InputError(f"each truth must be an odomkit.truth.Truth or None, got a "
+                             f"{type(truth).__name__}")
+        found = truth if truth is not None else truth_from_log(log)
+        if found is None:
+            raise InputError("no truth: the log has no ground truth of its own; give a Truth "
+                             "(odomkit.truth.Truth, or odomkit.io.truth.read_truth) for it",
+                             source=log.source)
+        if noise:
+            from dataclasses import replace
+
+            found = replace(found, sigma=float(noise.get("sigma", found.sigma)),
+                            heading_sigma=float(noise.get("heading_sigma", found.heading_sigma)),
+                            time_sigma=float(noise.get("time_sigma", found.time_sigma)))
+        out.append(found)
     return out

@@ -18,7 +18,7 @@ from numpy.typing import ArrayLike
 from odomkit import validate
 from odomkit.path import Segment
 from odomkit.progress import NO_PROGRESS, Progress
-from odomkit.robot import SystematicErrors
+from odomkit.robot import Robot, SystematicErrors
 from odomkit.workflows.predict import add_ros_pose_covariance
 from odomkit.workflows.results import check_result, numeric_guard
 
@@ -48,9 +48,11 @@ def run_simulate(
     max_work: float | None = None,
     plot: str | Path | None = None,
     overwrite: bool = False,
+    robot: Robot | None = None,
+    sample_period: float | None = None,
 ) -> dict[str, Any]:
     """Simulate ``runs`` noisy runs of ``segments`` and check them against the closed-form
-    prediction: the ``--json`` object.
+    prediction (or the track's engines where there is none): the ``--json`` object.
 
     Parameters are those of :func:`odomkit.simulate.monte_carlo` (``scheduler``: a Dask
     scheduler address or ``dask.distributed.Client``; ``max_work``: the largest runs ×
@@ -78,7 +80,8 @@ def run_simulate(
             runs=runs, partitions=partitions, seed=seed, pose0=pose0, cov0=cov0,
             systematic=systematic, alpha=alpha, workers=workers, chunk_runs=chunk_runs,
             scheduler=scheduler, progress=progress, compass_period=compass_period,
-            max_work=MAX_WORK if max_work is None else max_work,
+            max_work=MAX_WORK if max_work is None else max_work, robot=robot,
+            sample_period=sample_period,
         )
     theory, simulation = result["theory"], result["simulation"]
     check_result("the simulation", {"the predicted pose": theory["pose"],
@@ -93,7 +96,8 @@ def run_simulate(
         warnings.warn(message, stacklevel=2)
     if plot is not None:
         result["outputs"] = {"plot": str(_figure(plot, result, segments, noise, wheel_base, partitions,
-                                                 pose0, cov0, systematic, workers, compass_period))}
+                                                 pose0, cov0, systematic, workers, compass_period,
+                                                 robot, sample_period))}
     return result
 
 
@@ -103,7 +107,8 @@ PLOT_RUNS = 4096
 
 def _figure(plot: str | Path, result: dict[str, Any], segments: Sequence[Segment], noise: NoiseArg,
             wheel_base: float | None, partitions: int, pose0: ArrayLike, cov0: ArrayLike | None,
-            systematic: SystematicErrors | None, workers: int | None, compass_period: float | None) -> Path:
+            systematic: SystematicErrors | None, workers: int | None, compass_period: float | None,
+            robot: Robot | None = None, sample_period: float | None = None) -> Path:
     """The end poses are not kept by the experiment: the first :data:`PLOT_RUNS` runs are
     simulated again with its seed and engine, which draws the same numbers (each block of
     runs has its own seeded stream, :mod:`odomkit.simulate.blocks`)."""
@@ -113,7 +118,7 @@ def _figure(plot: str | Path, result: dict[str, Any], segments: Sequence[Segment
     shown = simulate_runs(segments, noise, wheel_base, runs=min(int(result["runs"]), PLOT_RUNS),
                           partitions=partitions, seed=int(result["seed"]), pose0=pose0, cov0=cov0,
                           systematic=systematic, workers=workers, engine=result["engine"],
-                          compass_period=compass_period)
+                          compass_period=compass_period, robot=robot, sample_period=sample_period)
     theory = result["theory"]
     return simulate_figure(plot, shown.final, theory["pose"], theory["cov"], runs=int(result["runs"]),
                            seed=int(result["seed"]))

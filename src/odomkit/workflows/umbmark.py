@@ -67,7 +67,7 @@ def umbmark_from_errors_file(errors_csv: str | Path, side: float, *,
     return summary
 
 
-def umbmark_from_files(run_paths: Sequence[str | Path], robot_path: str | Path, side: float, *,
+def umbmark_from_files(run_paths: str | Path | Sequence[str | Path], robot_path: str | Path, side: float, *,
                        log_options: LogOptions | None = None, plot: str | Path | None = None,
                        overwrite: bool = False, **kwargs: Any) -> UmbmarkFromRuns:
     """UMBmark (:func:`odomkit.calibrate.realdata.umbmark_from_runs`) from log files, read
@@ -76,7 +76,9 @@ def umbmark_from_files(run_paths: Sequence[str | Path], robot_path: str | Path, 
     the correction (:func:`odomkit.workflows.figures.umbmark_figure`)."""
     # The exact-calibration stack (scipy) loads only for this form.
     from odomkit.calibrate.realdata import return_errors_from_runs, umbmark_from_runs
+    from odomkit.workflows.results import paths_given
 
+    run_paths = paths_given(run_paths, "run")
     _check_plot(plot, overwrite, [*run_paths, robot_path])
 
     robot = _diff_robot(robot_path)
