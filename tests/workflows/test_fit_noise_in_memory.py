@@ -245,3 +245,20 @@ def test_position_only_truth_with_its_noise_held_equals_the_command(tmp_path, no
                     truth_held={"truth_sigma": 0.01})
     _same({k: v for k, v in json.loads(out).items() if k not in ("outputs", "seconds")}, fitted.summary)
     assert "truth_sigma" not in fitted.summary["parameters"] and fitted.truth["sigma"] == 0.01
+
+
+def test_a_truth_in_memory_is_asked_what_a_truth_file_is(three_logs):
+    """A Truth handed over in memory gets the checks a truth file gets when a command reads it:
+    its heading in degrees is named (it was fitted silently, the windows started from
+    headings that were no robot's)."""
+    from dataclasses import replace
+
+    _, _, logs, truths = three_logs
+    in_degrees = [replace(truth, theta=np.degrees(truth.theta)) for truth in truths]
+    with pytest.warns(UserWarning, match="does not follow the direction its positions move in"):
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="^(?!.*does not follow)")
+            try:
+                fit_noise_in_memory(logs, DiffDrive(0.4), truths=in_degrees, window=WINDOWS)
+            except InputError:
+                pass  # the fit may refuse such windows; the warning came first

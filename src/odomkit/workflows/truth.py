@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
 
 __all__ = ["applied_clock", "clock_from_robot", "load_truth", "resolved_truth", "TruthOptions",
-           "truth_options_per_log", "with_truth_topic"]
+           "truth_options_per_log", "warn_of_truth", "with_truth_topic"]
 
 
 @dataclass(frozen=True)
@@ -140,12 +140,20 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     offset = applied_clock(options, log)
     if offset:
         truth = replace(truth, t=truth.t - offset)
-    if truth.theta is not None:
-        _warn_if_heading_off_motion(truth)
-    _warn_if_units_off(truth, log)
+    warn_of_truth(truth, log)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
+
+
+def warn_of_truth(truth: Truth, log: OdometryLog | None = None) -> None:
+    """Warn, once per truth, of a truth that is not what it claims: a heading that does not
+    follow its own motion, positions or times in another unit. Every truth a command reads
+    (:func:`load_truth`) and every one handed to a workflow in memory
+    (:func:`odomkit.workflows.results.truths_given`) is asked."""
+    if truth.theta is not None:
+        _warn_if_heading_off_motion(truth)
+    _warn_if_units_off(truth, log)
 
 
 def _warn_if_heading_off_motion(truth: Truth) -> None:
