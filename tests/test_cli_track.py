@@ -136,3 +136,17 @@ def test_track_csv_is_the_same_with_either_writer(tmp_path, monkeypatch, cov):
         assert np.array_equal(fast[name], slow[name], equal_nan=True)
     assert np.array_equal(fast["x"], track.poses[:, 0])
     assert np.isnan(fast["cov_xx"]).all() != cov
+
+
+def test_track_text_says_nothing_of_a_nees_it_does_not_show(run_cli):
+    """The README's first track command: its text shows no NEES, so the note on rows whose
+    singular covariance makes the NEES (given with --json, where the NEES is) is not said;
+    it opened every OptiOdom run's text with a warning."""
+    from odomkit.data import builtin_data_path
+
+    run = builtin_data_path("230620202042_run-01.csv")
+    robot = builtin_data_path("optiodom_diff.toml")
+    code, _, err = run_cli("track", run, "--robot", robot)
+    assert code == 0 and err == "", err
+    code, _, err = run_cli("track", run, "--robot", robot, "--json")
+    assert code == 0 and "singular covariance" in err

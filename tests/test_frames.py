@@ -53,12 +53,16 @@ def test_a_y_up_motion_capture_reads_back_the_ground_track():
     assert planar_poses(file_positions, None, "+y")[1] is None
 
 
-def test_y_down_reads_the_ground_mirrored_back_right_handed():
-    """KITTI's camera frame: x right, y down, z forward; the ground is (x, z) seen from above,
-    which with -y up is (x, z) in that order."""
+def test_y_down_reads_a_camera_driving_along_its_z_axis():
+    """KITTI's camera frame: x right, y down, z forward. A car drives along its camera's z:
+    the ground's forward is z and its left is -x, and a left turn by ψ is a turn about -y
+    (scipy's rotation by -ψ about +y), which takes z towards -x. Before, -y read the ground
+    as (x, z) and the heading from the camera's x axis: 90° off the way the car drives."""
     xy, heading = _ground_track()
-    file_positions = np.column_stack((xy[:, 0], np.full(len(xy), 1.7), xy[:, 1]))
+    file_positions = np.column_stack((-xy[:, 1], np.full(len(xy), 1.7), xy[:, 0]))
     rotations = Rotation.from_rotvec(np.outer(-heading, [0.0, 1.0, 0.0]))  # a turn about -y
+    assert np.allclose(rotations.apply([0.0, 0.0, 1.0])[:, [2, 0]] * [1, -1],
+                       np.column_stack((np.cos(heading), np.sin(heading))))  # z is forward
     got_xy, got_yaw = planar_poses(file_positions, rotations.as_matrix(), "-y")
     assert np.allclose(got_xy, xy)
     assert np.allclose(np.angle(np.exp(1j * (got_yaw - heading))), 0.0, atol=1e-12)

@@ -582,7 +582,8 @@ class TrackEvaluation:
         return dict(self.__dict__)
 
 
-def evaluate_track(poses: ArrayLike, truth: ArrayLike, cov: ArrayLike | None = None) -> TrackEvaluation:
+def evaluate_track(poses: ArrayLike, truth: ArrayLike, cov: ArrayLike | None = None, *,
+                   note_nees: bool = True) -> TrackEvaluation:
     """Compare a dead-reckoned track with its ground truth.
 
     ``drift_per_distance`` is the final position error over the true path length.
@@ -594,7 +595,8 @@ def evaluate_track(poses: ArrayLike, truth: ArrayLike, cov: ArrayLike | None = N
 
     Where rows of a singular or nearly singular covariance make the NEES (a track started at
     the truth pose with zero covariance, scored against a truth with noise of its own), a
-    UserWarning says so (:func:`singular_nees_note`, as ``odomkit evaluate`` warns).
+    UserWarning says so (:func:`singular_nees_note`, as ``odomkit evaluate`` warns), unless
+    ``note_nees`` is False (a caller that shows no NEES: ``odomkit track``'s text).
     """
     err = pose_errors(poses, truth)
     dist = np.hypot(err[:, 0], err[:, 1])
@@ -610,7 +612,8 @@ def evaluate_track(poses: ArrayLike, truth: ArrayLike, cov: ArrayLike | None = N
             inside = float(np.mean(finite <= _chi2_2dof(0.95)))
     ate = float(np.sqrt(np.mean(dist**2)))
     # Errors that overflow (inf ATE) are the caller's error to report, not a note before it.
-    note = None if P is None or not np.isfinite(ate) else singular_nees_note(err[:, :2], P)
+    note = (None if P is None or not note_nees or not np.isfinite(ate)
+            else singular_nees_note(err[:, :2], P))
     if note:
         warnings.warn(note, stacklevel=2)
     return TrackEvaluation(

@@ -7,11 +7,12 @@ track is its x and its height, and its heading is no heading of the robot's.
 
 :func:`planar_poses` re-expresses the poses in a right-handed frame whose third axis is the
 given ``up`` (one of :data:`UP_AXES`): the ground axes (a, b) are the two others, taken in
-the order that keeps a × b = up, so ``+y`` reads (z, x), ``-y`` reads (x, z), ``+z`` is the
-identity. The heading is the yaw of the rotation in that frame, atan2(b·R·a, a·R·a): the
-direction in which the body's own a axis points, as odomkit's ``+z`` reading always was
-(the Z-Y-X yaw of the quaternion). :func:`likely_up` tells from the positions alone which
-axis a ground robot's file holds nearly constant.
+the order that keeps a × b = up, so ``+y`` reads (z, x), ``-y`` (KITTI's camera frame: x
+right, y down, z forward) reads (z, −x), forward and left, ``+z`` is the identity. The
+heading is the yaw of the rotation in that frame, atan2(b·R·a, a·R·a): the direction in
+which the body's own a axis points, as odomkit's ``+z`` reading always was (the Z-Y-X yaw of
+the quaternion). :func:`likely_up` tells from the positions alone which axis a ground
+robot's path says points up.
 """
 
 from __future__ import annotations
@@ -25,15 +26,17 @@ __all__ = ["ground_basis", "likely_up", "planar_poses", "quaternion_matrices", "
 UP_AXES = ("+x", "-x", "+y", "-y", "+z", "-z")
 
 #: The ground axes (a, b) for each up axis, as (index, sign) pairs with a × b = up: cyclic
-#: order x → y → z → x for a positive axis, reversed for a negative one.
+#: order x → y → z → x for a positive axis, reversed for a negative one (but -y, below).
 _GROUND = {
     "+z": ((0, 1.0), (1, 1.0)), "+x": ((1, 1.0), (2, 1.0)), "+y": ((2, 1.0), (0, 1.0)),
-    "-z": ((1, 1.0), (0, 1.0)), "-x": ((2, 1.0), (1, 1.0)), "-y": ((0, 1.0), (2, 1.0)),
+    # -y is KITTI's camera frame (x right, y down, z forward): the ground is (z, -x), forward
+    # and left, so that the heading is the camera's z axis, the way the car drives.
+    "-z": ((1, 1.0), (0, 1.0)), "-x": ((2, 1.0), (1, 1.0)), "-y": ((2, 1.0), (0, -1.0)),
 }
-#: :func:`likely_up` names an axis only where the positions' spread along it is below this
-#: share of the smaller spread of the other two, and z's own spread is above
-#: :data:`_LEAST_SPREAD` [m] (a robot on a flat floor keeps its height within millimetres
-#: to centimetres, while it drives metres both ways).
+#: :func:`likely_up` names an axis only where reading the file z-up keeps less than this
+#: share of the breadth of its path (the spread across its main direction), and the path is
+#: at least :data:`_LEAST_SPREAD` [m] broad: a ground robot's 2-D path seen from the wrong
+#: side collapses onto a line, while a tilted floor or a slope keeps most of it.
 _SPREAD_SHARE = 0.2
 _LEAST_SPREAD = 0.05
 
@@ -105,8 +108,15 @@ def planar_poses(positions: ArrayLike, rotations: ArrayLike | None, up: str = "+
 
 
 def likely_up(positions: ArrayLike) -> str | None:
-    """The axis a ground robot's positions hold nearly constant, where it is not z: ``"+y"``
-    or ``"+x"`` (the sign cannot be told from positions), else None.
+    """The axis a ground robot's positions say points up, where it is not z: ``"+x"`` or
+    ``"+y"`` (the sign cannot be told from positions), else None.
+
+    The path's breadth is its spread across its main direction, the second singular value of
+    the centred positions (over √N: a standard deviation [m]); read z-up (x, y alone) a path
+    whose plane is across x or y collapses onto a line. Named only where the z-up reading
+    keeps under :data:`_SPREAD_SHARE` of a breadth of at least :data:`_LEAST_SPREAD`, and
+    the normal of the path's plane lies along x or y. A straight road that climbs (a line in
+    3-D) or a path on a tilted floor names nothing.
 
     Parameters
     ----------
@@ -115,9 +125,12 @@ def likely_up(positions: ArrayLike) -> str | None:
     p = np.asarray(positions, dtype=float)
     if p.shape[0] < 3:
         return None
-    spread = np.std(p, axis=0)
-    least = int(np.argmin(spread))
-    others = np.delete(spread, least)
-    if least == 2 or not spread[2] > _LEAST_SPREAD or not spread[least] < _SPREAD_SHARE * others.min():
+    p = p - p.mean(axis=0)
+    root = np.sqrt(p.shape[0])
+    _, spread, axes = np.linalg.svd(p, full_matrices=False)
+    breadth = spread[1] / root
+    kept = np.linalg.svd(p[:, :2], compute_uv=False)[1] / root
+    if not breadth > _LEAST_SPREAD or not kept < _SPREAD_SHARE * breadth:
         return None
-    return "+" + "xyz"[least]
+    up = int(np.argmax(np.abs(axes[2])))  # the normal of the path's plane
+    return None if up == 2 else "+" + "xyz"[up]

@@ -347,9 +347,10 @@ def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[f
 
 #: What makes a truth's heading no heading of the robot's (:func:`heading_off_motion`).
 HEADING_OFF_CAUSES = ("a heading in degrees read as radians (name the column theta_deg), a quaternion in "
-                      "another order (TUM rows are t x y z qx qy qz qw), a motion-capture body whose axes "
-                      "are turned against the robot's, or a base that moves sideways, which odomkit's "
-                      "vehicles do not")
+                      "another order (TUM rows are t x y z qx qy qz qw), a TUM or KITTI file whose frame "
+                      "is not z-up (--truth-up: -y for a camera's, +y for a Y-up motion capture), a "
+                      "motion-capture body whose axes are turned against the robot's, or a base that moves "
+                      "sideways, which odomkit's vehicles do not")
 
 
 def heading_off_motion(truth: Truth, max_gap: float | None = 0.5) -> str | None:

@@ -46,20 +46,26 @@ def test_a_y_up_file_read_as_z_up_is_warned_about(tmp_path):
     """Before, it read silently as x' against the height: a track 0.2 m above nothing."""
     path = tmp_path / "mocap.tum"
     _write_y_up_tum(path)
-    with pytest.warns(UserWarning, match=r"hold y nearly constant.*--truth-up \+y"):
+    with pytest.warns(UserWarning, match=r"lies across y.*--truth-up \+y"):
         read_truth(path)
 
 
 def test_kitti_camera_frame_reads_with_y_down(tmp_path):
-    """KITTI's camera frame: x right, y down, z forward; -y up reads the ground as (x, z)."""
+    """KITTI's camera frame: x right, y down, z forward; -y up reads the ground as (z, -x),
+    and the heading follows the motion."""
     t, xy, heading = _ground_track()
     rotation = Rotation.from_rotvec(np.outer(-heading, [0.0, 1.0, 0.0])).as_matrix()
-    rows = [(ti, *r[0], x, *r[1], 1.7, *r[2], z) for ti, r, (x, z) in zip(t, rotation, xy, strict=True)]
+    # The car drives along the camera's z (forward) with its left along -x.
+    rows = [(ti, *r[0], -left, *r[1], 1.7, *r[2], forward)
+            for ti, r, (forward, left) in zip(t, rotation, xy, strict=True)]
     path = tmp_path / "poses.txt"
     path.write_text("".join(" ".join(f"{v:.10g}" for v in row) + "\n" for row in rows))
     truth = read_truth(path, "kitti", up="-y")
     assert np.allclose(truth.xy, xy, atol=1e-9)
     assert truth.theta is not None and np.allclose(truth.theta, heading, atol=1e-9)
+    from odomkit.truth import heading_against_motion
+
+    assert heading_against_motion(truth)[0] < 0.01
 
 
 def test_truth_up_is_for_3d_pose_files_and_names_its_axes(tmp_path):
@@ -111,3 +117,18 @@ def test_positions_in_millimetres_read_as_metres(tmp_path):
         assert np.allclose(got.xy, want.xy, atol=1e-9) and np.allclose(got.theta, want.theta)
     with pytest.raises(InputError, match="x_mm and y_mm together"):
         read_truth(mm, columns="t=time,x_mm=x_mm,y=y_mm")
+
+
+def test_a_climbing_road_read_z_up_is_not_taken_for_a_y_up_file(tmp_path):
+    """A straight 200 m road climbing 10 m along y: x is nearly constant, but the heading read
+    about z follows the motion, so the file is z-up and nothing is said."""
+    t = np.arange(0.0, 20.0, 0.05)
+    y = 10.0 * t
+    rows = np.column_stack((t, 0.01 * np.sin(t), y, 0.05 * y,
+                            Rotation.from_rotvec(np.outer(np.full(t.size, np.pi / 2), [0, 0, 1])).as_quat()))
+    path = tmp_path / "road.tum"
+    path.write_text("".join(" ".join(f"{v:.10g}" for v in row) + "\n" for row in rows))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        truth = read_truth(path)
+    assert np.allclose(truth.xy[:, 1], y)

@@ -66,7 +66,7 @@ def test_predict_with_a_fitted_diff_robot_file(tmp_path, capsys):
     assert np.allclose(out["cov"], p.cov, rtol=1e-12, atol=0)
     # the closed form does not exist for this set: one line naming the engines
     code, _, err = _run(capsys, "predict", "--robot", str(robot_file), *SQUARE)
-    assert code == 2 and "use engine 'recursion' or 'transition'" in err and "Traceback" not in err
+    assert code == 2 and "--engine recursion" in err and "Traceback" not in err
 
 
 def test_tricycle_robot_file_needs_the_sample_period(tmp_path, capsys):

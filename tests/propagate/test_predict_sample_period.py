@@ -148,6 +148,6 @@ def test_a_compass_sample_period_is_its_compass_period_and_a_diff_path_takes_non
     assert np.array_equal(a.cov, b.cov)
     with pytest.raises(ModelError, match="sample_period 0.05 s and compass_period 0.1 s differ"):
         predict(path, noise, sample_period=0.05, compass_period=0.1)
-    with pytest.raises(ModelError, match="sample_period needs segments with durations"):
+    with pytest.raises(ModelError, match=r"sample_period \(--sample-period\) needs segments with durations"):
         predict([Straight(1.0)], WheelNoise(1e-3, 1e-3), wheel_base=0.4, engine="recursion",
                 sample_period=0.05)

@@ -5,8 +5,8 @@ directions with almost no variance. There the first-order prediction is of the s
 the second-order terms it neglects, so the whitened errors (NEES, the mean and covariance
 tests) blew up, and the verdict read "linear model breaks down: mean NEES 350" where every
 axis's σ agreed to 1 %. The checks now leave out a direction that both the theory and the
-simulation find negligible (below 1 % of the largest standardised variance in theory, 2 %
-in the simulation) and say so; a direction the simulation fills is kept, so a real
+simulation find negligible (below 0.1 % of the largest standardised variance in theory,
+0.2 % in the simulation) and say so; a direction the simulation fills is kept, so a real
 disagreement still fails.
 """
 
@@ -27,7 +27,7 @@ FITTED = (WheelNoise(0.0, 6.342e-4), LateralSlipNoise(1.324e-5),
           ParameterUncertainty(sigma_wheel_base=1.749e-3, sigma_scale_right=1.694e-3))
 
 
-@pytest.mark.parametrize("noise,base", [(BIAS, 0.2), (FITTED, 0.2)], ids=["bias", "fitted"])
+@pytest.mark.parametrize("noise,base", [(BIAS, 0.2)], ids=["bias"])
 def test_bias_noise_that_agrees_is_consistent_and_names_what_was_left_out(noise, base):
     """Theory and simulation agree on every axis (σ within 1.5 %, checked here against
     their sampling error): the verdict is 'consistent' and names the left-out directions,
@@ -105,3 +105,29 @@ def test_a_well_conditioned_prediction_leaves_nothing_out():
     r = compare(rng.multivariate_normal([1, 2, 3], cov, 5000), [1, 2, 3], cov)
     assert r["verdict"] == "consistent" and "left_out" not in r["checks"]
     assert r["checks"]["rank"] == 3
+
+
+def test_a_theory_with_a_third_of_the_lateral_slip_is_not_passed():
+    """A review's reproducer: the fitted square's theory with a third of the simulation's
+    lateral slip. At a 1 % share its two smallest directions (0.3-0.5 %, NEES 1.8 and 2.0)
+    were left out and the verdict read "consistent"; now it fails, as it should."""
+    from odomkit.propagate.predict import predict
+    from odomkit.robot import DiffDrive
+
+    bias = ParameterUncertainty(sigma_wheel_base=1.7e-3, sigma_scale_right=1.7e-3)
+    theory = predict(SQUARE, (WheelNoise(0.0, 6.3e-4), LateralSlipNoise(1.3e-5), bias), robot=DiffDrive(0.2),
+                     engine="recursion", partitions=50)
+    r = monte_carlo(SQUARE, (WheelNoise(0.0, 6.3e-4), LateralSlipNoise(4e-5), bias), robot=DiffDrive(0.2),
+                    runs=4000, partitions=50, seed=1, workers=1, theory=(theory.pose, theory.cov))
+    assert not r["consistent"], r["verdict"]
+
+
+def test_second_order_effects_the_runs_measure_are_reported_not_hidden():
+    """The fitted square's noise: every σ agrees within 1.5 %, but the runs' mean lies about
+    0.3 σ off the first-order prediction (a bias's second-order mean error, −L·δθ²/2), beyond
+    the 0.25 σ tolerance, in directions holding 0.7 % of the variance: that is measured, so
+    the verdict says it rather than leaving those directions out."""
+    r = monte_carlo(SQUARE, FITTED, 0.2, runs=4000, partitions=100, seed=2)
+    th, sim = np.asarray(r["theory"]["std"]), np.asarray(r["simulation"]["std"])
+    assert np.all(np.abs(sim / th - 1) < 0.015)
+    assert not r["consistent"] and "mean biased" in r["verdict"] and "left_out" not in r["checks"]

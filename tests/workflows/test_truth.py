@@ -166,3 +166,38 @@ def test_a_truth_that_merely_runs_longer_is_no_unit(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         assert load_truth(TruthOptions(path), log) is not None
+
+
+def test_warnings_from_worker_processes_reach_the_json_once(tmp_path, run_cli):
+    """fit-noise --workers 2 reads the logs in other processes: their warnings (here a truth
+    heading in degrees) went to the workers' stderr in Python's raw form and were missing
+    from the JSON; now they come back as the command's own, each once."""
+    paths = []
+    for k in (1, 2):
+        folder = tmp_path / f"run{k}"
+        folder.mkdir()
+        log, robot, truth = _circle_files(folder, lambda p, t, x, y, th: p.write_text(
+            "t,x,y,theta\n" + "".join(f"{a:.2f},{b:.6f},{c:.6f},{np.degrees(d):.4f}\n"
+                                      for a, b, c, d in zip(t, x, y, th, strict=True))))
+        paths += ["--log", log, "--truth", truth]
+    code, out, err = run_cli("fit-noise", "--robot", robot, *paths, "--window", "10s", "--workers", "2",
+                             "--out", tmp_path / "fitted.toml", "--json")
+    # The fit itself fails on such windows (exit 2, one error line); the truth's warning,
+    # raised in the workers, comes first as the command's own line, both files named in it.
+    assert code == 2 and "UserWarning" not in err, err
+    [said] = [line for line in err.splitlines() if "does not follow the direction" in line]
+    assert said.startswith("odomkit: warning: 2 logs (") and "run1" in said and "run2" in said
+
+
+def test_a_span_cut_from_a_long_log_is_no_time_unit(tmp_path, run_cli):
+    """--span 0:2 of a 30 min log against its 30 min truth: the cut log spans 1.9 s, a
+    factor 947 against the truth, which was blamed on the truth's time unit."""
+    t = np.arange(0.0, 1800.0, 0.1)
+    log = tmp_path / "log.csv"
+    log.write_text("t,speed,yaw_rate\n" + "".join(f"{ti:.1f},0.5,0\n" for ti in t))
+    truth = tmp_path / "truth.csv"
+    truth.write_text("t,x,y,theta\n" + "".join(f"{ti:.1f},{0.5 * ti:.3f},0,0\n" for ti in t))
+    robot = tmp_path / "robot.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n[noise]\nalpha_ss = 0.001\npsd_gyro = 1e-5\n')
+    code, _, err = run_cli("track", log, "--robot", robot, "--truth", truth, "--span", "0:2")
+    assert code == 0 and "time is likely in" not in err, err

@@ -100,7 +100,7 @@ def track(
             bag_out=bag_out, bag_format=bag_format, frame_id=frame_id, child_frame_id=child_frame_id,
             progress=progress, plot=plot,
         )
-        summary = result.summary()
+        summary = result.summary(note_nees=json)  # the text shows no NEES to warn of
     if json:
         print_json(with_warnings(summary, warned))
         return

@@ -84,11 +84,13 @@ def truth_options(truth: Path | None, fmt: str, columns: str | None, time_unit: 
         raise InputError(f"--truth-time-offset must be a finite number of seconds, got {time_offset!r}")
     from odomkit.frames import UP_AXES
 
-    if up.strip() not in UP_AXES:
+    up = up.strip()
+    up = f"+{up}" if up in ("x", "y", "z") else up  # "y" is "+y", as --imu-up reads it
+    if up not in UP_AXES:
         raise InputError(f"--truth-up must be one of {', '.join(UP_AXES)} (the truth file's axis that points "
                          f"up), got {up!r}")
     return TruthOptions(truth, fmt, columns, time_unit, sigma, max_gap or None, heading_sigma, time_sigma,
-                        time_offset, record, up.strip())
+                        time_offset, record, up)
 
 
 #: The truth flags besides ``--truth`` itself (one file, or one per log, as the command

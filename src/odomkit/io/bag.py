@@ -530,7 +530,7 @@ _MEASURED_TWISTS = ("Odometry", "TwistWithCovarianceStamped")
 
 def _twist_signals(messages: list[Any], ns: NDArray[np.int64], kind: str, topic: str,
                    source: str) -> _Stream:
-    if kind in ("Odometry", "TwistWithCovarianceStamped"):
+    if kind in _MEASURED_TWISTS:  # twist.twist: Odometry's and TwistWithCovarianceStamped's
         twists = [m.twist.twist for m in messages]
     elif kind == "TwistStamped":
         twists = [m.twist for m in messages]

@@ -585,22 +585,20 @@ def project_ecef(
     return _onto_plane(pm, east, north, float(lat0), float(lon0), heading, source)
 
 
-def _ground_poses(path: Path, positions: NDArray[np.float64], rotations: NDArray[np.float64],
-                  up: str) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """A 3-D pose file's poses on the ground plane across ``up``
-    (:func:`odomkit.frames.planar_poses`), with a warning where ``up`` is z but the positions
-    hold another axis nearly constant (:func:`odomkit.frames.likely_up`): read so, the track
-    is one ground axis against the height, and the heading no turn of the robot's."""
-    if up == "+z" and (other := likely_up(positions)) is not None:
-        x, y, z = np.std(positions, axis=0)
-        warnings.warn(f"{path}: the positions hold {other[1]} nearly constant (spread x {x:.3g} m, "
-                      f"y {y:.3g} m, z {z:.3g} m): the file's "
-                      f"{other[1]} axis points up (a motion capture's Y-up frame, KITTI's camera frame), and "
-                      "read as z-up its track is one ground axis against the height; give --truth-up "
-                      f"{other} (or -{other[1]} if the track comes out mirrored)", stacklevel=4)
-    xy, yaw = planar_poses(positions, rotations, up)
-    assert yaw is not None
-    return xy, yaw
+def _warn_if_not_z_up(truth: Truth, positions: NDArray[np.float64]) -> None:
+    """Warn where a 3-D pose file's path lies in a plane across x or y
+    (:func:`odomkit.frames.likely_up`): read z-up, its track is one ground axis against the
+    height, and its heading no turn of the robot's (a Y-up file's heading read about z is 0
+    or π throughout, which even follows a track squeezed onto a line)."""
+    other = likely_up(positions)
+    if other is None:
+        return
+    x, y, z = np.std(positions, axis=0)
+    warnings.warn(f"{truth.source}: the positions' path lies across {other[1]} (spread x {x:.3g} m, "
+                  f"y {y:.3g} m, z {z:.3g} m), and read z-up it is squeezed onto a line: "
+                  f"the file's {other[1]} axis points up (a motion capture's Y-up frame, a camera's y-down "
+                  "one), and read as z-up its track is one ground axis against the height; give --truth-up "
+                  f"{other} (-{other[1]} for a camera's frame, x right, y down, z forward)", stacklevel=4)
 
 
 def read_truth(
@@ -717,11 +715,13 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
                              source=str(path), line=lines[row][0])
         # The yaw about the up axis (for z up, the Z-Y-X yaw); scale-free, so an unnormalised
         # quaternion gives the same angle.
-        xy, theta = _ground_poses(path, data[:, 1:4], quaternion_matrices(q), up)
+        positions = data[:, 1:4]
+        xy, theta = planar_poses(positions, quaternion_matrices(q), up)
     elif fmt == "kitti":
         t = data[:, 0]
         rotations = data[:, [1, 2, 3, 5, 6, 7, 9, 10, 11]].reshape(-1, 3, 3)
-        xy, theta = _ground_poses(path, data[:, [4, 8, 12]], rotations, up)
+        positions = data[:, [4, 8, 12]]
+        xy, theta = planar_poses(positions, rotations, up)
     else:
         t = data[:, index["t"]]
         ecef = "ecef_x" in index
@@ -765,5 +765,8 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
     if geo is not None:
         project = project_ecef if ecef else project_latlon
         xy, theta = project(geo[:, 0], geo[:, 1], geo[:, 2], geo[:, 3] if north else None, str(path))
-    return Truth(t.copy(), np.ascontiguousarray(xy, dtype=float),
-                 None if theta is None else unwrap_angle(theta), float(sigma), str(path))
+    truth = Truth(t.copy(), np.ascontiguousarray(xy, dtype=float),
+                  None if theta is None else unwrap_angle(theta), float(sigma), str(path))
+    if fmt in ("tum", "kitti") and up == "+z":
+        _warn_if_not_z_up(truth, positions)
+    return truth

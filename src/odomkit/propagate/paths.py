@@ -237,8 +237,8 @@ def path_model(noise: NoiseModel | Sequence[NoiseModel | None] | NoiseSet,
         raise ModelError(f"compass_period applies to the compass model, not the {family} model")
     if sample_period is not None:
         if robot.type_name == "diff":
-            raise ModelError("sample_period needs segments with durations (KellyArc, SteerArc); "
-                             "a diff path's segments are wheel travels")
+            raise ModelError("sample_period (--sample-period) needs segments with durations (KellyArc, "
+                             "SteerArc: --segment arc:V,OMEGA,T); a diff path's segments are wheel travels")
         return PathModel(family, models, robot,
                          sample_period=validate.positive(sample_period, "sample_period", unit="s"))
     # A model with a step map of its own (classical) has its σ per step: on a diff path

@@ -399,7 +399,8 @@ def predict(
         listed = ", ".join(type(m).__name__ for m in model.noise.models)
         what = ("bias noise" if model.noise.bias else f"the {model.family} model"
                 if model.family == "steering" else f"noise ({listed})")
-        raise ModelError(f"{what} has no closed form here; use engine 'recursion' or 'transition'")
+        raise ModelError(f"{what} has no closed form here; use engine 'recursion' or 'transition' "
+                         "(odomkit predict --engine recursion)")
     if model.compass_period is not None:
         c0 = _compass_start(c0, model)
         if engine != "closed":

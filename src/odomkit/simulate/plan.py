@@ -256,9 +256,6 @@ def make_plan(path: Sequence[Segment], noise: NoiseArg, wheel_base: float | None
                 model.noise.bias_variances(model.robot))
         return Plan("compass", coefs, max(1, int(np.max(coefs[:, 6]))), p0, _cov_factor(start),
                     bias, heading, lateral)
-    if model.sample_period is not None:
-        counts = np.array(segment_samples(path, model.sample_period), dtype=np.int64)
-        coefs, bias, lateral = _coefs(model, path, counts.tolist(), systematic)
     # the classical model moves by its own map (rotate, then translate), on any vehicle
     kind = "classical" if model.noise.step_map("exact") == "classical" else "increment"
     if model.sample_period is not None:

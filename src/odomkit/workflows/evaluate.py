@@ -317,27 +317,16 @@ def evaluate_in_memory(
     >>> out["windows"], out["coverage_overall"]
     (9, 'optimistic')
     """
-    from odomkit.workflows.results import logs_given, truths_given
+    from odomkit.workflows.results import logs_given, noise_models, truths_given
 
     given = logs_given(logs, "odomkit.workflows.evaluate.evaluate_logs")
     truth = truths_given(truths, given, truth_noise)
-    models: tuple[NoiseModel, ...] = () if noise is None else _noise_tuple(noise)
+    models: tuple[NoiseModel, ...] = () if noise is None else noise_models(noise)
     specs = window_specs(window)
     by_spec = score_loaded((LoadedLog(log, found, max_gap) for log, found in zip(given, truth, strict=True)),
                            len(given), robot, models, specs, min_travel=min_travel, align=align,
                            rpe_distances=rpe_distances, method=method, progress=progress, errors_only=True)
     return _pooled(specs, by_spec, rpe_distances)
-
-
-def _noise_tuple(noise: NoiseModel | Sequence[NoiseModel]) -> tuple[NoiseModel, ...]:
-    """One noise model or several as a tuple (a NoiseSet's models too)."""
-    from odomkit.noise import NoiseModel, NoiseSet
-
-    if isinstance(noise, NoiseModel):
-        return (noise,)
-    if isinstance(noise, NoiseSet):
-        return tuple(noise.models)
-    return tuple(noise)
 
 
 def _pooled(specs: Sequence[WindowSpec | None], by_spec: Sequence[list[Scored]],

@@ -22,9 +22,11 @@ import math
 import multiprocessing
 import os
 import time
+import warnings
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
+from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, TypeVar
 
@@ -180,10 +182,29 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
+def _recorded(fn: Callable[[T], R], task: T) -> tuple[R, list[str]]:
+    """``fn(task)`` in another process, with the texts of the UserWarnings it raised: a
+    worker's warnings go to its own stderr in Python's raw form, never into the JSON."""
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", UserWarning)
+        result = fn(task)
+    return result, [str(w.message) for w in caught if issubclass(w.category, UserWarning)]
+
+
+def _said(done: tuple[R, list[str]]) -> R:
+    """A :func:`_recorded` result, its warnings raised again here, where the command collects
+    them (each once: :func:`odomkit.workflows.results.collected_warnings`)."""
+    result, texts = done
+    for text in texts:
+        warnings.warn(text, UserWarning, stacklevel=2)
+    return result
+
+
 def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: str | None,
              progress: Progress = NO_PROGRESS) -> list[R]:
     """``fn`` over ``tasks`` in order: on Dask, in worker processes, or here; ``progress``
-    is advanced by one as each task's result arrives."""
+    is advanced by one as each task's result arrives. A worker's warnings are raised again
+    here, as if the task had run here."""
     if scheduler is not None:
         from odomkit.simulate.distributed import get_client
 
@@ -191,13 +212,13 @@ def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: 
         from dask.distributed import as_completed
 
         try:
-            futures = client.map(fn, list(tasks), pure=False)
+            futures = client.map(partial(_recorded, fn), list(tasks), pure=False)
             index = {f.key: i for i, f in enumerate(futures)}
             done: list[Any] = [None] * len(futures)
             for fut in as_completed(futures):
                 done[index[fut.key]] = fut.result()
                 progress.advance()
-            return done
+            return [_said(d) for d in done]
         finally:
             if owned:
                 client.close()
@@ -211,8 +232,8 @@ def _run_all(fn: Callable[[T], R], tasks: Sequence[T], workers: int, scheduler: 
     # can hang the child.
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=context) as pool:
-        for result in pool.map(fn, tasks, chunksize=max(1, len(tasks) // (4 * workers))):
-            results.append(result)
+        for item in pool.map(partial(_recorded, fn), tasks, chunksize=max(1, len(tasks) // (4 * workers))):
+            results.append(_said(item))
             progress.advance()
     return results
 
@@ -324,14 +345,20 @@ def fit_noise_in_memory(
 
     Examples
     --------
-    >>> import warnings
+    The robot is the runs' own (its metres per tick and wheel base: a ``DiffDrive`` left at
+    one metre per tick turns ten thousand times as much as the truth, and the fit says so).
+
     >>> from odomkit.data import builtin_data_path
     >>> from odomkit.io.optiodom import read_run
-    >>> from odomkit.robot import DiffDrive
+    >>> from odomkit.io.robotfile import read_robot
+    >>> robot, _ = read_robot(builtin_data_path("optiodom_diff.toml"))
     >>> logs = [read_run(builtin_data_path(f"230620202042_run-0{i}.csv")) for i in (1, 2, 3)]
-    >>> with warnings.catch_warnings():
-    ...     warnings.simplefilter("ignore")
-    ...     fitted = fit_noise_in_memory(logs, DiffDrive(wheel_base=0.2), window=["10s", "30s"])
+    >>> import warnings
+    >>> with warnings.catch_warnings(record=True) as said:
+    ...     warnings.simplefilter("always")
+    ...     fitted = fit_noise_in_memory(logs, robot, window=["10s", "30s"])
+    >>> [w for w in said if "turns" in str(w.message)]
+    []
     >>> sorted(fitted.truth)
     ['heading_sigma', 'sigma', 'time_sigma']
     >>> [type(m).__name__ for m in fitted.noise]
@@ -339,7 +366,7 @@ def fit_noise_in_memory(
     """
     from odomkit.calibrate.fit_noise import models_to_fit
     from odomkit.windows import parse_windows
-    from odomkit.workflows.results import logs_given, truths_given
+    from odomkit.workflows.results import logs_given, noise_models, truths_given
 
     given = logs_given(logs, "odomkit.workflows.fit_noise.fit_noise_files")
     held = dict(truth_held or {})
@@ -354,7 +381,7 @@ def fit_noise_in_memory(
         raise InputError(f"give one group per log: {len(given)} log(s), {len(groups)} group(s)")
     specs = parse_windows(window)
     _check_trim(trim)
-    file_models = _noise_tuple(noise)
+    file_models = noise_models(noise)
     models, default_fixed = models_to_fit(robot, file_models, kinds)
     names = _names(given)
     tasks = [LoadedTask(name, log, truth, max_gap, robot, models, specs, min_travel, method)
@@ -374,17 +401,6 @@ def _names(logs: Sequence[OdometryLog]) -> list[str]:
     where that is the default ``<memory>`` or two logs share one."""
     sources = [log.source for log in logs]
     return [s if s != "<memory>" and sources.count(s) == 1 else f"log {i + 1}" for i, s in enumerate(sources)]
-
-
-def _noise_tuple(noise: NoiseModel | Sequence[NoiseModel]) -> tuple[NoiseModel, ...]:
-    """One noise model or several (a NoiseSet's too) as a tuple."""
-    from odomkit.noise import NoiseModel, NoiseSet
-
-    if isinstance(noise, NoiseModel):
-        return (noise,)
-    if isinstance(noise, NoiseSet):
-        return tuple(noise.models)
-    return tuple(noise)
 
 
 def _check_trim(trim: float | None) -> None:

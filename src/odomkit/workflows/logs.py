@@ -260,7 +260,11 @@ def _span_rows(log: OdometryLog, text: str) -> OdometryLog:
     if b - a < 2:
         raise InputError(f"--span {text} leaves {max(b - a, 0)} row(s) of the log, whose rows run over "
                          f"{duration:.6g} s from its first", source=log.source)
-    return log.rows(a, b)
+    from dataclasses import replace
+
+    # The whole log's clock kept, for what compares it with a truth's (a truth's span against
+    # a cut log's is no sign of a time unit: workflows.truth._warn_if_units_off).
+    return replace(log.rows(a, b), meta={**log.meta, "uncut_clock": (first, float(log.t[-1]))})
 
 
 def _positive(value: float) -> bool:

@@ -27,10 +27,12 @@ from odomkit.errors import InputError, ModelError
 
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
+    from odomkit.noise import NoiseModel
     from odomkit.truth import Truth
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["check_result", "collected_warnings", "grouped_warnings", "listed", "logs_given", "numeric_guard",
+__all__ = ["check_result", "collected_warnings", "grouped_warnings", "listed", "logs_given", "noise_models",
+           "numeric_guard",
            "paths_given", "RESULT_RTOL", "short_names", "truths_given", "truths_per_log"]
 
 #: Asymmetry and negative eigenvalue a computed covariance may show, relative to its largest
@@ -314,6 +316,18 @@ def logs_given(logs: OdometryLog | Sequence[OdometryLog], files: str) -> list[Od
 #: The keys of a robot file's ``[truth]`` table that are the truth's own noise
 #: (:func:`truths_given`'s ``truth_noise``): position σ [m], heading σ [rad], time σ [s].
 _TRUTH_NOISE_KEYS = ("sigma", "heading_sigma", "time_sigma")
+
+
+def noise_models(noise: NoiseModel | Sequence[NoiseModel]) -> tuple[NoiseModel, ...]:
+    """One noise model or several (a NoiseSet's models too) as a tuple, in the order given:
+    what the workflow functions that take logs in memory take as ``noise``."""
+    from odomkit.noise import NoiseModel, NoiseSet
+
+    if isinstance(noise, NoiseModel):
+        return (noise,)
+    if isinstance(noise, NoiseSet):
+        return tuple(noise.models)
+    return tuple(noise)
 
 
 def truths_given(truths: Truth | Sequence[Truth | None] | None, logs: Sequence[OdometryLog],

@@ -40,12 +40,14 @@ class TrackRun:
     outputs: dict[str, str] = field(default_factory=dict)
     truth: NDArray[np.float64] | None = None  # (N, 3) truth at the log rows, NaN outside it
 
-    def summary(self) -> dict[str, Any]:
+    def summary(self, note_nees: bool = True) -> dict[str, Any]:
         """The ``--json`` object: final pose and covariance (also in ROS's 6×6 layout,
         :func:`odomkit.io.ros.ros_pose_covariance`), path length, duration, and the final
         error against ground truth when the log has it (``ground_truth``), and, with any
         truth (``--truth`` or the log's), ``final_position_error`` at the last row inside
-        the truth and ``max_position_error`` over the rows inside it."""
+        the truth and ``max_position_error`` over the rows inside it. ``note_nees`` False
+        leaves out the warning on rows whose singular covariance makes the NEES
+        (:func:`odomkit.evaluate.singular_nees_note`), for a caller that shows no NEES."""
         final = self.track.poses[-1]
         out: dict[str, Any] = {
             "samples": int(self.track.poses.shape[0]),
@@ -59,7 +61,8 @@ class TrackRun:
         }
         if self.log.ground_truth is not None:
             with numeric_guard("the comparison with ground truth"):
-                truth = evaluate_track(self.track.poses, self.log.ground_truth, self.track.cov)
+                truth = evaluate_track(self.track.poses, self.log.ground_truth, self.track.cov,
+                                       note_nees=note_nees)
             # Errors of 1e199 m overflow the RMSE's squares to inf (JSON null): one line instead.
             # drift_per_distance is nan by definition when the truth does not move, and the NEES
             # None when no row has a regular covariance; neither is checked then.

@@ -186,10 +186,12 @@ def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
         warnings.warn(f"{truth.source}: {note}", stacklevel=3)
     if log is None or len(log.t) < 2 or len(truth) < 2:
         return
-    ours, theirs = float(log.t[-1] - log.t[0]), float(truth.t[-1] - truth.t[0])
+    uncut = log.meta.get("uncut_clock")  # the log's clock before --span cut it
+    start, end = uncut if isinstance(uncut, tuple) else (float(log.t[0]), float(log.t[-1]))
+    ours, theirs = float(end - start), float(truth.t[-1] - truth.t[0])
     # Both clocks start together (relative times from 0, as a recorder writes them); a truth
     # that merely runs far longer (a GPS logging the whole day) starts elsewhere as a rule.
-    if not (ours > 0 and theirs > 0) or abs(float(truth.t[0] - log.t[0])) > 0.01 * max(ours, theirs):
+    if not (ours > 0 and theirs > 0) or abs(float(truth.t[0] - start)) > 0.01 * max(ours, theirs):
         return
     for unit, seconds in _TIME_UNITS.items():
         for ratio, whose, flag in ((theirs / ours, "the truth's", "--truth-time-unit"),
