@@ -114,13 +114,22 @@ def test_a_steering_wheel_angle_read_as_the_road_wheels_is_caught_on_small_angle
     assert found["travel_ratio"].status == "ok"
 
 
-def test_a_gyro_in_degrees_read_as_radians_is_named():
+def _gyro_drive(straight_legs=False):
+    """A gyro robot at 1 m/s for 200 s turning at a rate drawn every 10 s (or, with
+    ``straight_legs``, only in every other 5 s), and its exact poses: (robot, log, poses, rng)."""
     robot = GyroOdometry()
     rng = np.random.default_rng(4)
     t = 0.05 * np.arange(4000)
     rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25))
+    if straight_legs:
+        rate = rate * (np.arange(t.size) // 100 % 2)
     log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
-    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    return robot, log, dead_reckon_log(log, robot, pose0=np.zeros(3)).poses, rng
+
+
+def test_a_gyro_in_degrees_read_as_radians_is_named():
+    robot, log, poses, rng = _gyro_drive()
+    t = log.t
     truth = Truth(t[::2], poses[::2, :2] + rng.normal(0, 0.002, (t[::2].size, 2)), poses[::2, 2], 0.002)
     found = by_check(check_truth_motion(with_channel(log, "yaw_rate", 180 / math.pi), robot, truth))
     turn = found["turn_ratio"]
@@ -133,12 +142,8 @@ def test_a_truth_heading_in_degrees_read_as_radians_is_named_beside_the_log():
     """The turning ratio is the odometry's over the truth's: 1/57 is a log column in radians
     read as degrees or, as here, the truth's heading in degrees read as radians; the advice
     named only the first."""
-    robot = GyroOdometry()
-    rng = np.random.default_rng(4)
-    t = 0.05 * np.arange(4000)
-    rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25))
-    log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
-    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    robot, log, poses, _ = _gyro_drive()
+    t = log.t
     truth = Truth(t[::2], poses[::2, :2], np.degrees(poses[::2, 2]), 0.002)
     turn = by_check(check_truth_motion(log, robot, truth))["turn_ratio"]
     assert turn.status == "fail" and turn.value == pytest.approx(math.pi / 180, rel=0.03)
@@ -442,12 +447,8 @@ def test_a_far_yaw_rate_scale_of_a_twist_names_a_skid_steer_base():
 def test_a_truth_in_millimetres_read_as_metres_is_named():
     """The odometry travels a thousandth of the truth: the truth's positions are in mm (a Vicon
     export), named with the columns that read them."""
-    robot = GyroOdometry()
-    rng = np.random.default_rng(4)
-    t = 0.05 * np.arange(4000)
-    rate = np.interp(t, np.arange(25) * 10.0, rng.uniform(-0.4, 0.4, 25)) * (np.arange(t.size) // 100 % 2)
-    log = OdometryLog(t, {"speed": np.full(t.size, 1.0), "yaw_rate": rate})
-    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    robot, log, poses, _ = _gyro_drive(straight_legs=True)
+    t = log.t
     truth = Truth(t[::2], 1000 * poses[::2, :2], poses[::2, 2], 0.002)
     travel = by_check(check_truth_motion(log, robot, truth))["travel_ratio"]
     assert travel.status == "fail" and travel.value == pytest.approx(1e-3, rel=0.03)
