@@ -201,3 +201,16 @@ def test_a_span_cut_from_a_long_log_is_no_time_unit(tmp_path, run_cli):
     robot.write_text('[robot]\ntype = "unicycle"\n[noise]\nalpha_ss = 0.001\npsd_gyro = 1e-5\n')
     code, _, err = run_cli("track", log, "--robot", robot, "--truth", truth, "--span", "0:2")
     assert code == 0 and "time is likely in" not in err, err
+
+
+@pytest.mark.parametrize("flag", [("--truth-up", "+y"), ("--truth-time-unit", "ms"),
+                                  ("--truth-columns", "t,x,y")])
+def test_a_truth_file_flag_without_a_truth_file_is_refused(run_cli, flag):
+    """--truth-up (or any flag that reads a truth file) with the log's own ground truth was
+    ignored without a word: the user believed the truth turned, or its clock scaled."""
+    from odomkit.data import builtin_data_path
+
+    code, _, err = run_cli("evaluate", builtin_data_path("230620202042_run-01.csv"), "--robot",
+                           builtin_data_path("optiodom_diff.toml"), *flag)
+    assert code == 2 and f"{flag[0]} reads a --truth file, and none is given" in err, err
+    assert len(err.strip().splitlines()) == 1

@@ -124,6 +124,9 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
         found = read_truth(options.path, options.format, options.columns, options.time_unit, sigma,
                            record=options.record, up=options.up)
     else:
+        if flags := _file_flags(options):
+            raise InputError(f"{', '.join(flags)} reads a --truth file, and none is given (the log's own "
+                             "truth is read as it is): give the file with --truth, or leave the flag out")
         found = None if log is None else truth_from_log(log)
         stated = None if log is None else log.meta.get("truth_position_sigma")
     if found is None:
@@ -216,6 +219,16 @@ def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
     return offset
 
 
+def _file_flags(options: TruthOptions) -> list[str]:
+    """The flags given that read a truth file (its format, columns, time unit, records, up
+    axis): a bag's truth topic or a log's own truth has none of these to read."""
+    return [flag for flag, given in (("--truth-format", options.format != "auto"),
+                                     ("--truth-columns", options.columns is not None),
+                                     ("--truth-time-unit", options.time_unit != "s"),
+                                     ("--truth-record", options.record is not None),
+                                     ("--truth-up", options.up != "+z")) if given]
+
+
 def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, float | None]:
     """The truth topic of the ``--truth`` bag and the σ its GPS fixes state; the options of a
     text truth file are refused by name, and so is a topic the log itself was read from
@@ -223,12 +236,7 @@ def _bag_truth(options: TruthOptions, log: OdometryLog | None) -> tuple[Truth, f
     from odomkit.io.bag import bag_root, read_bag_truth
 
     assert options.path is not None
-    text_only = [flag for flag, given in (("--truth-format", options.format != "auto"),
-                                          ("--truth-columns", options.columns is not None),
-                                          ("--truth-time-unit", options.time_unit != "s"),
-                                          ("--truth-record", options.record is not None),
-                                          ("--truth-up", options.up != "+z")) if given]
-    if text_only:
+    if text_only := _file_flags(options):
         raise InputError(f"{', '.join(text_only)} applies to a text truth file; {options.path} is a "
                          "ROS bag (name its truth topic with --truth-topic)")
     found = read_bag_truth(options.path, options.topic, options.bag_time, options.frame)
