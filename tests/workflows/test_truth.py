@@ -214,3 +214,14 @@ def test_a_truth_file_flag_without_a_truth_file_is_refused(run_cli, flag):
                            builtin_data_path("optiodom_diff.toml"), *flag)
     assert code == 2 and f"{flag[0]} reads a --truth file, and none is given" in err, err
     assert len(err.strip().splitlines()) == 1
+
+
+def test_check_says_a_heading_off_its_motion_once(tmp_path, run_cli):
+    """check's truth_heading FAILs on a heading in degrees; reading the truth warned of the
+    same beside it, so the user read it twice."""
+    log, robot, truth = _circle_files(tmp_path, lambda p, t, x, y, th: p.write_text(
+        "t,x,y,theta\n" + "".join(f"{a:.2f},{b:.6f},{c:.6f},{np.degrees(d):.4f}\n"
+                                  for a, b, c, d in zip(t, x, y, th, strict=True))))
+    code, out, err = run_cli("check", log, "--robot", robot, "--truth", truth)
+    said = (out + err).count("does not follow the direction its positions move in")
+    assert said == 1 and "FAIL truth_heading" in out, out + err

@@ -102,9 +102,12 @@ class TruthOptions:
         return {k: float(v) for k, v in given.items() if v is not None}
 
 
-def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth | None:
+def load_truth(options: TruthOptions, log: OdometryLog | None = None, *,
+               heading_warning: bool = True) -> Truth | None:
     """The truth file of ``options``, else the log's own ground truth, else None; its clock
-    moved onto the log's by ``options.time_offset`` (t − offset)."""
+    moved onto the log's by ``options.time_offset`` (t − offset); what it is asked
+    (:func:`warn_of_truth`) said as warnings; its heading not (``heading_warning`` False) where
+    the caller judges that itself (``odomkit check``'s ``truth_heading``: said once, not twice)."""
     from odomkit.io.bag import is_bag
     from odomkit.io.truth import read_truth
     from odomkit.truth import truth_from_log
@@ -143,18 +146,18 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None) -> Truth |
     offset = applied_clock(options, log)
     if offset:
         truth = replace(truth, t=truth.t - offset)
-    warn_of_truth(truth, log)
+    warn_of_truth(truth, log, heading=heading_warning)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
 
 
-def warn_of_truth(truth: Truth, log: OdometryLog | None = None) -> None:
+def warn_of_truth(truth: Truth, log: OdometryLog | None = None, *, heading: bool = True) -> None:
     """Warn, once per truth, of a truth that is not what it claims: a heading that does not
-    follow its own motion, positions or times in another unit. Every truth a command reads
-    (:func:`load_truth`) and every one handed to a workflow in memory
-    (:func:`odomkit.workflows.results.truths_given`) is asked."""
-    if truth.theta is not None:
+    follow its own motion (unless ``heading`` is False), positions or times in another unit.
+    Every truth a command reads (:func:`load_truth`) and every one handed to a workflow in
+    memory (:func:`odomkit.workflows.results.truths_given`) is asked."""
+    if heading and truth.theta is not None:
         _warn_if_heading_off_motion(truth)
     _warn_if_units_off(truth, log)
 
