@@ -19,7 +19,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from odomkit import validate
-from odomkit.angles import unwrap_angle
+from odomkit.angles import unwrap_angle, wrap_angle
 from odomkit.errors import InputError
 from odomkit.log import OdometryLog, clock_text
 
@@ -329,17 +329,14 @@ def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[f
     ValueError
         For a position-only truth.
     """
-    from odomkit.angles import wrap_angle
-
     if truth.theta is None:
         raise ValueError("heading_against_motion needs a truth with heading")
     before, after, use = _chords(truth, max_gap)
     chord = after.poses[:, :2] - before.poses[:, :2]
-    turn = after.poses[:, 2] - before.poses[:, 2]  # unwrapped: a turn, not a wrap
     use &= np.hypot(chord[:, 0], chord[:, 1]) >= max(_MIN_CHORD, 10.0 * truth_noise(truth))
     if not use.any():
         return math.nan, 0
-    mid_heading = before.poses[use, 2] + 0.5 * turn[use]
+    mid_heading = 0.5 * (before.poses[use, 2] + after.poses[use, 2])  # θ is unwrapped: no wrap between
     off = np.abs(wrap_angle(mid_heading - np.arctan2(chord[use, 1], chord[use, 0])))
     folded = np.minimum(off, math.pi - off)
     return float(np.median(folded)), int(folded.size)

@@ -19,17 +19,12 @@ from numpy.typing import NDArray
 
 from odomkit.errors import InputError
 
-# Defined in the core with the note they make (odomkit.evaluate.singular_nees_note, which
-# evaluate_track issues too); named here for the workflows that import them from here.
-from odomkit.evaluate import NEAR_SINGULAR as NEAR_SINGULAR
-from odomkit.evaluate import NO_ERROR as NO_ERROR
-
 if TYPE_CHECKING:
     from odomkit.log import OdometryLog
     from odomkit.truth import Truth
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["FEW_WINDOW_ENDS", "issue_notes", "NEAR_SINGULAR", "NO_ERROR", "pooled_report", "require_truth",
+__all__ = ["FEW_WINDOW_ENDS", "issue_notes", "pooled_report", "require_truth",
            "score_rows", "Scored", "summarise", "TrackRows", "verdicts"]
 
 

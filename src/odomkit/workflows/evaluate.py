@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from odomkit.errors import InputError
+from odomkit.evaluate import NEAR_SINGULAR as NEAR_SINGULAR  # named here as before; defined in the core
+from odomkit.evaluate import NO_ERROR as NO_ERROR
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.workflows._score_logs import (
     LoadedLog,
@@ -35,8 +37,6 @@ from odomkit.workflows._score_logs import (
     window_specs,
 )
 from odomkit.workflows._scoring import FEW_WINDOW_ENDS as FEW_WINDOW_ENDS  # once defined here
-from odomkit.workflows._scoring import NEAR_SINGULAR as NEAR_SINGULAR
-from odomkit.workflows._scoring import NO_ERROR as NO_ERROR
 from odomkit.workflows._scoring import (
     Scored,
     TrackRows,

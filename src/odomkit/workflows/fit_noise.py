@@ -369,8 +369,10 @@ def fit_noise_in_memory(
     from odomkit.workflows.results import logs_given, noise_models, truths_given
 
     given = logs_given(logs, "odomkit.workflows.fit_noise.fit_noise_files")
+    from odomkit.io.robotfile import TRUTH_SIGMAS
+
     held = dict(truth_held or {})
-    names_held = ("truth_sigma", "truth_heading_sigma", "truth_time_sigma")
+    names_held = tuple(f"truth_{key}" for key in TRUTH_SIGMAS)  # the fit's names of the [truth] noise
     unknown = sorted(set(held) - set(names_held))
     if unknown:
         raise InputError(f"truth_held takes {', '.join(names_held)}, got {', '.join(unknown)}")

@@ -313,11 +313,6 @@ def logs_given(logs: OdometryLog | Sequence[OdometryLog], files: str) -> list[Od
     return items
 
 
-#: The keys of a robot file's ``[truth]`` table that are the truth's own noise
-#: (:func:`truths_given`'s ``truth_noise``): position σ [m], heading σ [rad], time σ [s].
-_TRUTH_NOISE_KEYS = ("sigma", "heading_sigma", "time_sigma")
-
-
 def noise_models(noise: NoiseModel | Sequence[NoiseModel]) -> tuple[NoiseModel, ...]:
     """One noise model or several (a NoiseSet's models too) as a tuple, in the order given:
     what the workflow functions that take logs in memory take as ``noise``."""
@@ -354,12 +349,14 @@ def truths_given(truths: Truth | Sequence[Truth | None] | None, logs: Sequence[O
         if len(items) != len(logs):
             raise InputError(f"give one Truth per log: {len(logs)} log(s), {len(items)} truth(s) (or one "
                              "Truth for every log, or None for each log's own ground truth)")
+    from odomkit.io.robotfile import TRUTH_SIGMAS  # a robot file's [truth] noise: σ [m], σθ [rad], σt [s]
+
     noise = dict(truth_noise or {})
-    unknown = sorted(set(noise) - set(_TRUTH_NOISE_KEYS))
+    unknown = sorted(set(noise) - set(TRUTH_SIGMAS))
     if unknown:
         more = ("; a clock offset is not noise: move the truth's clock (Truth.t - offset) before" if
                 "time_offset" in unknown else "")
-        raise InputError(f"truth_noise takes {', '.join(_TRUTH_NOISE_KEYS)} (a robot file's [truth]), got "
+        raise InputError(f"truth_noise takes {', '.join(TRUTH_SIGMAS)} (a robot file's [truth]), got "
                          f"{', '.join(unknown)}{more}")
     out = []
     for log, truth in zip(logs, items, strict=True):

@@ -175,17 +175,14 @@ def _warn_if_heading_off_motion(truth: Truth) -> None:
                       f"heading. Likely {HEADING_OFF_CAUSES}; odomkit check compares the two", stacklevel=3)
 
 
-#: Seconds per unit of the time units a clock may be written in besides seconds.
-_TIME_UNITS = {"ms": 1e-3, "us": 1e-6, "ns": 1e-9}
-
-
 def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     """Warn where the truth moves faster than a wheeled vehicle
     (:func:`odomkit.truth.implausible_speed`), or where its span and the log's differ by a
-    time unit's factor (within 2x of 1000, 1e6, 1e9) while both start together: a truth
-    stamped in ms read as s spans 1000 times the log's seconds, and overlaps it only in its
-    first thousandth, which
-    evaluate reported as "no window travels --min-travel", not as a unit."""
+    time unit's factor (within 2x of 1000, 1e6, 1e9: :data:`odomkit.io.text.TIME_UNITS`)
+    while both start together: a truth stamped in ms read as s spans 1000 times the log's
+    seconds and overlaps it only in its first thousandth, which evaluate reported as "no
+    window travels --min-travel", not as a unit."""
+    from odomkit.io.text import TIME_UNITS
     from odomkit.truth import implausible_speed
 
     if note := implausible_speed(truth):
@@ -199,7 +196,8 @@ def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     # that merely runs far longer (a GPS logging the whole day) starts elsewhere as a rule.
     if not (ours > 0 and theirs > 0) or abs(float(truth.t[0] - start)) > 0.01 * max(ours, theirs):
         return
-    for unit, seconds in _TIME_UNITS.items():
+    for unit in ("ms", "us", "ns"):
+        seconds = TIME_UNITS[unit]
         for ratio, whose, flag in ((theirs / ours, "the truth's", "--truth-time-unit"),
                                    (ours / theirs, "the log's", "--time-unit")):
             if 0.5 / seconds <= ratio <= 2.0 / seconds:
