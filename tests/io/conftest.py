@@ -108,6 +108,43 @@ def stamp() -> Callable[..., dict[str, Any]]:
     return header
 
 
+#: An OptiOdom run's wheel: encoder resolution × gear ratio (optiodom_diff.toml) ticks a turn.
+_TICKS_PER_TURN = 64 * 43.7
+#: The same robot with wheel angles in radians as its "ticks" (a JointState's positions):
+#: metres per tick = the wheel radius.
+_RAD_ROBOT = """[robot]
+type = "diff"
+wheel_base = 0.2
+wheel_radius = 0.042
+encoder_resolution = 6.283185307179586
+[noise]
+k_left = 0.001
+k_right = 0.001
+"""
+
+
+@pytest.fixture(scope="session")
+def rad_robot() -> str:
+    """The robot file's text for a bag whose JointState wheel angles came from an OptiOdom run
+    (:func:`wheel_angles`)."""
+    return _RAD_ROBOT
+
+
+def _wheel_angles(log: Any) -> tuple[np.ndarray, np.ndarray]:
+    """An OptiOdom run's left and right wheel angles [rad] at its rows, from 0: its ticks per
+    cycle summed (row 0's are motion before the log) and turned into radians."""
+    turn = 2 * np.pi / _TICKS_PER_TURN
+    left = np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]) * turn
+    right = np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]) * turn
+    return left, right
+
+
+@pytest.fixture(scope="session")
+def wheel_angles() -> Callable[[Any], tuple[np.ndarray, np.ndarray]]:
+    """``wheel_angles(log)``: an OptiOdom run's wheel angles [rad], what a JointState carries."""
+    return _wheel_angles
+
+
 def _one_line_error(call: Callable[[], object]) -> str:
     """The message of the InputError ``call()`` raises, checked to be one line."""
     from odomkit.errors import InputError

@@ -22,25 +22,12 @@ from odomkit.io.bag import read_bag_odometry  # noqa: E402
 
 ROBOT = builtin_data_path("optiodom_diff.toml")
 RUNS = [builtin_data_path(f"230620202042_run-0{i}.csv") for i in range(1, 7)]
-TICKS_PER_TURN = 64 * 43.7  # encoder resolution × gear ratio (optiodom_diff.toml)
 T0 = 1_687_000_000 * 10**9  # the runs' times, moved to an epoch time [ns]
-# The same robot with wheel angles in radians as its "ticks": metres per tick = radius.
-RAD_ROBOT = """[robot]
-type = "diff"
-wheel_base = 0.2
-wheel_radius = 0.042
-encoder_resolution = 6.283185307179586
-[noise]
-k_left = 0.001
-k_right = 0.001
-"""
 
 
-def run_bag(bag_writer, stamp, run, path, fmt="mcap"):
+def run_bag(bag_writer, stamp, wheel_angles, run, path, fmt="mcap"):
     log = read_run(run)
-    turn = 2 * math.pi / TICKS_PER_TURN
-    left = np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]) * turn
-    right = np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]) * turn
+    left, right = wheel_angles(log)
     msgs = []
     for k, t in enumerate(log.t):
         ns = T0 + round(t * 1e9)
@@ -56,13 +43,13 @@ def run_bag(bag_writer, stamp, run, path, fmt="mcap"):
 
 
 @pytest.fixture(scope="module")
-def bags(tmp_path_factory, bag_writer, stamp):
+def bags(tmp_path_factory, bag_writer, stamp, wheel_angles, rad_robot):
     d = tmp_path_factory.mktemp("bags")
-    (d / "rad.toml").write_text(RAD_ROBOT)
+    (d / "rad.toml").write_text(rad_robot)
     (d / "gyro.toml").write_text('[robot]\ntype = "gyro"\n')
-    made = {fmt: run_bag(bag_writer, stamp, RUNS[0], d / f"run1_{fmt}", fmt)
+    made = {fmt: run_bag(bag_writer, stamp, wheel_angles, RUNS[0], d / f"run1_{fmt}", fmt)
             for fmt in ("ros1", "db3", "mcap")}
-    made["runs"] = [made["mcap"]] + [run_bag(bag_writer, stamp, r, d / f"run{i + 2}")
+    made["runs"] = [made["mcap"]] + [run_bag(bag_writer, stamp, wheel_angles, r, d / f"run{i + 2}")
                                      for i, r in enumerate(RUNS[1:])]
     made["dir"] = d
     return made

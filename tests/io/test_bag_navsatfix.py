@@ -26,18 +26,8 @@ pm = pytest.importorskip("pymap3d", reason="the gps extra (pymap3d) is not insta
 from odomkit.io.bag import read_bag  # noqa: E402
 
 RUN = builtin_data_path("230620202042_run-01.csv")
-TICKS_PER_TURN = 64 * 43.7  # encoder resolution × gear ratio (optiodom_diff.toml)
 T0 = 1_687_000_000 * 10**9  # the run's times, moved to an epoch time [ns]
 ORIGIN = (-33.8688, 151.2093, 42.0)
-RAD_ROBOT = """[robot]
-type = "diff"
-wheel_base = 0.2
-wheel_radius = 0.042
-encoder_resolution = 6.283185307179586
-[noise]
-k_left = 0.001
-k_right = 0.001
-"""
 NO_FIX = 3  # every 7th fix, from the 4th, has status -1 (no fix)
 
 
@@ -46,13 +36,11 @@ def _seconds(ns):
 
 
 @pytest.fixture(scope="module")
-def gps_bag(tmp_path_factory, bag_writer, stamp):
+def gps_bag(tmp_path_factory, bag_writer, stamp, wheel_angles, rad_robot):
     """Bags in every format, the fixes with a fix as a text file, and the stated σ's median."""
     d = tmp_path_factory.mktemp("navsat")
     log = read_run(RUN)
-    turn = 2 * math.pi / TICKS_PER_TURN
-    left = np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]) * turn
-    right = np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]) * turn
+    left, right = wheel_angles(log)
     msgs = []
     for k, t in enumerate(log.t):
         ns = T0 + round(t * 1e9)
@@ -77,7 +65,7 @@ def gps_bag(tmp_path_factory, bag_writer, stamp):
             sigmas.append(math.sqrt((east**2 + north**2) / 2))
     text = d / "fixes.csv"
     text.write_text("t,lat,lon,alt\n" + "".join(",".join(repr(float(v)) for v in r) + "\n" for r in rows))
-    (d / "rad.toml").write_text(RAD_ROBOT)
+    (d / "rad.toml").write_text(rad_robot)
     bags = {fmt: bag_writer(d / f"run_{fmt}", fmt, msgs) for fmt in ("ros1", "db3", "mcap")}
     return {"dir": d, "text": text, "bags": bags, "fixes": len(fix_ns), "kept": len(rows),
             "sigma": float(np.median(sigmas))}
@@ -146,8 +134,8 @@ def test_calibrate_with_the_gps_topic_equals_the_text_file(run_cli, gps_bag):
     assert code == 2 and "--from does not apply with --truth" in err
 
 
-def test_too_few_fixes_and_bad_fixes_are_one_line(run_cli, tmp_path, bag_writer, stamp):
-    (tmp_path / "rad.toml").write_text(RAD_ROBOT)
+def test_too_few_fixes_and_bad_fixes_are_one_line(run_cli, tmp_path, bag_writer, stamp, rad_robot):
+    (tmp_path / "rad.toml").write_text(rad_robot)
     joints = [("/js", "sensor_msgs/msg/JointState", T0 + k * 10**8,
                {"header": stamp(T0 + k * 10**8), "name": ["left", "right"],
                 "position": [k, k]}) for k in range(5)]
@@ -203,13 +191,14 @@ def test_report_calibrates_from_the_gps_topic_and_names_it(run_cli, gps_bag, tmp
         assert f"{value:.6g}" in page, name
 
 
-def test_the_robot_files_clock_offset_moves_a_gps_topic_as_it_moves_the_text_file(run_cli, gps_bag, tmp_path):
+def test_the_robot_files_clock_offset_moves_a_gps_topic_as_it_moves_the_text_file(run_cli, gps_bag, tmp_path,
+                                                                                   rad_robot):
     """calibrate fits the GPS's clock offset into [truth] time_offset; a bag's GPS topic is on
     its own clock as a latitude/longitude file is, so the offset moves both alike (a user
     study's calibrated Husky: 20.7 m ATE from the topic, 19.2 m from the same fixes as a file)
     and fit-noise keeps it in the file it writes. A log's gt_* columns are never moved by it."""
     robot = tmp_path / "late.toml"
-    robot.write_text(RAD_ROBOT + "\n[truth]\ntime_offset = 0.3\n")
+    robot.write_text(rad_robot + "\n[truth]\ntime_offset = 0.3\n")
     args = ("--robot", robot, "--topic", "/joint_states", "--window", "10s", "--truth-sigma", "0.003",
             "--json")
     runs = {}

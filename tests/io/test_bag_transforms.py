@@ -177,27 +177,15 @@ def test_a_truth_transform_from_the_odom_frame_warns(bags):
 
 RUN = builtin_data_path("230620202042_run-01.csv")
 ROBOT = builtin_data_path("optiodom_diff.toml")
-TICKS_PER_TURN = 64 * 43.7  # encoder resolution × gear ratio (optiodom_diff.toml)
-RAD_ROBOT = """[robot]
-type = "diff"
-wheel_base = 0.2
-wheel_radius = 0.042
-encoder_resolution = 6.283185307179586
-[noise]
-k_left = 0.001
-k_right = 0.001
-"""
 
 
 @pytest.fixture(scope="module")
-def run_bag(tmp_path_factory, bag_writer, stamp):
+def run_bag(tmp_path_factory, bag_writer, stamp, wheel_angles, rad_robot):
     """The OptiOdom run 1 as JointState wheel angles, its OptiTrack poses as a PoseStamped
     /mocap, a TransformStamped /vicon/robot/robot and /tf world→base_link (beside odom→base_link)."""
     d = tmp_path_factory.mktemp("tf_run")
     log = read_run(RUN)
-    turn = 2 * math.pi / TICKS_PER_TURN
-    left = np.cumsum(np.r_[0, log.channels["ticks_left"][1:]]) * turn
-    right = np.cumsum(np.r_[0, log.channels["ticks_right"][1:]]) * turn
+    left, right = wheel_angles(log)
     msgs = []
     for k, t in enumerate(log.t):
         ns = T0 + round(t * 1e9)
@@ -211,7 +199,7 @@ def run_bag(tmp_path_factory, bag_writer, stamp):
         msgs.append(("/tf", TF, ns + 1_000_000, {"transforms": [
             _transform(stamp, ns, "odom", "base_link", 0.0, 0.0, 0.0),
             _transform(stamp, ns, "world", "base_link", x, y, th)]}))
-    (d / "rad.toml").write_text(RAD_ROBOT)
+    (d / "rad.toml").write_text(rad_robot)
     return {"bag": bag_writer(d / "run1", "mcap", msgs), "robot": d / "rad.toml", "dir": d}
 
 
