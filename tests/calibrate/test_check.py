@@ -323,3 +323,23 @@ def test_a_speed_that_reads_zero_at_a_crawl_is_named_and_a_stuck_speed_still_fai
     stuck = np.where((t > 10.0) & (t < 13.0), 0.0, true_speed)
     found = check_stuck(OdometryLog(t, {"speed": stuck, "yaw_rate": np.zeros(t.size)}), Unicycle(), truth)
     assert statuses(found, "stuck") == ["fail"] and "stuck encoder" in found[0].message
+
+
+def test_times_on_an_epoch_clock_are_said_to_the_millisecond():
+    """MRCLAM logs (and ROS bags) stamp rows with Unix time: ``.6g`` printed every time of
+    the day as 1.24844e+09, so a stuck stretch "from t = 1.24844e+09 s to 1.24844e+09 s"
+    named no time at all. The stretch is said to the millisecond (:func:`odomkit.log.clock_text`)."""
+    left, right = square_both_ways()
+    epoch = 1248444187.156
+    stuck = left.copy()
+    stuck[5:45] = 0.0  # the left encoder reads nothing for 2 s of straight driving
+    log = make_log(left, right)
+    truth = truth_of(log)
+    late = OdometryLog(log.t + epoch, make_log(stuck, right).channels)
+    found = check_stuck(late, ROBOT, Truth(truth.t + epoch, truth.xy, truth.theta))
+    assert statuses(found, "stuck") == ["fail"]
+    said = found[0].message.split("from t = ")[1].split(" s while")[0].split(" s to ")
+    start, end = (float(x) for x in said)
+    assert "e+09" not in found[0].message and all(len(x.split(".")[1]) == 3 for x in said)
+    assert start == pytest.approx(epoch + 5 * PERIOD, abs=PERIOD)
+    assert end == pytest.approx(epoch + 45 * PERIOD, abs=PERIOD)

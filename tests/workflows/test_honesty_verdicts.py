@@ -298,12 +298,21 @@ def test_every_window_left_out_is_one_line_and_exit_2(noisy_diff_log, tmp_path, 
     assert len(line) == 1 and "no window end could be scored" in line[0] and "Traceback" not in err
 
 
-def _fit(make, tmp_path, k_true, seed, *, slip=0.0, trim=None, kinds=("white",), window="3s", truth="gt.csv"):
+def _fit(make, tmp_path, k_true, seed, *, slip=0.0, trim=None, kinds=("white",), window="3s", truth="gt.csv",
+         epoch=0.0):
     """fit-noise of a robot file's k on a simulated log; ``slip``: with probability 0.005 a step
-    also slips one wheel by that much [m] (a heavy tail no Gaussian model holds)."""
+    also slips one wheel by that much [m] (a heavy tail no Gaussian model holds); ``epoch``
+    [s] added to the log's and the truth's times (a Unix clock)."""
     from odomkit.workflows.fit_noise import fit_noise_files
 
     log, gt, robot = _simulate(make, tmp_path, k_true=k_true, k_model=0.005, seed=seed)
+    for path, header in ((log, "t,L,R"), (tmp_path / truth, None)):
+        if epoch:
+            with open(path) as f:
+                header = f.readline().strip()
+            data = np.loadtxt(path, delimiter=",", skiprows=1)
+            data[:, 0] += epoch
+            np.savetxt(path, data, delimiter=",", header=header, comments="", fmt="%.17g")
     if slip:
         data = np.loadtxt(log, delimiter=",", skiprows=1)
         rng = np.random.default_rng(100 + seed)
@@ -343,10 +352,15 @@ def test_fit_noise_says_when_its_model_family_misses_its_own_windows(noisy_diff_
     so its own in-sample coverage is outside its range, and the warning names the window
     ends of largest eᵀΣ⁻¹e by log and time; trimmed (the default 0.999), far more than 5 %
     of the ends are left out, which is no rare tail."""
-    result = _fit(noisy_diff_log, tmp_path, 0.01, 0, slip=0.1)
+    result = _fit(noisy_diff_log, tmp_path, 0.01, 0, slip=0.1, epoch=1248444187.0)
     said = _misfit(result)
     assert len(said) == 1 and "does not describe these logs" in said[0] and "WheelNoise" in said[0]
     assert "log.csv " in said[0] and " s (" in said[0]
+    # On a Unix clock (MRCLAM, ROS bags) each window is named to the millisecond, not as
+    # 1.24844e+09-1.24844e+09 s for every window of the day.
+    named = said[0].split("log.csv ")[1].split(" s (")[0]
+    start, end = (float(part) for part in named.split("-"))
+    assert "e+09" not in said[0] and 1248444187.0 <= start < end <= 1248444187.0 + 300.0
     cov = result["coverage_in_sample"]
     lo, hi = coverage_range(result["windows"], 0.5)
     assert cov["0.5"] > hi or cov["0.99"] < coverage_range(result["windows"], 0.99)[0]

@@ -54,7 +54,7 @@ from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_identifiable import check_identifiable, identifiability_sigma
 from odomkit.calibrate.check_ratios import check_truth_motion
 from odomkit.calibrate.check_truth import check_truth_heading, check_truth_interpolated
-from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog
+from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog, clock_text
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at, truth_noise
 
@@ -221,7 +221,7 @@ def check_stuck(log: OdometryLog, robot: Robot, truth: Truth | None = None,
             for i, j in _streaks(mask):
                 if float(np.sum(step_t[i:j])) < _STUCK_SECONDS or not np.any(values[quiet]):
                     continue
-                span = f"from t = {t[i]:.6g} s to {t[j]:.6g} s"
+                span = f"from t = {clock_text(t[i])} s to {clock_text(t[j])} s"
                 if (truth_turn is not None and odo_turn is not None and np.isfinite(truth_turn[i])
                         and np.isfinite(truth_turn[j])):
                     turned, said = truth_turn[j] - truth_turn[i], odo_turn[j] - odo_turn[i]
@@ -309,8 +309,8 @@ def _silent_while_truth_moves(log: OdometryLog, truth: Truth, values: dict[str, 
         moved = float(np.hypot(*(xy[j] - xy[i])))
         if duration < _STUCK_SECONDS or moved <= floor:
             continue
-        span = (f"the odometry reads no motion from t = {t[i]:.6g} s to {t[j]:.6g} s while the truth moves "
-                f"{moved:.3g} m")
+        span = (f"the odometry reads no motion from t = {clock_text(t[i])} s to {clock_text(t[j])} s while "
+                f"the truth moves {moved:.3g} m")
         rows = t[i: j + 1]
         from_start = np.hypot(*(xy[i: j + 1] - xy[i]).T)
         to_end = np.hypot(*(xy[i: j + 1] - xy[j]).T)

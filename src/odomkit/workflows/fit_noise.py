@@ -151,7 +151,10 @@ def prepare_loaded(task: LoadedTask) -> PreparedLog:
         scatter = scatter_sigma(truth)
         off = motion_problems(log, task.robot, truth, task.max_gap, noise=truth_noise(truth, scatter))
         short = Path(name).name
-        labels = tuple(f"{short} {log.t[w.start]:.6g}-{log.t[w.end]:.6g} s" for w in basis.windows)
+        from odomkit.log import clock_text
+
+        labels = tuple(f"{short} {clock_text(log.t[w.start])}-{clock_text(log.t[w.end])} s"
+                       for w in basis.windows)
         from odomkit.truth_knots import interpolated_note
 
         inside = truth.t[(truth.t >= log.t[0]) & (truth.t <= log.t[-1])]
