@@ -40,6 +40,8 @@ UNITS: dict[str, tuple[str, ...]] = {
     "--compass-period": ("s",),
     "--sample-period": ("s",),
     "--lateral-noise": ("m²/m",),
+    "--turn-noise": ("rad²/rad",),
+    "--turn-travel-noise": ("m²/rad",),
     # calibration and evaluation
     "--side": ("m",),
     "--heading-weight": ("m/rad",),

@@ -30,6 +30,7 @@ from odomkit.noise import (
     ParameterUncertainty,
     SpeedNoise,
     TricycleNoise,
+    TurnNoise,
     WheelNoise,
     noise_fields,
 )
@@ -148,6 +149,9 @@ CASES = [
     ("car-front", TricycleNoise(0.01, 0.02, 0.003), lambda rng: car_log(rng, "front"), _car_motion),
     ("speed-unicycle", SpeedNoise(1e-3), unicycle_log, lambda s, k, u: _additive(s, k, u, (0,))),
     ("gyro-unicycle", GyroNoise(1e-3), unicycle_log, lambda s, k, u: _additive(s, k, u, (1,))),
+    # raw inputs (heading error, travel error) enter (Δθ, Δd)
+    ("turn", TurnNoise(1e-3, 2e-4), gyro_log, lambda s, k, u: _additive(s, k, u, (1, 0))),
+    ("turn-unicycle", TurnNoise(1e-3, 2e-4), unicycle_log, lambda s, k, u: _additive(s, k, u, (1, 0))),
     ("params-diff-white", ParameterUncertainty(0.01, 0.02, 0.03, mode="white"), diff_log,
      _diff_params),
     ("params-tricycle-white", ParameterUncertainty(0.01, 0.02, mode="white", sigma_steering_offset=0.01),
@@ -269,6 +273,13 @@ def test_models_check_their_robot():
         ParameterUncertainty(sigma_heading_offset=0.1, mode="white").check_robot(CompassOdometry())
     with pytest.raises(ModelError, match="TricycleNoise applies to a Tricycle or Car robot"):
         TricycleNoise(0.1, 0.1).check_robot(Unicycle())
+    for robot, why in ((DiffDrive(0.4), "per-wheel noise"), (tri.robot, "steering noise"),
+                       (Car(2.7), "steering noise"), (CompassOdometry(), "measures its heading")):
+        with pytest.raises(ModelError, match=f"TurnNoise applies to a GyroOdometry or Unicycle robot, "
+                                             f"not a {type(robot).__name__}; .*{why}"):
+            TurnNoise(0.1).check_robot(robot)
+    TurnNoise(0.1).check_robot(Unicycle())
+    TurnNoise(0.1).check_robot(GyroOdometry())
     ClassicalNoise(0.1, 0.1).check_robot(tri.robot)  # the classical model fits any robot
 
 
@@ -309,7 +320,7 @@ def test_bad_parameters_are_rejected():
 def test_registry_knows_every_model_with_its_robot_file_keys():
     assert set(NOISE_MODELS) == {"WheelNoise", "ClassicalNoise", "SpeedNoise", "GyroNoise",
                                  "CompassNoise", "TricycleNoise", "ParameterUncertainty",
-                                 "LateralSlipNoise"}
+                                 "LateralSlipNoise", "TurnNoise"}
     assert all(issubclass(cls, NoiseModel) for cls in NOISE_MODELS.values())
     assert noise_fields(TricycleNoise) == (frozenset({"sigma_speed", "sigma_steer"}),
                                            frozenset({"sigma_dt"}))

@@ -24,7 +24,7 @@ __all__ = [
     "InitialPoseOption", "JsonOption", "KLeftOption", "KRightOption", "ModelOption", "noise_from_flags",
     "NoiseOption", "Opt", "parse_matrix", "parse_numbers", "path_problem", "PathProblem", "RobotFileOption",
     "SamplePeriodOption", "SegmentOption", "SigmaAngleOption", "SigmaDistanceOption", "SpeedNoiseOption",
-    "WheelBaseOption"
+    "TurnNoiseOption", "TurnTravelNoiseOption", "WheelBaseOption"
 ]
 
 Opt = typer.Option
@@ -32,7 +32,8 @@ Opt = typer.Option
 MODEL_FLAGS = {
     "diff": {"--wheel-base", "--k-left", "--k-right", "--sigma-distance", "--sigma-angle",
              "--lateral-noise"},
-    "gyro": {"--speed-noise", "--gyro-noise", "--lateral-noise", "--sample-period"},
+    "gyro": {"--speed-noise", "--gyro-noise", "--turn-noise", "--turn-travel-noise", "--lateral-noise",
+             "--sample-period"},
     "compass": {"--speed-noise", "--heading-noise", "--compass-period", "--lateral-noise"},
 }
 #: The flags a robot file (``--robot``) may come with: the file gives the vehicle and noise.
@@ -63,6 +64,12 @@ SpeedNoiseOption = Annotated[float | None, Opt(
     "--speed-noise", help="Kelly α_ss [m] (distance variance per metre).")]
 GyroNoiseOption = Annotated[float | None, Opt(
     "--gyro-noise", help="Kelly σ_gg, yaw-rate noise density [rad²/s].")]
+TurnNoiseOption = Annotated[float | None, Opt(
+    "--turn-noise", help=("Gyro model: α_turn [rad²/rad], the heading variance per radian turned "
+                          "(TurnNoise; AMCL's α1 made linear in the turn)."))]
+TurnTravelNoiseOption = Annotated[float | None, Opt(
+    "--turn-travel-noise", help=("Gyro model: α_turn_travel [m²/rad], the travel variance per radian "
+                                 "turned (TurnNoise; AMCL's α4 made linear in the turn)."))]
 HeadingNoiseOption = Annotated[float | None, Opt(
     "--heading-noise", help="Kelly σ_θθ, compass noise density [rad²·s].")]
 LateralNoiseOption = Annotated[float | None, Opt(
@@ -131,7 +138,7 @@ def noise_from_flags(model: str, noise: str, given: dict[str, float | None]) -> 
 
 def _base_noise(model: str, noise: str, given: dict[str, float | None]) -> NoiseArg:
     """The noise of the model's own flags (without a lateral slip)."""
-    from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, WheelNoise
+    from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, SpeedNoise, TurnNoise, WheelNoise
 
     if model == "diff" and noise == "wheel":
         return WheelNoise(_non_negative("--k-left", given["--k-left"], "m^½"),
@@ -143,7 +150,12 @@ def _base_noise(model: str, noise: str, given: dict[str, float | None]) -> Noise
         raise ModelError(f"--noise must be 'wheel' or 'classical', got {noise!r}")
     speed = SpeedNoise(_non_negative("--speed-noise", given["--speed-noise"] or 0.0, "m"))
     if model == "gyro":
-        return speed, GyroNoise(_non_negative("--gyro-noise", given["--gyro-noise"], "rad^2/s"))
+        gyro = GyroNoise(_non_negative("--gyro-noise", given["--gyro-noise"], "rad^2/s"))
+        turn, travel = given.get("--turn-noise"), given.get("--turn-travel-noise")
+        if turn is None and travel is None:
+            return speed, gyro
+        return speed, gyro, TurnNoise(_non_negative("--turn-noise", turn or 0.0, "rad^2/rad"),
+                                      _non_negative("--turn-travel-noise", travel or 0.0, "m^2/rad"))
     return speed, CompassNoise(_non_negative("--heading-noise", given["--heading-noise"],
                                              "rad^2*s"))
 

@@ -27,6 +27,8 @@ from odomkit.cli.options import (
     SigmaAngleOption,
     SigmaDistanceOption,
     SpeedNoiseOption,
+    TurnNoiseOption,
+    TurnTravelNoiseOption,
     WheelBaseOption,
     path_problem,
 )
@@ -65,6 +67,8 @@ def predict_command(
     sigma_angle: SigmaAngleOption = None,
     speed_noise: SpeedNoiseOption = None,
     gyro_noise: GyroNoiseOption = None,
+    turn_noise: TurnNoiseOption = None,
+    turn_travel_noise: TurnTravelNoiseOption = None,
     heading_noise: HeadingNoiseOption = None,
     lateral_noise: LateralNoiseOption = None,
     compass_period: CompassPeriodOption = None,
@@ -98,7 +102,8 @@ def predict_command(
         model, noise, segment,
         {"--wheel-base": wheel_base, "--k-left": k_left, "--k-right": k_right,
          "--sigma-distance": sigma_distance, "--sigma-angle": sigma_angle,
-         "--speed-noise": speed_noise, "--gyro-noise": gyro_noise,
+         "--speed-noise": speed_noise, "--gyro-noise": gyro_noise, "--turn-noise": turn_noise,
+         "--turn-travel-noise": turn_travel_noise,
          "--heading-noise": heading_noise, "--compass-period": compass_period,
          "--lateral-noise": lateral_noise, "--sample-period": sample_period},
         initial_pose, initial_cov, initial_cov_matrix, robot)

@@ -246,10 +246,12 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
         if cls.toml_table != "noise":
             continue
         required, optional = noise_fields(cls)
-        present = required & set(plain)
+        # A model is named by its required keys, or, where it has none (every field
+        # defaults to zero, as TurnNoise's), by any of its keys.
+        present = (required or optional) & set(plain)
         if not present:
             continue
-        if present != required:
+        if required - present:
             missing = ", ".join(sorted(required - present))
             raise InputError(f"[noise] {cls.__name__} also needs {missing}", source=source)
         kwargs = {k: f.number(k) for k in sorted(required | (optional & set(plain)))}

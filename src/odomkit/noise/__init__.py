@@ -12,6 +12,9 @@ model                       kind    applies to
 :class:`TricycleNoise`      white   tricycle and car: speed, steering and period errors
 :class:`LateralSlipNoise`   white   any: sideways slip across the track, variance
                                     α_lat·|Δd| (position only)
+:class:`TurnNoise`          white   unicycle, gyro: heading and travel errors that grow
+                                    with turning, variances α_turn·|Δθ| and
+                                    α_turn_travel·|Δθ|
 :class:`ParameterUncertainty`  bias  every vehicle's parameters, constant over a run
                             (wheel base, wheel or speed scales, steering offset,
                             yaw-rate offset and scale, heading offset; or white)
@@ -26,6 +29,7 @@ from odomkit.noise.kelly import CompassNoise, GyroNoise, SpeedNoise
 from odomkit.noise.parameters import ParameterUncertainty
 from odomkit.noise.slip import LateralSlipNoise
 from odomkit.noise.tricycle import TricycleNoise
+from odomkit.noise.turn import TurnNoise
 from odomkit.noise.wheel import ClassicalNoise, WheelNoise
 
 __all__ = [
@@ -42,5 +46,6 @@ __all__ = [
     "CompassNoise",
     "TricycleNoise",
     "LateralSlipNoise",
+    "TurnNoise",
     "ParameterUncertainty",
 ]

@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from odomkit.angles import sinc, sinc_derivative
 from odomkit.errors import ModelError
-from odomkit.noise import CompassNoise, GyroNoise, SpeedNoise
+from odomkit.noise import CompassNoise, GyroNoise, SpeedNoise, TurnNoise
 from odomkit.noise.kelly import compass_sample_count
 from odomkit.path import KellyArc
 from odomkit.propagate.closed import (
@@ -50,6 +50,7 @@ def gyro_arc_cov(
     gyro_noise: GyroNoise,
     theta0: float = 0.0,
     cov0: ArrayLike | None = None,
+    turn_noise: TurnNoise | None = None,
 ) -> NDArray[np.float64]:
     """Covariance at the end of a gyro-odometry segment, Kelly eq. (11), (13), (15).
 
@@ -57,6 +58,13 @@ def gyro_arc_cov(
     :mod:`odomkit.propagate.closed`), with the segment's noise over its duration
     ``q_ss = α_ss·|V|·T`` and ``q_θθ = σ_gg·T``, uncorrelated (Kelly Table 1,
     σ_vθ = 0). The incoming covariance goes through Kelly's IC_s transition.
+
+    A :class:`~odomkit.noise.TurnNoise` adds ``α_turn_travel·|ωT|`` to q_ss and
+    ``α_turn·|ωT|`` to q_θθ: on a constant-curvature segment its density per unit of the
+    segment is constant too (a GyroNoise of density α_turn·|ω| and a SpeedNoise of
+    α_ss = α_turn_travel·|ω/V|), so the same integral holds. On a spin in place (V = 0,
+    D = 0) the travel error still moves the end point, along the turning heading:
+    A's first column (cos φ, sin φ) does not vanish with D.
 
     Parameters
     ----------
@@ -68,6 +76,8 @@ def gyro_arc_cov(
     theta0 : float
         Heading at the start [rad].
     cov0 : array_like, shape (3, 3), optional
+    turn_noise : TurnNoise, optional
+        α_turn [rad], α_turn_travel [m²/rad]; None: none.
 
     Returns
     -------
@@ -83,8 +93,11 @@ def gyro_arc_cov(
     """
     v, w, t = segment.speed, segment.yaw_rate, segment.duration
     d, a = v * t, w * t
-    added = arc_added_cov_local(d, a, speed_noise.alpha_ss * abs(v) * t, 0.0,
-                                gyro_noise.psd_gyro * t)
+    q_ss, q_tt = speed_noise.alpha_ss * abs(v) * t, gyro_noise.psd_gyro * t
+    if turn_noise is not None:
+        q_ss += turn_noise.alpha_turn_travel * abs(a)
+        q_tt += turn_noise.alpha_turn * abs(a)
+    added = arc_added_cov_local(d, a, q_ss, 0.0, q_tt)
     return chain_cov(d, a, theta0, cov0, added)
 
 

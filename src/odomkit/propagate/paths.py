@@ -11,6 +11,7 @@ noise                              family      vehicle         segments
 ``WheelNoise``                     wheel       diff            Arc, Straight, Spin
 ``ClassicalNoise``                 classical   diff            Arc, Straight, Spin
 ``(SpeedNoise, GyroNoise)``        gyro        gyro, unicycle  KellyArc
+``TurnNoise`` (and those two)      gyro        gyro, unicycle  KellyArc
 ``(SpeedNoise, CompassNoise)``     compass     compass         KellyArc
 ``TricycleNoise``, ``SpeedNoise``  steering    tricycle, car   SteerArc
 =================================  ==========  ==============  ==========================
@@ -77,10 +78,10 @@ _FAMILIES: dict[str, tuple[str, ...]] = {
 _CLOSED: dict[str, frozenset[str]] = {
     "wheel": frozenset({"WheelNoise", "LateralSlipNoise"}),
     "classical": frozenset({"ClassicalNoise", "LateralSlipNoise"}),
-    "gyro": frozenset({"GyroNoise", "SpeedNoise", "LateralSlipNoise"}),
+    "gyro": frozenset({"GyroNoise", "SpeedNoise", "TurnNoise", "LateralSlipNoise"}),
     "compass": frozenset({"CompassNoise", "SpeedNoise", "LateralSlipNoise"}),
 }
-_EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise) or (SpeedNoise, CompassNoise), "
+_EXPECTED = ("WheelNoise, ClassicalNoise, (SpeedNoise, GyroNoise, TurnNoise) or (SpeedNoise, CompassNoise), "
              "with or without a SpeedNoise, a ParameterUncertainty and a LateralSlipNoise; or "
              "robot= and any noise odomkit track takes for it")
 # The segments each vehicle drives.

@@ -9,6 +9,7 @@ noise                              segments     closed form
 ``WheelNoise``                     Arc, ...     Chong–Kleeman eq. (23), (25)
 ``ClassicalNoise``                 Arc, ...     Chong–Kleeman eq. (1)–(3), per piece
 ``(SpeedNoise, GyroNoise)``        KellyArc     Kelly eq. (11), (13), (15)
+``TurnNoise`` (+ those two)        KellyArc     the same integral, q += α·|ωT|
 ``(SpeedNoise, CompassNoise)``     KellyArc     Kelly eq. (10) sampled every T (see
                                                :func:`~odomkit.propagate.closed_kelly.compass_arc_cov`)
 ``TricycleNoise`` (+ ``robot``)    SteerArc     none: ``recursion`` or ``transition``, at a ``sample_period``
@@ -64,7 +65,15 @@ from odomkit.angles import wrap_angle
 from odomkit.errors import ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import step_displacement
-from odomkit.noise import ClassicalNoise, CompassNoise, GyroNoise, LateralSlipNoise, SpeedNoise, WheelNoise
+from odomkit.noise import (
+    ClassicalNoise,
+    CompassNoise,
+    GyroNoise,
+    LateralSlipNoise,
+    SpeedNoise,
+    TurnNoise,
+    WheelNoise,
+)
 from odomkit.path import Segment
 from odomkit.propagate.closed import classical_step, wheel_arc_cov
 from odomkit.propagate.closed_kelly import compass_arc_cov, gyro_arc_cov
@@ -239,7 +248,12 @@ def _wheel_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segm
 def _gyro_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,
                  model: PathModel) -> NDArray[np.float64]:
     speed = model.noise.get(SpeedNoise) or SpeedNoise(0.0)
-    return gyro_arc_cov(seg, speed, model.noise.require(GyroNoise), pose[2], cov)  # type: ignore[arg-type]
+    gyro = model.noise.get(GyroNoise) or GyroNoise(0.0)
+    if model.robot.type_name == "unicycle" and seg.speed == 0 and seg.yaw_rate == 0:  # type: ignore[union-attr]
+        # A unicycle told to stand stands: no yaw-rate noise acts (GyroNoise.noisy_time),
+        # as in the engines and the Monte Carlo.
+        gyro = GyroNoise(0.0)
+    return gyro_arc_cov(seg, speed, gyro, pose[2], cov, model.noise.get(TurnNoise))  # type: ignore[arg-type]
 
 
 def _compass_closed(pose: NDArray[np.float64], cov: NDArray[np.float64], seg: Segment,

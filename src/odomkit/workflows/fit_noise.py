@@ -697,7 +697,8 @@ def _floor_below_scatter(fitted: float | None, scatter: float | None,
 
 #: The unit of each noise field (the variance parameter is its square for σ and k fields).
 _NOISE_UNITS = {"k_left": "m^½", "k_right": "m^½", "alpha_ss": "m", "psd_gyro": "rad²/s",
-               "psd_compass": "rad²·s", "alpha_lateral": "m", "sigma_speed": "m/s", "sigma_steer": "rad",
+               "psd_compass": "rad²·s", "alpha_lateral": "m", "alpha_turn": "rad²/rad",
+               "alpha_turn_travel": "m²/rad", "sigma_speed": "m/s", "sigma_steer": "rad",
                "sigma_dt": "s", "sigma_distance": "m", "sigma_angle": "rad", "sigma_wheel_base": "m",
                "sigma_scale_left": "relative", "sigma_scale_right": "relative",
                "sigma_steering_offset": "rad",
