@@ -1,6 +1,7 @@
 """How honest is the covariance? The tables of docs/results/honesty.md (issue 11's targets), one command.
 
-    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--part optiodom snowhite gps speed car]
+    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--mrclam DIR]
+        [--part optiodom snowhite gps speed car mrclam]
 
 (a) OptiOdom, differential and tricycle. The experiments of each kind (diff: square,
     circular, ivanjko, free; tricycle: square, circular, free) are sorted by name; every
@@ -23,6 +24,11 @@
 (d) Speed: ``odomkit fit-noise`` on all 203 OptiOdom runs (two robot files), wall time.
 (e) A simulated car against a late, noisy 1 Hz GPS (``--part car``; no data needed):
     calibrate, fit-noise and evaluate through the CLI over six seeds.
+(f) Five commanded-velocity robots of one type against motion capture (``--part mrclam
+    --mrclam DIR``; the UTIAS MRCLAM datasets, not shipped: DIR holds MRCLAM_Dataset6/,
+    MRCLAM_Dataset7/, ... each with Robot1..5_Odometry.dat and Robot1..5_Groundtruth.dat):
+    ``odomkit fit-noise --window 10s --window 30s`` on robots 1 and 2, ``odomkit evaluate
+    --window`` on robots 3, 4 and 5 with that one fitted robot file, through the CLI.
 """
 
 from __future__ import annotations
@@ -380,11 +386,64 @@ def car(_root: Path) -> None:
                   f"{ev['nees_position_mean']:.2f} ({lo:.2f}–{hi:.2f}) |")
 
 
+#: The noise families compared on MRCLAM: the robot file's [noise] for each (a unicycle:
+#: commanded speed and yaw rate), and fit-noise's --kinds.
+MRCLAM_VARIANTS = (
+    ("white (speed, yaw rate, slip)", "alpha_ss = 0.001\npsd_gyro = 1e-5\nalpha_lateral = 0\n", "white"),
+    ("white + bias", "alpha_ss = 0.001\npsd_gyro = 1e-5\nalpha_lateral = 0\n", "white,bias"),
+    ("fit-noise's defaults: white + turn + bias", "alpha_ss = 0.001\npsd_gyro = 1e-5\nalpha_lateral = 0\n"
+     "alpha_turn = 0\nalpha_turn_travel = 0\n", "white,bias"),
+)
+
+
+def mrclam(root: Path | None) -> None:
+    """Fit on robots 1–2 of each MRCLAM dataset, score robots 3–5 (issue 11's outside study:
+    five robots of one type, commanded v and ω against Vicon)."""
+    import tempfile
+
+    if root is None or not root.is_dir():
+        print("\n## MRCLAM: skipped (give --mrclam DIR or ODOMKIT_MRCLAM: the UTIAS MRCLAM datasets, "
+              "asrl.utias.utoronto.ca/datasets/mrclam, not shipped)")
+        return
+    folders = sorted(f for f in root.iterdir() if (f / "Robot5_Groundtruth.dat").is_file())
+    print("\n## MRCLAM: fitted on robots 1–2 (10 s and 30 s windows), scored on robots 3–5\n")
+    print("| dataset | noise | fitted | 10 s: inside 95 % / 50 %, NEES (bounds) | 30 s | 60 s |\n"
+          "|---|---|---|---|---|---|")
+    common = ("--columns", "t,speed,yaw_rate")
+    for folder in folders:
+        logs = {r: (folder / f"Robot{r}_Odometry.dat", folder / f"Robot{r}_Groundtruth.dat")
+                for r in range(1, 6)}
+        for name, noise, kinds in MRCLAM_VARIANTS:
+            with tempfile.TemporaryDirectory() as tmp:
+                robot = Path(tmp) / "unicycle.toml"
+                robot.write_text('[robot]\ntype = "unicycle"\n\n[noise]\n' + noise
+                                 + "\n[noise.parameters]\nsigma_scale_left = 0.01\n"
+                                 "sigma_yaw_rate_offset = 0.001\nsigma_yaw_rate_scale = 0.01\n")
+                fit_args = [a for r in (1, 2) for a in ("--log", logs[r][0], "--truth", logs[r][1])]
+                fit = _odomkit_json("fit-noise", "--robot", robot, *fit_args, "--window", "10s", "--window",
+                                    "30s", "--kinds", kinds, "--out", Path(tmp) / "fit.toml", *common)
+                fitted = ", ".join(f"{k} {v:.2g}" for k, v in fit["parameters"].items()
+                                   if not k.startswith("truth") and v > 0)
+                cells = []
+                for window in ("10s", "30s", "60s"):
+                    held = [a for r in (3, 4, 5) for a in ("--truth", logs[r][1])]
+                    ev = _odomkit_json("evaluate", *(logs[r][0] for r in (3, 4, 5)), *held, "--robot",
+                                       Path(tmp) / "fit.toml", "--window", window, *common)
+                    lo, hi = ev["nees_bounds"]
+                    cells.append(f"{ev['coverage']['0.95']:.3f} / {ev['coverage']['0.5']:.3f}, "
+                                 f"{ev['nees_position_mean']:.2f} ({lo:.2f}–{hi:.2f}), {ev['windows']} ends")
+                print(f"| {folder.name} | {name} | {fitted} | {' | '.join(cells)} |")
+
+
 def main() -> None:
     default = Path(os.environ.get("ODOMKIT_DATA", REPO.parent / "shared" / "data"))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=default)
-    parser.add_argument("--part", nargs="*", default=["optiodom", "snowhite", "gps", "speed", "car"])
+    parser.add_argument("--part", nargs="*",
+                        default=["optiodom", "snowhite", "gps", "speed", "car", "mrclam"])
+    mrclam_dir = os.environ.get("ODOMKIT_MRCLAM")
+    parser.add_argument("--mrclam", type=Path, default=Path(mrclam_dir) if mrclam_dir else None,
+                        help="folder of UTIAS MRCLAM datasets (MRCLAM_DatasetN/RobotK_*.dat)")
     args = parser.parse_args()
     import warnings
 
@@ -392,7 +451,7 @@ def main() -> None:
     for name in args.part:
         {"optiodom": lambda: optiodom(args.data / "optiodom"), "snowhite": lambda: snowhite(args.data),
          "gps": lambda: gps(args.data), "car": lambda: car(args.data),
-         "speed": lambda: speed(args.data / "optiodom")}[name]()
+         "speed": lambda: speed(args.data / "optiodom"), "mrclam": lambda: mrclam(args.mrclam)}[name]()
 
 
 if __name__ == "__main__":
