@@ -64,8 +64,9 @@ def test_a_noise_free_clock_offset_and_the_car_come_back_exactly(delta):
     assert cal.time_offset == pytest.approx(delta, abs=1e-6)
     np.testing.assert_allclose(cal.values, TRUE_VALUES, rtol=1e-6)
     assert cal.time_offset_std_error is not None and cal.time_offset_std_error < 1e-6
-    assert cal.to_dict()["truth_time_offset"] == {"value": cal.time_offset,
-                                                  "std_error": cal.time_offset_std_error}
+    said = cal.to_dict()["truth_time_offset"]
+    assert said == {"value": cal.time_offset, "std_error": cal.time_offset_std_error,
+                    "std_error_between_runs": cal.time_offset_std_error_between_runs}  # the 2 runs' spread
     # Without δ the same data cannot be matched: the fit is off, the residual far from zero
     # (a check that the offset is large enough to matter here).
     blind = calibrate_positions(logs, truths, NOMINAL_CAR)

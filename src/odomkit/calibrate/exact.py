@@ -69,7 +69,8 @@ from odomkit.robot import DiffDrive
 from odomkit.truth import Truth, scatter_sigma, truth_from_log
 
 __all__ = ["BETWEEN_RUNS_FACTOR", "between_runs", "between_runs_warning", "SCALE_OBSERVABLE_BELOW",
-           "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source", "warn_if_drifting"]
+           "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source", "truth_noise",
+           "warn_if_drifting"]
 
 Source = Literal["endpoints", "trajectory"]
 
@@ -125,9 +126,10 @@ class ExactCalibration:
         Relative sensitivity of the residuals to the overall scale at the start (0 = none).
     notes : tuple of str
         Human-readable remarks (why the scale was fixed, convergence).
-    time_offset, time_offset_std_error : float or None
+    time_offset, time_offset_std_error, time_offset_std_error_between_runs : float or None
         ``positions`` with ``fit_time_offset``: the truth's clock offset δ [s] (a fix
-        stamped t is the pose at log time t − δ) and its standard error; None otherwise.
+        stamped t is the pose at log time t − δ), its standard error, and that from the runs'
+        (windows') spread as ``std_errors_between_runs`` (None for one run); None otherwise.
     std_errors_between_runs : ndarray, shape like ``values``, or None
         Standard errors from the runs' spread (the runs as independent clusters, see
         :func:`calibrate_exact`): honest where the residuals along a run are correlated
@@ -138,6 +140,12 @@ class ExactCalibration:
         column-scaled Jacobian's condition number beyond 1e8, with a note):
         the values lie anywhere along it and the standard errors mean nothing (a single arc
         of constant curvature cannot tell the wheels' scale from the wheel base).
+    n_windows, windows_left_out, window : int or None, int, str or None
+        ``positions`` fitted in windows (:func:`odomkit.calibrate.positions.calibrate_positions`
+        ``window=``): how many windows were fitted, each from its own start pose (the clusters of
+        ``std_errors_between_runs``), how many were left out (too few fixes, truth that does not
+        spread), and their length (``"60 s"``, ``"20 m"``; ``"given"``: (start, end) times given);
+        None, 0, None for a fit of whole runs.
     """
 
     robot: CalibratedRobot
@@ -155,8 +163,12 @@ class ExactCalibration:
     notes: tuple[str, ...] = ()
     time_offset: float | None = None
     time_offset_std_error: float | None = None
+    time_offset_std_error_between_runs: float | None = None
     std_errors_between_runs: NDArray[np.float64] | None = None
     determined: bool = True
+    n_windows: int | None = None
+    windows_left_out: int = 0
+    window: str | None = None
 
     @property
     def E_d(self) -> float:
@@ -197,6 +209,11 @@ class ExactCalibration:
         }
         if self.time_offset is not None:
             out["truth_time_offset"] = {"value": self.time_offset, "std_error": self.time_offset_std_error}
+            if self.time_offset_std_error_between_runs is not None:
+                out["truth_time_offset"]["std_error_between_runs"] = self.time_offset_std_error_between_runs
+        if self.n_windows is not None:
+            out["windows"] = {"length": self.window, "fitted": self.n_windows,
+                              "left_out": self.windows_left_out}
         if self.std_errors_between_runs is not None:
             out["std_errors_between_runs"] = {
                 n: float(v) for n, v in zip(self.names, self.std_errors_between_runs, strict=True)}
@@ -251,7 +268,28 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
             )
 
 
-def warn_if_drifting(var_res: float, n_res: int, truths: Sequence[Truth]) -> None:
+def truth_noise(truths: Sequence[Truth]) -> tuple[float, str]:
+    """The truth's position noise σ [m] per axis that a calibration's residuals are held
+    against, and what it is: the stated σ (``--truth-sigma``), else the σ the fixes' own file
+    states (a bag's NavSatFix covariance), else the fixes' scatter about a smooth path
+    (:func:`odomkit.truth.scatter_sigma`); 0 where none is known."""
+    stated = max((t.sigma for t in truths), default=0.0)
+    what = "stated σ"
+    if stated <= 0:
+        # The σ the fixes' own file states (a bag's NavSatFix covariance), not given as
+        # --truth-sigma: the ratio is judged against it as check judges (a GPS's scatter about
+        # a smooth path misses its error correlated in time: a Husky's 0.1 m against 0.8 m
+        # stated made its residuals "15x the truth's").
+        stated = max((t.stated_sigma for t in truths), default=0.0)
+        what = "σ its fixes state"
+    if stated <= 0:
+        found = [x for x in (scatter_sigma(t) for t in truths) if x is not None]
+        stated = float(np.sqrt(np.mean(np.square(found)))) if found else 0.0
+        what = "scatter about a smooth path"
+    return stated, what
+
+
+def warn_if_drifting(var_res: float, n_res: int, truths: Sequence[Truth], *, windowed: bool = False) -> None:
     """Warn when the residuals are more than the truth's own noise: σ̂²(JᵀJ)⁻¹ treats them
     as independent from fix to fix, which the odometry's own drift (a random walk along
     each run) is not. On a simulated car with residuals 1.28× the GPS's σ, the clock
@@ -267,28 +305,22 @@ def warn_if_drifting(var_res: float, n_res: int, truths: Sequence[Truth]) -> Non
         How many position residuals (fixes × 2).
     truths : sequence of Truth
         The truth of each run, with its stated ``sigma`` [m] (0: not stated).
+    windowed : bool
+        The fit is of windows (``calibrate --window``): the message names the standard errors
+        between windows, which allow for the drift.
     """
-    stated = max((t.sigma for t in truths), default=0.0)
-    what = "stated σ"
-    if stated <= 0:
-        # The σ the fixes' own file states (a bag's NavSatFix covariance), not given as
-        # --truth-sigma: the ratio is judged against it as check judges (a GPS's scatter about
-        # a smooth path misses its error correlated in time: a Husky's 0.1 m against 0.8 m
-        # stated made its residuals "15x the truth's").
-        stated = max((t.stated_sigma for t in truths), default=0.0)
-        what = "σ its fixes state"
-    if stated <= 0:
-        found = [x for x in (scatter_sigma(t) for t in truths) if x is not None]
-        stated = float(np.sqrt(np.mean(np.square(found)))) if found else 0.0
-        what = "scatter about a smooth path"
+    stated, what = truth_noise(truths)
     if stated <= 0 or var_res < 1e-18:  # residuals under a nanometre are round-off, not drift
         return
     ratio = float(np.sqrt(var_res)) / stated
     # An honest residual RMS is σ within about 1/√n_res (relative): allow five of those.
     if ratio > 1.0 + 5.0 / np.sqrt(n_res):
+        where = ("each window, so the fit's own standard errors are optimistic; those between windows "
+                 "(JSON std_errors_between_runs) allow for it" if windowed else
+                 "each run, so the standard errors are optimistic")
         warnings.warn(f"the calibration's residuals (RMS {np.sqrt(var_res):.3g} m) are {ratio:.2f}x the "
                       f"truth's {what} ({stated:.3g} m): the odometry's own drift is in them, correlated "
-                      "along each run, so the standard errors are optimistic", UserWarning, stacklevel=3)
+                      f"along {where}", UserWarning, stacklevel=3)
 
 
 def between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequence[int],
@@ -358,19 +390,22 @@ def between_runs(J: NDArray[np.float64], r: NDArray[np.float64], sizes: Sequence
 
 
 def between_runs_warning(names: Sequence[str], values: NDArray[np.float64], own: NDArray[np.float64],
-                          between: NDArray[np.float64], n_runs: int) -> str | None:
+                          between: NDArray[np.float64], n_runs: int, clusters: str = "runs") -> str | None:
     """The warning where a parameter's between-run standard error exceeds the fit's own by
-    more than :data:`BETWEEN_RUNS_FACTOR` (and round-off: 1e-9 of the value)."""
-    off = [f"{name} ± {b:.2g} between runs against ± {s:.2g} from the fit ({b / s:.0f}×)" if s > 0 else
-           f"{name} ± {b:.2g} between runs against ± {s:.2g} from the fit"
+    more than :data:`BETWEEN_RUNS_FACTOR` (and round-off: 1e-9 of the value); ``clusters``
+    names the runs (``"windows"`` for a fit in windows)."""
+    off = [f"{name} ± {b:.2g} between {clusters} against ± {s:.2g} from the fit ({b / s:.0f}×)" if s > 0 else
+           f"{name} ± {b:.2g} between {clusters} against ± {s:.2g} from the fit"
            for name, v, s, b in zip(names, values, own, between, strict=True)
            if b > BETWEEN_RUNS_FACTOR * s and b > 1e-9 * max(1.0, abs(float(v)))]
     if not off:
         return None
-    return (f"the {n_runs} runs scatter more than the fit's standard errors allow: " + "; ".join(off)
-            + ": the fit takes the residuals along a run as independent, but the odometry's drift is "
-            "correlated along each run (or the runs' robots differ), so its ± are optimistic; quote the "
-            "between-run ones (JSON std_errors_between_runs)")
+    one = clusters[:-1]
+    robots = "" if clusters == "windows" else " (or the runs' robots differ)"
+    return (f"the {n_runs} {clusters} scatter more than the fit's standard errors allow: " + "; ".join(off)
+            + f": the fit takes the residuals along a {one} as independent, but the odometry's drift is "
+            f"correlated along each {one}{robots}, so its ± are optimistic; quote the "
+            f"between-{one} ones (JSON std_errors_between_runs)")
 
 
 def calibrate_exact(

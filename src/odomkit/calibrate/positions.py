@@ -30,7 +30,14 @@ its noise, and rows without truth. Here:
   left out, it reads as an along-track error proportional to speed. Its Jacobian column
   is −(the odometry's velocity at t − δ), the slope of the log segment the fix falls in
   (the residual is piecewise linear in δ). Fixes within :data:`MAX_TIME_OFFSET` of either
-  end of the log are then left out, so the same fixes are compared at every δ.
+  end of the log are then left out, so the same fixes are compared at every δ;
+* a long run whose dead-reckoned heading wanders (metres of drift in a small arena) biases
+  the fit of the whole run, which shrinks the track to shorten its residuals
+  (:func:`drift_bias` says so); with ``window`` each run is cut into windows, each fitted
+  from a start pose of its own, the robot's parameters and δ shared. There each window's
+  start pose is eliminated for the parameters tried (variable projection: its SE(2)
+  alignment to the fixes), so no column per window is held: the windows are
+  the clusters of the between-run standard errors.
 
 The parameter-to-body-step maps are :mod:`odomkit.calibrate.residuals`' (diff, tricycle,
 car) and the integration with sensitivities its
@@ -41,14 +48,20 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Collection, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import least_squares
 
 from odomkit import validate
-from odomkit.calibrate.exact import ExactCalibration, between_runs, between_runs_warning, warn_if_drifting
+from odomkit.calibrate.exact import (
+    ExactCalibration,
+    between_runs,
+    between_runs_warning,
+    truth_noise,
+    warn_if_drifting,
+)
 from odomkit.calibrate.residuals import (
     CALIBRATED_ROBOTS,
     CalibratedRobot,
@@ -59,12 +72,13 @@ from odomkit.calibrate.residuals import (
 )
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
-from odomkit.kinematics import Method
+from odomkit.kinematics import Method, body_steps
 from odomkit.log import OdometryLog
 from odomkit.truth import Truth
+from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
-__all__ = ["MAX_STEERING_OFFSET", "MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "calibrate_positions",
-           "compared_fixes", "runs_disagree", "scale_range"]
+__all__ = ["DRIFT_SHARE", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES",
+           "calibrate_positions", "compared_fixes", "drift_bias", "runs_disagree", "scale_range"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -149,7 +163,18 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
 class _Problem:
     """Position residuals of all runs over their first ``horizon`` fraction, for
     q = (free robot parameters, the truth's clock offset δ if fitted, then x₀, y₀, θ₀ of
-    each run)."""
+    each run).
+
+    :meth:`residuals_and_jacobian` is the full problem in q. :meth:`reduced` is the same
+    problem with every run's start pose at its best for the shared parameters g (the first
+    ``n_global`` entries of q): a start pose moves the run's dead-reckoned track rigidly, so
+    for given g it is the SE(2) alignment of the track to the fixes (Umeyama 1991, closed
+    form), and the shared parameters are fitted on their own (variable projection, Golub &
+    Pereyra 1973). Its Jacobian is each run's block of shared columns made orthogonal to the
+    run's own start-pose columns (Kaufman 1975), the Frisch–Waugh–Lovell form whose
+    ``JᵀJ`` is the shared block of the full problem's information with the start poses
+    marginalised. The two have the same minima; the reduced one holds a dense Jacobian of
+    residuals × shared parameters only, so many runs (windows) cost no memory per run."""
 
     def __init__(self, model: CalibrationModel, runs: list[_Run], logs: Sequence[OdometryLog],
                  free: NDArray[np.intp], method: Method, fit_time_offset: bool):
@@ -161,9 +186,11 @@ class _Problem:
         self.horizon = 1.0
         self.n_global = free.size + int(fit_time_offset)  # parameters shared by every run
         self.fit_time_offset = fit_time_offset
+        self._last: tuple[bytes, float, tuple[NDArray[np.float64], NDArray[np.float64],
+                                               NDArray[np.float64], list[int]]] | None = None
 
     def split(self, q: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, NDArray[np.float64]]:
-        """(robot parameters, clock offset δ [s], start poses (runs, 3))."""
+        """(robot parameters, clock offset δ [s], start poses (runs, 3); none for g alone)."""
         p = self.p_fixed.copy()
         p[self.free] = q[: self.free.size]
         delta = float(q[self.free.size]) if self.fit_time_offset else 0.0
@@ -173,52 +200,87 @@ class _Problem:
         run = self.runs[i]
         return run.t <= self.t0[i] + self.horizon * (self.t1[i] - self.t0[i])
 
-
-    def residuals_and_jacobian(self, q: NDArray[np.float64]
-                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        p, delta, starts = self.split(q)
-        n_free = self.free.size
-        res, jac = [], []
-        for i, run in enumerate(self.runs):
-            dd, dth, ddd, ddt = self.model.steps(p, i)
-            poses, dposes = integrate_with_sensitivity(dd, dth, ddd[:, self.free], ddt[:, self.free],
-                                                       starts[i], self.method)
-            keep = self.used(i)
-            fixes = run.at(delta, keep)
-            pos = fixes.interpolate(poses[:, :2])
-            r = pos - run.xy[keep]
-            j = np.zeros((pos.shape[0], 2, q.size))
-            j[:, :, :n_free] = fixes.interpolate(dposes[:, :2])
-            if self.fit_time_offset:
-                # a later δ compares each fix with the odometry earlier: −velocity there
-                j[:, :, n_free] = -fixes.rate(poses[:, :2])
-            col = self.n_global + 3 * i
-            j[:, 0, col] = 1.0
-            j[:, 1, col + 1] = 1.0
-            # a turn of the start by dθ₀ swings every position about the start
-            j[:, 0, col + 2] = -(pos[:, 1] - starts[i][1])
-            j[:, 1, col + 2] = pos[:, 0] - starts[i][0]
-            res.append(r.reshape(-1))
-            jac.append(j.reshape(-1, q.size))
-        return np.concatenate(res), np.concatenate(jac)
-
-    def align_starts(self, p: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Each run's start pose by SE(2) alignment of its odometry (parameters ``p``, from
-        the origin) to the truth over the current horizon (Umeyama, closed form)."""
-        starts = []
-        for i, run in enumerate(self.runs):
-            dd, dth = self.model.steps(p, i)[:2]
-            zero = np.zeros((dd.size, 0))
-            poses, _ = integrate_with_sensitivity(dd, dth, zero, zero, np.zeros(3), self.method)
-            keep = self.used(i)
+    def _block(self, i: int, p: NDArray[np.float64], delta: float, start: NDArray[np.float64] | None
+               ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Run ``i`` over the current horizon from ``start`` (x₀, y₀, θ₀), or from the start
+        that fits its fixes best (None): residuals (n, 2) [m], their derivatives in the shared
+        parameters (n, 2, n_global) and in the start pose (n, 2, 3), and the start pose (3,)."""
+        dd, dth, ddd, ddt = self.model.steps(p, i)
+        # From the origin, then moved rigidly: dead reckoning from a start pose is the track
+        # from the origin rotated by θ₀ and shifted (the parameters' derivatives rotate alike).
+        poses, dposes = integrate_with_sensitivity(dd, dth, ddd[:, self.free], ddt[:, self.free],
+                                                   np.zeros(3), self.method)
+        keep = self.used(i)
+        run = self.runs[i]
+        fixes = run.at(delta, keep)
+        xy = run.xy[keep]
+        pos = fixes.interpolate(poses[:, :2])
+        if start is None:
             try:
-                phi, shift = umeyama_se2(run.at(0.0, keep).interpolate(poses[:, :2]), run.xy[keep])
+                phi, shift = umeyama_se2(pos, xy)
             except ModelError:
                 raise InputError("the odometry does not move over the run's first "
                                  f"{self.horizon * (self.t1[i] - self.t0[i]):.3g} s while the truth does: "
                                  "check the log's channels and --columns", source=self.sources[i]) from None
-            starts.append([shift[0], shift[1], phi])
-        return np.asarray(starts, dtype=float).reshape(-1)
+            start = np.array([shift[0], shift[1], phi])
+        c, s = np.cos(start[2]), np.sin(start[2])
+        rot = np.array([[c, -s], [s, c]])
+        pos = pos @ rot.T + start[:2]
+        n_free = self.free.size
+        jg = np.zeros((pos.shape[0], 2, self.n_global))
+        jg[:, :, :n_free] = np.einsum("ab,nbk->nak", rot, fixes.interpolate(dposes[:, :2]))
+        if self.fit_time_offset:
+            # a later δ compares each fix with the odometry earlier: −velocity there
+            jg[:, :, n_free] = -(fixes.rate(poses[:, :2]) @ rot.T)
+        js = np.zeros((pos.shape[0], 2, 3))
+        js[:, 0, 0] = 1.0
+        js[:, 1, 1] = 1.0
+        # a turn of the start by dθ₀ swings every position about the start
+        js[:, 0, 2] = -(pos[:, 1] - start[1])
+        js[:, 1, 2] = pos[:, 0] - start[0]
+        return pos - xy, jg, js, np.asarray(start, dtype=float)
+
+    def residuals_and_jacobian(self, q: NDArray[np.float64]
+                               ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """The full problem: residuals (m,) [m] and the dense Jacobian (m, q.size)."""
+        p, delta, starts = self.split(q)
+        res, jac = [], []
+        for i in range(len(self.runs)):
+            r, jg, js, _ = self._block(i, p, delta, starts[i])
+            j = np.zeros((r.shape[0], 2, q.size))
+            j[:, :, : self.n_global] = jg
+            col = self.n_global + 3 * i
+            j[:, :, col:col + 3] = js
+            res.append(r.reshape(-1))
+            jac.append(j.reshape(-1, q.size))
+        return np.concatenate(res), np.concatenate(jac)
+
+    def reduced(self, g: NDArray[np.float64], starts: NDArray[np.float64] | None = None
+                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], list[int]]:
+        """The problem in the shared parameters g alone, each run from its best start pose
+        (or from ``starts`` (runs, 3) given): residuals (m,) [m], the Jacobian (m, n_global)
+        with each run's rows made orthogonal to its start-pose columns, the start poses
+        (runs, 3) and each run's row count. The last answer without ``starts`` is kept
+        (least_squares asks for the residuals and the Jacobian at the same g one after the
+        other)."""
+        key = np.asarray(g, dtype=float).tobytes()
+        last = self._last
+        if starts is None and last is not None and last[0] == key and last[1] == self.horizon:
+            return last[2]
+        p, delta, _ = self.split(g)
+        res, jac, found, sizes = [], [], [], []
+        for i in range(len(self.runs)):
+            r, jg, js, start = self._block(i, p, delta, None if starts is None else starts[i])
+            jg2, js2 = jg.reshape(-1, self.n_global), js.reshape(-1, 3)
+            coef = np.linalg.lstsq(js2, jg2, rcond=None)[0]
+            res.append(r.reshape(-1))
+            jac.append(jg2 - js2 @ coef)
+            found.append(start)
+            sizes.append(r.size)
+        out = (np.concatenate(res), np.concatenate(jac), np.asarray(found).reshape(-1, 3), sizes)
+        if starts is None:
+            self._last = (key, self.horizon, out)
+        return out
 
 
 #: [rad] a steering offset beyond this from the robot file's is a wrong steering channel, not an
@@ -258,6 +320,17 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
     return lower, upper
 
 
+def _spread(xy: NDArray[np.float64]) -> float:
+    """RMS distance [m] of positions (n, 2) from their centroid (0 for none)."""
+    return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)))) if len(xy) else 0.0
+
+
+def _min_spread(truth: Truth) -> float:
+    """How far [m] a run's fixes must spread to be calibrated from: three times the truth's
+    σ, at least 1 cm (a robot standing or turning on the spot gives no start pose)."""
+    return max(3.0 * truth.sigma, 0.01)
+
+
 def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float],
                    sources: Sequence[str]) -> float:
     """The shortest power-of-two fraction of every run holding at least ``min_fixes`` fixes
@@ -267,8 +340,7 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
 
     def enough(i: int) -> bool:
         xy = problem.runs[i].xy[problem.used(i)]
-        spread = float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)))) if len(xy) else 0.0
-        return len(xy) >= min_fixes and spread >= min_spread[i]
+        return len(xy) >= min_fixes and _spread(xy) >= min_spread[i]
 
     problem.horizon = 1.0
     for i in range(len(problem.runs)):
@@ -286,6 +358,179 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
     return horizon
 
 
+#: A whole run whose residuals beyond the truth's noise (RMS per axis) reach this share of how
+#: far its truth spreads (RMS distance from the centroid) is drift-dominated (:func:`drift_bias`).
+#: Measured: the ten 15-minute MRCLAM runs (Vicon, commanded velocities) 0.22–0.37 where
+#: fitted; the first run of every OptiOdom experiment (motion capture, 19–211 s) at most 0.032;
+#: simulated 400–600 s drives against a 0.5–1 m GPS at most 0.014.
+DRIFT_SHARE = 0.1
+
+
+def drift_bias(sources: Sequence[str], res: NDArray[np.float64], sizes: Sequence[int],
+               xy: Sequence[NDArray[np.float64]], truths: Sequence[Truth], *,
+               short: bool = False) -> str | None:
+    """A warning where a fit of whole runs is drift-dominated, else None.
+
+    Each run's start pose is fitted with the parameters. Where the odometry's dead-reckoned
+    heading wanders over a run, its track departs from the truth by metres; the fit then
+    shortens its residuals by shrinking the track about the fixes' centre (an errors-in-
+    variables attenuation, of order the square of the drift's share of the run's extent), and
+    the scale comes out too small by far more than its standard error (a real 15-minute
+    MRCLAM run: c_scale 0.741 ± 0.0014 whole, 0.90 fitted in 60 s windows). Said where a run's
+    residual RMS beyond the truth's noise (:func:`odomkit.calibrate.exact.truth_noise`) is
+    more than :data:`DRIFT_SHARE` of how far its fixes spread.
+
+    Parameters
+    ----------
+    sources : each run's name
+    res : ndarray, shape (m,)
+        The fit's position residuals [m], run after run.
+    sizes : each run's share of ``res`` (2 per fix)
+    xy : each run's compared fixes, shape (n_i, 2) [m]
+    truths : each run's truth (its noise)
+    short : the gist alone, for the end of an error message
+    """
+    sigma, _ = truth_noise(truths)
+    said = []
+    start = 0
+    for source, size, fixes in zip(sources, sizes, xy, strict=True):
+        r = res[start:start + size]
+        start += size
+        rms = float(np.sqrt(np.mean(r**2))) if size else 0.0
+        drift, spread = float(np.sqrt(max(rms**2 - sigma**2, 0.0))), _spread(fixes)
+        if spread > 0 and drift > DRIFT_SHARE * spread:
+            said.append(f"{source}: residual RMS {rms:.3g} m against a spread of {spread:.3g} m "
+                        f"({100 * drift / spread:.0f} %)")
+    if not said:
+        return None
+    if short:
+        return ("a whole-run fit of a drifting run is biased (it shrinks the track; " + "; ".join(said)
+                + "): try --window 60s")
+    return ("the whole-run calibration is drift-dominated and biased: " + "; ".join(said) + " (truth noise "
+            f"{sigma:.3g} m): the dead-reckoned heading wanders over the run, and a fit of the whole run "
+            "shortens its residuals by shrinking the track (a scale too small, a turning gain off) by far "
+            "more than its standard errors; fit windows short beside the drift, each from its own start "
+            "pose: --window 60s (calibrate_positions(..., window=\"60s\"))")
+
+
+#: Fewest truth fixes a window (``calibrate_positions(window=...)``) is fitted from: each has a
+#: start pose of its own (three parameters); a window with fewer is left out and counted.
+MIN_WINDOW_FIXES = 10
+
+
+@dataclass(frozen=True)
+class _Windows:
+    """The windows cut from every log: the kept ones as runs of their own (``logs``: the log's
+    rows over the window and ``margin`` beyond each end, ``runs``: the window's fixes), and
+    per log how many were cut, how many left out for too few fixes, for truth that does not
+    spread, and the compared fixes that fall in no window given."""
+
+    logs: list[OdometryLog]
+    runs: list[_Run]
+    min_spread: list[float]
+    cut: list[int]
+    few: list[int]
+    still: list[int]
+    between: list[int]
+    length: str  # "60 s", "20 m" or "given"
+
+
+def _window_edges(log: OdometryLog, robot: CalibratedRobot, run: _Run, spec: WindowSpec
+                  ) -> list[tuple[float, float]]:
+    """Consecutive windows of ``spec`` over the compared fixes of one log, (start, end) [s]:
+    cut as ``evaluate --window`` and ``fit-noise`` cut them (:func:`odomkit.windows.split_windows`,
+    by time or by the odometry's travel with the robot file's values), over the rows between
+    the first and the last compared fix; the tail shorter than a window joins the last one, so
+    that every fix is compared."""
+    t = np.asarray(log.t, dtype=float)
+    valid = (t >= run.t[0]) & (t <= run.t[-1])
+    travel = cumulative_travel(body_steps(robot, log))
+    found, _ = split_windows(t, travel, spec, 0.0, valid=valid)
+    if not found:
+        raise InputError(why_no_windows(t, travel, valid, spec, 0.0, 0), source=log.source)
+    edges = [float(run.t[0])] + [float(t[w.end]) for w in found[:-1]] + [float(run.t[-1])]
+    return list(zip(edges[:-1], edges[1:], strict=True))
+
+
+def _given_edges(log: OdometryLog, given: Sequence[tuple[float, float]], k: int) -> list[tuple[float, float]]:
+    """Windows given as (start, end) log times [s], checked: inside the log, each end after its
+    start, in order and not overlapping (a fix is compared once)."""
+    t0, t1 = float(log.t[0]), float(log.t[-1])
+    out: list[tuple[float, float]] = []
+    for j, pair in enumerate(given):
+        try:
+            a, b = (float(x) for x in pair)
+        except (TypeError, ValueError):
+            raise InputError(f"window {j + 1} of run {k + 1} must be a (start, end) pair of times in "
+                             f"seconds, got {pair!r}", source=log.source) from None
+        if not (np.isfinite(a) and np.isfinite(b) and a < b):
+            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) must end after it starts",
+                             source=log.source)
+        if a < t0 or b > t1:
+            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) reaches outside the log "
+                             f"({t0:.6g}..{t1:.6g} s)", source=log.source)
+        if out and a < out[-1][1]:
+            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) starts before window {j} ends "
+                             f"({out[-1][1]:.6g} s): give the windows in order, not overlapping",
+                             source=log.source)
+        out.append((a, b))
+    if not out:
+        raise InputError(f"no window given for run {k + 1}", source=log.source)
+    return out
+
+
+def _cut_windows(runs: Sequence[OdometryLog], truths: Sequence[Truth], with_truth: list[_Run],
+                 robot: CalibratedRobot, spec: WindowSpec | None,
+                 given: Sequence[Sequence[tuple[float, float]]] | None, margin: float) -> _Windows:
+    """Every log cut into windows (``spec``, or the (start, end) times ``given`` per log), each
+    window's fixes those stamped inside it; a window with fewer than :data:`MIN_WINDOW_FIXES`
+    fixes, or whose fixes do not spread (:func:`_min_spread`), is left out and counted. A
+    window's log rows reach ``margin`` [s] beyond its ends (the fitted clock offset's range),
+    so that its fixes are compared at any offset tried."""
+    if given is not None and len(given) != len(runs):
+        raise InputError(f"give the windows of each run: {len(runs)} run(s), windows for {len(given)}")
+    out = _Windows([], [], [], [], [], [], [], "given" if spec is None else str(spec))
+    for k, (log, truth, run) in enumerate(zip(runs, truths, with_truth, strict=True)):
+        t = np.asarray(log.t, dtype=float)
+        if spec is not None:
+            edges = _window_edges(log, robot, run, spec)
+        else:
+            assert given is not None
+            edges = _given_edges(log, given[k], k)
+        taken = np.zeros(run.t.size, dtype=bool)
+        few = still = 0
+        for j, (a, b) in enumerate(edges):
+            last = j == len(edges) - 1 or edges[j + 1][0] > b
+            inside = (run.t >= a) & ((run.t <= b) if last else (run.t < b)) & ~taken
+            taken |= inside
+            if np.count_nonzero(inside) < MIN_WINDOW_FIXES:
+                few += 1
+                continue
+            if _spread(run.xy[inside]) < _min_spread(truth):
+                still += 1
+                continue
+            i0 = max(int(np.searchsorted(t, a - margin, side="right")) - 1, 0)
+            i1 = min(int(np.searchsorted(t, b + margin, side="left")), t.size - 1)
+            piece = log.rows(i0, i1 + 1)
+            into = f"{a - t[0]:.4g}..{b - t[0]:.4g} s into the log"
+            out.logs.append(replace(piece, source=f"{log.source}, window {j + 1} of {len(edges)} ({into})"))
+            out.runs.append(_Run(np.asarray(piece.t, dtype=float), run.xy[inside], run.t[inside], 0, 0,
+                                 margin))
+            out.min_spread.append(_min_spread(truth))
+        out.cut.append(len(edges))
+        out.few.append(few)
+        out.still.append(still)
+        out.between.append(int(np.count_nonzero(~taken)))
+    if not out.runs:
+        fewest = f"fewer than {MIN_WINDOW_FIXES} fixes"
+        raise InputError(f"no window to calibrate from: of {sum(out.cut)} window(s) ({out.length}), "
+                         f"{sum(out.still)} hold truth that does not spread (standing or turning on the "
+                         f"spot) and {sum(out.few)} hold {fewest}; check the truth's clock, or give longer "
+                         "windows",
+                         source=runs[0].source if len(runs) == 1 else None)
+    return out
+
+
 def calibrate_positions(
     runs: Sequence[OdometryLog],
     truths: Sequence[Truth],
@@ -296,6 +541,8 @@ def calibrate_positions(
     method: Method = "exact",
     fit_time_offset: bool = False,
     steering_cubic: bool = False,
+    window: WindowSpec | str | None = None,
+    windows: Sequence[Sequence[tuple[float, float]]] | None = None,
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to truth positions on the truth's own clock.
 
@@ -323,14 +570,30 @@ def calibrate_positions(
     steering_cubic : bool
         A car's ``steering_cubic`` [rad⁻²] is fitted too, as a fourth parameter (a steering
         ratio that varies with the angle; only large steering angles identify it).
+    window : WindowSpec or str, optional
+        Cut each run into consecutive windows of this length (``"60s"``: seconds, ``"20m"``:
+        metres of the odometry's travel with the robot's values; :func:`odomkit.windows.parse_window`),
+        cut as ``evaluate --window`` cuts them, the tail shorter than a window joined to the last
+        one. Each window is fitted from a start pose of its own (three nuisance parameters per
+        window), the robot's parameters and the clock offset shared by all: a long run whose
+        dead-reckoned heading wanders (metres of drift) biases a fit of the whole run, which can
+        shrink the path to shorten the residuals, and windows short beside the drift do not. A
+        window with fewer than :data:`MIN_WINDOW_FIXES` fixes, or whose fixes do not spread
+        three times the truth's σ (at least 1 cm), is left out and counted (an error if none
+        remains); the windows are the clusters of ``std_errors_between_runs``.
+    windows : sequence (one per run) of sequences of (start, end) [s], optional
+        The windows given instead, as log times (in order, not overlapping, inside the log);
+        fixes stamped between them are not compared.
 
     Returns
     -------
     ExactCalibration
         ``source = "positions"``; ``values``, ``std_errors``, ``cov`` of all the robot's
         parameters (a fixed one has zero variance); ``time_offset`` and
-        ``time_offset_std_error`` [s] when fitted; ``notes`` list the stages and each run's
-        fitted start pose.
+        ``time_offset_std_error`` [s] when fitted (and ``time_offset_std_error_between_runs``
+        from the runs' or windows' spread); ``notes`` list the stages and each run's
+        fitted start pose (with windows: each run's windows fitted and left out);
+        ``n_windows``, ``windows_left_out`` and ``window`` with windows.
     """
     if len(runs) < 1:
         raise InputError("calibration needs at least one run")
@@ -338,6 +601,12 @@ def calibrate_positions(
         raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle, Car, Unicycle "
                          f"and GyroOdometry robots, got {type(robot).__name__}")
     min_first_fixes = validate.positive_int(min_first_fixes, "min_first_fixes")
+    if window is not None and windows is not None:
+        raise InputError("give window (a length) or windows (the (start, end) times), not both")
+    spec = parse_window(window) if isinstance(window, str) else window
+    if spec is not None and not isinstance(spec, WindowSpec):
+        raise InputError(f"window must be a length such as \"60s\" or \"20m\" (or a WindowSpec), "
+                         f"got {window!r}")
     model = calibration_model(robot, runs, steering_cubic=steering_cubic)
     unknown = sorted(set(fixed) - set(model.names))
     if unknown:
@@ -346,37 +615,65 @@ def calibrate_positions(
                         for name, why in model.unobservable.items() if name not in fixed]
     fixed = set(fixed) | set(model.unobservable)
     free = np.array([k for k, n in enumerate(model.names) if n not in fixed], dtype=np.intp)
-    with_truth = _runs_with_truth(runs, truths, MAX_TIME_OFFSET if fit_time_offset else 0.0)
-    problem = _Problem(model, with_truth, runs, free, method, fit_time_offset)
+    margin = MAX_TIME_OFFSET if fit_time_offset else 0.0
+    with_truth = _runs_with_truth(runs, truths, margin)
+    cut = None
+    fitted_logs, fitted_runs, min_spread = list(runs), with_truth, [_min_spread(t) for t in truths]
+    if spec is not None or windows is not None:
+        cut = _cut_windows(runs, truths, with_truth, robot, spec, windows, margin)
+        fitted_logs, fitted_runs, min_spread = cut.logs, cut.runs, cut.min_spread
+        model = calibration_model(robot, fitted_logs, steering_cubic=steering_cubic)
+    problem = _Problem(model, fitted_runs, fitted_logs, free, method, fit_time_offset)
 
-    horizon = _first_horizon(problem, min_first_fixes, [max(3.0 * t.sigma, 0.01) for t in truths],
-                             [log.source for log in runs])
-    q = np.concatenate([model.p0[free], [0.0] if fit_time_offset else [], problem.align_starts(model.p0)])
-    lower, upper = _bounds(model, free, len(with_truth), fit_time_offset)
+    # A window holds fewer fixes than a run: its first stage needs no more than it has.
+    first_fixes = min_first_fixes if cut is None else min(min_first_fixes, min(r.t.size for r in fitted_runs))
+    horizon = _first_horizon(problem, first_fixes, min_spread, [log.source for log in fitted_logs])
+    g = np.concatenate([model.p0[free], [0.0] if fit_time_offset else []])
+    n_global, n_starts = g.size, 3 * len(fitted_runs)
+    # Whole runs: the parameters and the start poses fitted together, from each run's SE(2)
+    # alignment over the first horizon. Windows: the parameters alone, each window from its
+    # best start pose for them (_Problem.reduced): no dense Jacobian of 3 columns per window.
+    joint = cut is None
+    starts = problem.reduced(g)[2] if joint else None
+    lower, upper = _bounds(model, free, len(fitted_runs) if joint else 0, fit_time_offset)
     while True:
-        n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(with_truth)))
-        if n_res > q.size:
+        n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(fitted_runs)))
+        if n_res > n_global + n_starts and (joint or n_global):
             # Bounded (trust-region reflective): over a short first horizon a parameter the
             # path does not yet excite (the wheel base before the first turn) is free to run
             # off to ±1e185 under plain Levenberg–Marquardt, and no later stage brings it back.
-            sol = least_squares(lambda x: problem.residuals_and_jacobian(x)[0], q,
-                                jac=lambda x: problem.residuals_and_jacobian(x)[1], method="trf",
-                                bounds=(lower, upper), x_scale="jac", xtol=1e-12, ftol=1e-12,
-                                gtol=1e-12, max_nfev=200)
+            if joint:
+                assert starts is not None
+                sol = least_squares(lambda x: problem.residuals_and_jacobian(x)[0],
+                                    np.concatenate([g, starts.reshape(-1)]),
+                                    jac=lambda x: problem.residuals_and_jacobian(x)[1], method="trf",
+                                    bounds=(lower, upper), x_scale="jac", xtol=1e-12, ftol=1e-12,
+                                    gtol=1e-12, max_nfev=200)
+            else:
+                sol = least_squares(lambda x: problem.reduced(x)[0], g,
+                                    jac=lambda x: problem.reduced(x)[1], method="trf",
+                                    bounds=(lower, upper), x_scale="jac", xtol=1e-12, ftol=1e-12,
+                                    gtol=1e-12, max_nfev=200)
             if not np.all(np.isfinite(sol.x)):
                 raise ModelError("the calibration diverged to non-finite parameters; check the "
                                  "truth's clock and the robot file's units")
-            q = sol.x
-            notes.append(f"horizon {horizon:.4g} of each run: {n_res // 2} fixes, residual rms "
-                         f"{float(np.sqrt(np.mean(sol.fun**2))):.4g} m")
+            g = sol.x[:n_global]
+            if joint:
+                starts = sol.x[n_global:].reshape(-1, 3)
+            notes.append(f"horizon {horizon:.4g} of each {'run' if joint else 'window'}: {n_res // 2} fixes, "
+                         f"residual rms {float(np.sqrt(np.mean(sol.fun**2))):.4g} m")
         if horizon >= 1.0:
             break
         horizon = min(1.0, 2 * horizon)
         problem.horizon = horizon
+    # The shared parameters' rows with each run's (window's) start pose marginalised.
+    res, jac, starts, sizes = problem.reduced(g, starts)
+    biased = drift_bias([log.source for log in fitted_logs], res, sizes, [r.xy for r in fitted_runs],
+                        truths) if joint else None
     names = [*(model.names[k] for k in free), *(["truth time offset"] if fit_time_offset else [])]
     at_bound = [name for j, name in enumerate(names)
-                if np.isclose(q[j], lower[j], rtol=1e-6, atol=0.0)
-                or np.isclose(q[j], upper[j], rtol=1e-6, atol=0.0)]
+                if np.isclose(g[j], lower[j], rtol=1e-6, atol=0.0)
+                or np.isclose(g[j], upper[j], rtol=1e-6, atol=0.0)]
     if at_bound:
         ranges = {"steering_offset": f"steering offset ±{MAX_STEERING_OFFSET} rad",
                   "steering_cubic": "steering_cubic ±1/s² for the largest angle s driven (a ratio that "
@@ -386,16 +683,21 @@ def calibrate_positions(
         said = "; ".join(dict.fromkeys(ranges.get(name, scale) for name in at_bound))
         raise ModelError(f"the calibration ran to the edge of the plausible range for "
                          f"{', '.join(at_bound)} ({said}): check the channel signs, the robot file and the "
-                         "truth's clock, and that the runs turn both ways")
-    res, jac = problem.residuals_and_jacobian(q)
-    dof = res.size - q.size
+                         "truth's clock, and that the runs turn both ways"
+                         + ("" if biased is None else "; " + str(drift_bias(
+                             [log.source for log in fitted_logs], res, sizes, [r.xy for r in fitted_runs],
+                             truths, short=True))))
+    dof = res.size - g.size - n_starts
     if dof <= 0:
-        raise InputError(f"{res.size} position residuals cannot determine {q.size} parameters "
+        raise InputError(f"{res.size} position residuals cannot determine {g.size + n_starts} parameters "
                          "(the robot's and each run's start pose): give longer runs or more truth")
     var_res = float(res @ res) / dof
-    warn_if_drifting(var_res, res.size, truths)
+    warn_if_drifting(var_res, res.size, truths, windowed=cut is not None)
+    if biased is not None:
+        warnings.warn(biased, UserWarning, stacklevel=2)
+    # The shared block of σ̂²(JᵀJ)⁻¹ with the start poses marginalised: the reduced Jacobian's.
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
-    p, delta, starts = problem.split(q)
+    p, delta, _ = problem.split(g)
     cov = np.zeros((len(model.names), len(model.names)))
     cov[np.ix_(free, free)] = cov_q[: free.size, : free.size]
     std = np.sqrt(np.clip(np.diag(cov), 0.0, None))
@@ -406,28 +708,52 @@ def calibrate_positions(
     if np.any(p[np.asarray(model.positive)] <= 0):
         raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; check the "
                          "channel signs and the robot file")
-    for log, start, run in zip(runs, starts, with_truth, strict=True):
+    for k, (log, run) in enumerate(zip(runs, with_truth, strict=True)):
         left = ([f"{run.outside} outside the log's span"] if run.outside else []) + (
             [f"{run.near_ends} within {run.margin:g} s of its ends (where a fitted clock offset could "
              "move them out)"] if run.near_ends else [])
+        if cut is not None and cut.between[k]:
+            left.append(f"{cut.between[k]} between the windows given")
         left_out = f"; truth fixes left out: {' and '.join(left)}" if left else ""
-        notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
-                     f"{start[2]:.4g} rad){left_out}")
+        if cut is None:
+            start = starts[k]
+            notes.append(f"{log.source}: start pose fitted at ({start[0]:.4g} m, {start[1]:.4g} m, "
+                         f"{start[2]:.4g} rad){left_out}")
+            continue
+        out = cut.few[k] + cut.still[k]
+        why = " and ".join(
+            [f"{cut.still[k]} whose truth does not spread {_min_spread(truths[k]):.3g} m (standing or "
+             "turning on the spot)"] * bool(cut.still[k])
+            + [f"{cut.few[k]} with fewer than {MIN_WINDOW_FIXES} truth fixes"] * bool(cut.few[k]))
+        notes.append(f"{log.source}: {cut.cut[k] - out} of {cut.cut[k]} window(s) ({cut.length}) fitted, "
+                     "each from its own start pose" + (f"; left out: {why}" if out else "") + left_out)
     if any(truth.theta is not None for truth in truths):
         # The fit is on positions so that any truth, GPS included, enters it alike; a truth
         # that measures heading still pins the start heading better than positions alone.
         notes.append("the truth's heading is not compared (every fix is compared as a position); "
                      "it is used where the track starts from the truth (evaluate, track)")
-    between = None
-    if len(runs) > 1:
-        between = _between_runs_of_positions(problem, res, jac, len(model.names))
+    between = offset_between = None
+    clusters = "windows" if cut is not None else "runs"
+    if len(fitted_runs) > 1:
+        # Each run's (window's) rows are already orthogonal to its own start pose (the
+        # reduced Jacobian: Frisch–Waugh–Lovell), so the runs' spread is taken there; the
+        # clock offset, shared too, is the last row of T.
+        n_names = len(model.names)
+        T = np.zeros((n_names + int(fit_time_offset), problem.n_global))
+        T[problem.free, np.arange(problem.free.size)] = 1.0
+        if fit_time_offset:
+            T[n_names, free.size] = 1.0
+        spread_se, _ = between_runs(jac, res, sizes, T)
+        if spread_se is not None:
+            between = spread_se[:n_names]
+            offset_between = float(spread_se[n_names]) if fit_time_offset else None
         if between is None:
-            notes.append("no standard errors between runs: a run's own start pose leaves a parameter "
-                         "undetermined without it")
-        elif scattered := between_runs_warning(model.names, p, std, between, len(runs)):
+            notes.append(f"no standard errors between {clusters}: a {clusters[:-1]}'s own start pose leaves "
+                         "a parameter undetermined without it")
+        elif scattered := between_runs_warning(model.names, p, std, between, len(fitted_runs), clusters):
             warnings.warn(scattered, UserWarning, stacklevel=2)
-    travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(runs))]
-    spread = [float(np.sqrt(np.mean(np.sum((r.xy - r.xy.mean(axis=0)) ** 2, axis=1)))) for r in with_truth]
+    travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(fitted_runs))]
+    spread = [_spread(r.xy) for r in fitted_runs]
     sensitivity = float(np.mean([s / d if d > 0 else 0.0 for s, d in zip(spread, travelled, strict=True)]))
     return ExactCalibration(
         robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov, corr=corr,
@@ -437,36 +763,12 @@ def calibrate_positions(
         time_offset=delta if fit_time_offset else None,
         time_offset_std_error=(float(np.sqrt(max(cov_q[free.size, free.size], 0.0))) if fit_time_offset
                                else None),
+        time_offset_std_error_between_runs=offset_between,
         std_errors_between_runs=between,
+        n_windows=len(fitted_runs) if cut is not None else None,
+        windows_left_out=sum(cut.few) + sum(cut.still) if cut is not None else 0,
+        window=cut.length if cut is not None else None,
     )
-
-
-def _between_runs_of_positions(problem: _Problem, res: NDArray[np.float64], jac: NDArray[np.float64],
-                               n_params: int) -> NDArray[np.float64] | None:
-    """The robot parameters' standard errors between runs (:func:`odomkit.calibrate.exact.between_runs`)
-    for a fit with a start pose per run.
-
-    Each run's start pose is its own (a nuisance parameter of one cluster): by the
-    Frisch–Waugh–Lovell theorem the shared parameters' estimate is the one from the rows of
-    each run made orthogonal to that run's own start-pose columns, so the runs' spread is
-    taken there (the residuals at the solution are orthogonal to those columns already)."""
-    n_global = problem.n_global
-    blocks, sizes = [], []
-    start = 0
-    for i in range(len(problem.runs)):
-        size = 2 * int(np.count_nonzero(problem.used(i)))
-        rows = slice(start, start + size)
-        start += size
-        own = jac[rows, n_global + 3 * i:n_global + 3 * i + 3]
-        shared = jac[rows, :n_global]
-        coef, *_ = np.linalg.lstsq(own, shared, rcond=None)
-        blocks.append(shared - own @ coef)
-        sizes.append(size)
-    # Map the shared q (free robot parameters, then the clock offset) onto every robot parameter.
-    T = np.zeros((n_params, n_global))
-    T[problem.free, np.arange(problem.free.size)] = 1.0
-    between, _ = between_runs(np.concatenate(blocks), res, sizes, T)
-    return between
 
 
 def runs_disagree(joint: ExactCalibration, alone: Sequence[ExactCalibration | None],

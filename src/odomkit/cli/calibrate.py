@@ -4,7 +4,7 @@
 
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
-        [--truth GT ... [TRUTH OPTIONS]]
+        [--truth GT ... [TRUTH OPTIONS]] [--window 60s|20m]
         [--ros-yaml params.yaml --wheel-radius R] [--twist-speed V --controller-period T]
         [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
@@ -14,7 +14,9 @@ LOG OPTIONS are those of ``odomkit track`` (:mod:`odomkit.cli.log_options`), TRU
 the shared ones (:mod:`odomkit.cli.truth_options`). With ``--truth`` (the i-th for the i-th
 run) the fit compares the odometry with every truth fix on the truth's own clock and fits
 each run's start pose (:func:`odomkit.calibrate.positions.calibrate_positions`):
-position-only, noisy truth such as GPS works.
+position-only, noisy truth such as GPS works. ``--window`` cuts each run into windows, each
+fitted from its own start pose (a long drive whose heading wanders biases a whole-run fit);
+without ``--truth`` the logs' own ground truth is then compared as position fixes.
 """
 
 from __future__ import annotations
@@ -83,6 +85,11 @@ def calibrate_command(
     fit_steering_cubic: Annotated[bool, typer.Option(
         "--fit-steering-cubic", help="car: fit steering_cubic too, a steering ratio that varies with the "
                                      "angle (needs large steering angles in the logs).")] = False,
+    window: Annotated[str | None, typer.Option(
+        "--window", help="Fit the truth positions in consecutive windows of this length, each from its own "
+                         "start pose, the robot's parameters shared: 60s (time) or 20m (odometry travel). "
+                         "For long drives whose heading drifts (a whole-run fit shrinks the path); "
+                         "without --truth the logs' own truth is compared as positions.")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
     truth: TruthListOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
@@ -104,7 +111,7 @@ def calibrate_command(
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
                               overwrite=force, log_options=options, truth=per_run, own_truth=base,
-                              heading_weight=heading_weight, steering_cubic=fit_steering_cubic)
+                              heading_weight=heading_weight, steering_cubic=fit_steering_cubic, window=window)
     if json_out:
         print_json(with_warnings(out, warned))
         return
@@ -113,18 +120,25 @@ def calibrate_command(
 
 def _print_text(out: dict[str, Any]) -> None:
     if out["method"] == "exact":
-        print(f"exact calibration from {out['source']} of {out['n_runs']} run(s)")
+        windows = out.get("windows")
+        cut = "" if windows is None else (
+            f" in {windows['fitted']} window(s) of {windows['length']}, each from its own start pose"
+            + (f" ({windows['left_out']} left out, see the notes)" if windows["left_out"] else ""))
+        print(f"exact calibration from {out['source']} of {out['n_runs']} run(s){cut}")
         between = out.get("std_errors_between_runs", {})
+        clusters = "runs" if windows is None else "windows"
         for name, value in out["parameters"].items():
             # The standard error to two significant digits: a fixed six decimals shows
             # "± 0.000000" for a steering offset pinned to 1e-7 rad.
             line = f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}"
             if name in between:  # from the runs' spread, where the fit's own may be optimistic
-                line += f"  (between runs ± {between[name]:.2g})"
+                line += f"  (between {clusters} ± {between[name]:.2g})"
             print(line)
         offset = out.get("truth_time_offset")
         if offset is not None:  # a fix stamped t is the pose at log time t - offset
             how = f"± {offset['std_error']:.2g}" if offset.get("fitted") else "(given)"
+            if "std_error_between_runs" in offset:
+                how += f"  (between {clusters} ± {offset['std_error_between_runs']:.2g})"
             way = "lag" if offset["value"] >= 0 else "lead"
             print(f"  {'truth clock':16s} {offset['value']:+.6f} s {how}  "
                   f"(the truth's fixes {way} the log by {abs(offset['value']):.3g} s)")

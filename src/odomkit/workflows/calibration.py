@@ -38,6 +38,7 @@ from odomkit.io.ros import write_ros2_yaml
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.robot import Car, DiffDrive, Tricycle
 from odomkit.truth import Truth
+from odomkit.windows import WindowSpec, parse_window
 from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, load_truth
@@ -74,6 +75,7 @@ def calibrate_files(
     plot: str | Path | None = None,
     steering_cubic: bool = False,
     cubic_hint: str = CUBIC_HINT,
+    window: str | WindowSpec | None = None,
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -116,6 +118,17 @@ def calibrate_files(
         fixes; ``--fit-steering-cubic``).
     cubic_hint : the advice a car whose drive's halves disagree gets (default
         :data:`CUBIC_HINT`, the flag; a caller without it names its own way).
+    window : str or WindowSpec, optional
+        ``--window``: cut each run into consecutive windows of this length (``"60s"`` time,
+        ``"20m"`` odometry travel; :func:`odomkit.windows.parse_window`), each fitted from its
+        own start pose, the robot's parameters and the truth's clock offset shared
+        (:func:`odomkit.calibrate.positions.calibrate_positions` ``window=``): a long drive
+        whose dead-reckoned heading wanders biases a fit of the whole run. Exact only; with
+        the logs' own ground truth (no ``truth``) their positions are compared as fixes on the
+        log's own clock (no clock offset fitted; the heading is not compared), so ``--from``
+        and ``--heading-weight`` do not apply. JSON ``windows`` (length, fitted, left_out);
+        ``std_errors_between_runs`` are then between windows, and a single run's halves are
+        not calibrated alone (``halves`` absent).
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -126,6 +139,7 @@ def calibrate_files(
     from odomkit.workflows.results import paths_given, truths_per_log
 
     run_paths = paths_given(run_paths, "run")
+    spec = parse_window(window) if isinstance(window, str) else window
     if truth is not None:
         truth = truths_per_log(truth, len(run_paths), "run")
     truth_paths = [t.path for t in truth or () if t.path is not None]
@@ -145,6 +159,8 @@ def calibrate_files(
             stray.insert(0, "--from")
         if steering_cubic:
             stray.append("--fit-steering-cubic")
+        if spec is not None:
+            stray.append("--window")
         if stray:
             raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
         if side is None:
@@ -165,11 +181,20 @@ def calibrate_files(
         raise InputError("UMBmark needs a differential-drive robot (type = \"diff\")",
                          source=str(robot_path))
     runs = [load_log(p, robot, log_options or LogOptions()) for p in run_paths]
+    own_columns = False  # the logs' own gt_* columns compared as fixes (--window without --truth)
     if truth is None and method == "exact" and any(isinstance(log.meta.get("truth"), Truth) for log in runs):
         # A bag's GPS topic (--truth-topic): position-only fixes on their own clock, compared
         # one by one as --truth files are.
         _refuse_trajectory_flags(method, source, exact_kwargs)
         truth = [own_truth or TruthOptions()] * len(runs)
+    elif truth is None and method == "exact" and spec is not None:
+        # Windows each start from a pose of their own, fitted as calibrate_positions fits a
+        # run's: the logs' own truth is compared as fixes, on the log's clock (nothing to fit;
+        # --truth-time-offset still moves it).
+        _refuse_trajectory_flags(method, source, exact_kwargs, why="--window")
+        own = own_truth or TruthOptions()
+        truth = [replace(own, time_offset=own.time_offset or 0.0)] * len(runs)
+        own_columns = True
     truth_table = read_truth_table(robot_path)  # kept in --out-robot; its offset refitted with --truth
     turning: Callable[[], tuple[float, float]] | None = None  # the drive's turning gain, with a truth
     with numeric_guard("the calibration"):
@@ -195,7 +220,7 @@ def calibrate_files(
             gaps = [o.max_gap for o in truth]
             def fit_from(start: Any) -> ExactCalibration:
                 return calibrate_positions(runs, truths, start, fit_time_offset=given is None,
-                                           steering_cubic=steering_cubic)
+                                           steering_cubic=steering_cubic, window=spec)
 
             try:
                 first = _fit_said(fit_from, robot)
@@ -222,16 +247,17 @@ def calibrate_files(
                 # Each run alone (each half) from the start the joint fit came from.
                 summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_positions(
                     [runs[i]], [truths[i]], start, fit_time_offset=given is None,
-                    steering_cubic=steering_cubic))
-            else:
+                    steering_cubic=steering_cubic, window=spec))
+            elif spec is None:  # windows: their spread is the between-window standard errors
                 summary["halves"] = _each_half_alone(cal, runs[0], truths[0], start, given is None,
                                                      steering_cubic, cubic_hint, nominal=robot)
             new_robot = cal.robot
-            summary["truth_time_offset"] = (
-                {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
-                {**summary["truth_time_offset"], "fitted": True})
-            truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
-            truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
+            if not own_columns:  # the gt_* columns are on the log's clock: no offset to report
+                summary["truth_time_offset"] = (
+                    {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
+                    {**summary["truth_time_offset"], "fitted": True})
+                truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
+                truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
         else:
             # A single trajectory's residuals are held against the truth's stated noise.
             stated = own_truth.sigma if own_truth is not None else None
@@ -574,16 +600,18 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     return [half.to_dict() for half in halves]
 
 
-def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any]) -> None:
-    """Calibration from truth fixes (``--truth``, or a bag's GPS topic) takes none of the
-    trajectory fit's flags: one line naming the ones given."""
+def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any],
+                             why: str = "--truth") -> None:
+    """Calibration from truth fixes (``--truth``, a bag's GPS topic, or ``--window``: ``why``)
+    takes none of the trajectory fit's flags: one line naming the ones given."""
     if method != "exact":
-        raise InputError("--truth applies to --method exact")
+        raise InputError(f"{why} applies to --method exact")
     stray = (["--from"] if source is not None else []) + [
         _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
     if stray:
-        raise InputError(f"{', '.join(stray)} does not apply with --truth: every truth fix is compared "
-                         "as a position, and each run's start pose is fitted")
+        each = "window's" if why == "--window" else "run's"
+        raise InputError(f"{', '.join(stray)} does not apply with {why}: every truth fix is compared "
+                         f"as a position, and each {each} start pose is fitted")
 
 
 def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,
