@@ -87,6 +87,13 @@ def test_bad_inputs_are_named():
         calibrate_positions([log], [late], NOMINAL_CAR)
     with pytest.raises(ModelError, match="fixed names wheel_to_axle"):
         calibrate_positions([log], [truth], NOMINAL_CAR, fixed=("wheel_to_axle",))
+    # On a Unix clock (MRCLAM, a ROS bag) the spans are said to the millisecond, not as
+    # 1.24844e+09..1.24844e+09 s.
+    epoch = 1248444187.156
+    on_epoch = OdometryLog(log.t + epoch, log.channels)
+    with pytest.raises(InputError, match=r"\(1248444187\.156\.\.1248444237\.056 s; the truth covers "
+                                         r"1248454187\.\d{3}\.\.\d+\.\d{3} s\)"):
+        calibrate_positions([on_epoch], [Truth(late.t + epoch, late.xy, None, 3.0, "late.txt")], NOMINAL_CAR)
 
 
 def test_a_differential_drive_from_position_only_truth():

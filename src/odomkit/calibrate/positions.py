@@ -73,7 +73,7 @@ from odomkit.calibrate.residuals import (
 from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
 from odomkit.kinematics import Method, body_steps
-from odomkit.log import OdometryLog
+from odomkit.log import OdometryLog, clock_text
 from odomkit.truth import Truth
 from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
@@ -152,9 +152,9 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
         if tau.size < 4:
             within = f" (less {margin:g} s at each end, the largest clock offset fitted)" if margin else ""
             raise InputError(f"only {tau.size} truth fixes lie inside the log's time span "
-                             f"({t[0]:.6g}..{t[-1]:.6g} s{within}; the truth covers {truth.t[0]:.6g}.."
-                             f"{truth.t[-1]:.6g} s): check the clocks (--truth-time-unit, "
-                             "--truth-time-offset)", source=truth.source)
+                             f"({clock_text(t[0])}..{clock_text(t[-1])} s{within}; the truth covers "
+                             f"{clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s): check the clocks "
+                             "(--truth-time-unit, --truth-time-offset)", source=truth.source)
         beyond = int(np.count_nonzero(~compared_fixes(t, truth.t)))
         out.append(_Run(t, truth.xy[inside], tau, beyond, int(np.count_nonzero(~inside)) - beyond, margin))
     return out
@@ -464,14 +464,14 @@ def _given_edges(log: OdometryLog, given: Sequence[tuple[float, float]], k: int)
             raise InputError(f"window {j + 1} of run {k + 1} must be a (start, end) pair of times in "
                              f"seconds, got {pair!r}", source=log.source) from None
         if not (np.isfinite(a) and np.isfinite(b) and a < b):
-            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) must end after it starts",
+            raise InputError(f"window {j + 1} ({clock_text(a)}..{clock_text(b)} s) must end after it starts",
                              source=log.source)
         if a < t0 or b > t1:
-            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) reaches outside the log "
-                             f"({t0:.6g}..{t1:.6g} s)", source=log.source)
+            raise InputError(f"window {j + 1} ({clock_text(a)}..{clock_text(b)} s) reaches outside the log "
+                             f"({clock_text(t0)}..{clock_text(t1)} s)", source=log.source)
         if out and a < out[-1][1]:
-            raise InputError(f"window {j + 1} ({a:.6g}..{b:.6g} s) starts before window {j} ends "
-                             f"({out[-1][1]:.6g} s): give the windows in order, not overlapping",
+            raise InputError(f"window {j + 1} ({clock_text(a)}..{clock_text(b)} s) starts before window {j} "
+                             f"ends ({clock_text(out[-1][1])} s): give the windows in order, not overlapping",
                              source=log.source)
         out.append((a, b))
     if not out:
