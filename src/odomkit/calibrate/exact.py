@@ -146,6 +146,10 @@ class ExactCalibration:
         ``std_errors_between_runs``), how many were left out (too few fixes, truth that does not
         spread), and their length (``"60 s"``, ``"20 m"``; ``"given"``: (start, end) times given);
         None, 0, None for a fit of whole runs.
+    drift_dominated : bool
+        ``positions`` of whole runs: a run's residuals are mostly the odometry's own drift,
+        not the truth's noise, so the fit is biased (:func:`odomkit.calibrate.positions.drift_bias`
+        warned; JSON ``drift_dominated``, given only where True). Fit such runs in windows.
     """
 
     robot: CalibratedRobot
@@ -169,6 +173,7 @@ class ExactCalibration:
     n_windows: int | None = None
     windows_left_out: int = 0
     window: str | None = None
+    drift_dominated: bool = False
 
     @property
     def E_d(self) -> float:
@@ -211,6 +216,8 @@ class ExactCalibration:
             out["truth_time_offset"] = {"value": self.time_offset, "std_error": self.time_offset_std_error}
             if self.time_offset_std_error_between_runs is not None:
                 out["truth_time_offset"]["std_error_between_runs"] = self.time_offset_std_error_between_runs
+        if self.drift_dominated:
+            out["drift_dominated"] = True
         if self.n_windows is not None:
             out["windows"] = {"length": self.window, "fitted": self.n_windows,
                               "left_out": self.windows_left_out}

@@ -77,8 +77,9 @@ from odomkit.log import OdometryLog, clock_text
 from odomkit.truth import Truth
 from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
-__all__ = ["DRIFT_SHARE", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET", "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES",
-           "calibrate_positions", "compared_fixes", "drift_bias", "runs_disagree", "scale_range"]
+__all__ = ["DRIFT_GIST", "DRIFT_SHARE", "DRIFT_WINDOW", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET",
+           "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES", "calibrate_positions", "compared_fixes", "drift_bias",
+           "runs_disagree", "scale_range"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -364,6 +365,13 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
 #: fitted; the first run of every OptiOdom experiment (motion capture, 19–211 s) at most 0.032;
 #: simulated 400–600 s drives against a 0.5–1 m GPS at most 0.014.
 DRIFT_SHARE = 0.1
+#: The window a drift-dominated run is fitted in instead (named in :func:`drift_bias`'s advice;
+#: ``odomkit report``, which calibrates for the user, calibrates such a run in it): short
+#: beside the MRCLAM runs' drift, long enough for tens of fixes of a 1 Hz GPS.
+DRIFT_WINDOW = "60s"
+#: How :func:`drift_bias`'s gist begins, in the error of a whole-run fit that ran to the edge
+#: of its range on a drifting run.
+DRIFT_GIST = "a whole-run fit of a drifting run is biased"
 
 
 def drift_bias(sources: Sequence[str], res: NDArray[np.float64], sizes: Sequence[int],
@@ -404,13 +412,12 @@ def drift_bias(sources: Sequence[str], res: NDArray[np.float64], sizes: Sequence
     if not said:
         return None
     if short:
-        return ("a whole-run fit of a drifting run is biased (it shrinks the track; " + "; ".join(said)
-                + "): try --window 60s")
+        return f"{DRIFT_GIST} (it shrinks the track; " + "; ".join(said) + f"): try --window {DRIFT_WINDOW}"
     return ("the whole-run calibration is drift-dominated and biased: " + "; ".join(said) + " (truth noise "
             f"{sigma:.3g} m): the dead-reckoned heading wanders over the run, and a fit of the whole run "
             "shortens its residuals by shrinking the track (a scale too small, a turning gain off) by far "
             "more than its standard errors; fit windows short beside the drift, each from its own start "
-            "pose: --window 60s (calibrate_positions(..., window=\"60s\"))")
+            f"pose: --window {DRIFT_WINDOW} (calibrate_positions(..., window=\"{DRIFT_WINDOW}\"))")
 
 
 #: Fewest truth fixes a window (``calibrate_positions(window=...)``) is fitted from: each has a
@@ -768,6 +775,7 @@ def calibrate_positions(
         n_windows=len(fitted_runs) if cut is not None else None,
         windows_left_out=sum(cut.few) + sum(cut.still) if cut is not None else 0,
         window=cut.length if cut is not None else None,
+        drift_dominated=biased is not None,
     )
 
 
