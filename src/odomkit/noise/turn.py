@@ -21,7 +21,13 @@ independent of each other, of every other step and of every other model.
 **Why linear in |Δθ|: partition invariance.** A turn of Θ cut into n steps of Θ/n gathers
 Σ α·|Θ/n| = α·|Θ| whatever n, so the covariance of a turn does not depend on the log's
 sample rate (as long as a step does not turn both ways), exactly as α_ss·|Δd| does for
-distance. These are the analogues of nav2 AMCL's α1 (rotation error from rotation) and α4
+distance. That holds for a commanded or reported turn (a unicycle's ω is a body velocity,
+zero where the base stands). A gyro robot's Δθ is its *measured* turn: the gyro's own noise
+(and a bias left over) adds |Δθ| while it stands or drives straight, more the faster it is
+sampled (over 60 s standing, 0.12 rad at 10 Hz, 0.19 rad at 400 Hz), so ``fit-noise`` fits
+this model by default for a unicycle only (:data:`odomkit.calibrate.fit_noise.DEFAULT_WHITE`).
+
+These are the analogues of nav2 AMCL's α1 (rotation error from rotation) and α4
 (translation error from rotation) (:mod:`odomkit.calibrate.amcl`), but AMCL's variances
 are α·rot² per filter update: quadratic in the increment, so cutting the same turn into
 twice as many updates halves its variance, and the α's hold only for the update
