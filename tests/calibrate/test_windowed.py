@@ -332,6 +332,40 @@ def test_the_report_calibrates_a_drifting_run_in_windows_and_says_so(run_cli, tm
     assert "calibrated again in windows of 60 s" in html and "drift" in html
 
 
+def test_the_reports_calibration_table_gives_the_between_window_standard_errors(run_cli, tmp_path):
+    """User study s25 (MRCLAM): the report's calibration table showed the fit's own standard
+    errors (c_scale ± 0.00034) while its warnings said they were 60-83× too small and to quote
+    the between-window ones. The drifting run calibrated in windows shows both, keyed
+    (calibration.std_error.NAME, calibration.std_error_between.NAME), equal to calibrate
+    --window 60s's JSON, and the paragraph says to quote the between-window ones with each
+    ratio (between / own, from that JSON)."""
+    import re
+
+    log, truth = drive(0)
+    log_path, gps, robot = _write(tmp_path, log, truth)
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot, "--truth", gps,
+                             "--truth-sigma", "0.001", "--window", "60s", "--json")
+    assert code == 0, err
+    windowed = json.loads(out)
+    page = tmp_path / "report.html"
+    code, out, err = run_cli("report", log_path, "--robot", robot, "--truth", gps,
+                             "--truth-sigma", "0.001", "--out", page)
+    assert code == 0, err
+    html = page.read_text(encoding="utf-8")
+    shown = {m.group(1): float(m.group(2)) for m in re.finditer(
+        r'data-key="calibration\.(std_error(?:_between)?\.[a-z_]+)" data-value="([^"]+)"', html)}
+    between, own = windowed["std_errors_between_runs"], windowed["std_errors"]
+    assert set(between) == set(windowed["parameters"])
+    for name in windowed["parameters"]:
+        assert shown[f"std_error_between.{name}"] == pytest.approx(between[name], rel=1e-9)
+        assert shown[f"std_error.{name}"] == pytest.approx(own[name], rel=1e-9)
+    text = " ".join(re.sub(r"<[^>]+>", " ", html).split())
+    assert "standard error between windows" in text
+    ratios = ", ".join(f"{name} {between[name] / own[name]:.0f}×" for name in windowed["parameters"])
+    assert min(between[n] / own[n] for n in between) > 3  # a drifting run's, as calibrate warns
+    assert "Quote the between-window standard errors" in text and f"({ratios})" in text
+
+
 def test_the_report_answers_a_whole_run_fit_that_failed_on_drift_with_the_windowed_one():
     """A whole-run fit of a drifting run can also run to the edge of its range (four of the
     ten MRCLAM runs: the clock offset at 2 s, the scale at half the file's); its error then
@@ -349,3 +383,51 @@ def test_the_report_answers_a_whole_run_fit_that_failed_on_drift_with_the_window
     whole = {"parameters": {"c_scale": 0.9}}
     assert _calibrated_in_windows(whole, [], lambda: windowed) == (whole, None)
     assert _calibrated_in_windows({**whole, "drift_dominated": True}, [], lambda: windowed)[0] is windowed
+
+
+def test_plot_with_windows_is_refused_and_a_given_offset_of_the_logs_own_truth_is_reported(run_cli, tmp_path):
+    """--plot draws whole runs, each from one start pose: beside --window it would show a fit
+    that was not made (a 600 s drive: 0.27 m RMS drawn for a 0.04 m fit), so the pair is one
+    line, exit 2. A --truth-time-offset that moves the log's own gt_* columns changes the fit,
+    and the JSON says it was given, not fitted."""
+    log, truth = drive(0, duration=300.0)
+    log_path, gps, robot = _write(tmp_path, log, truth, own_truth=True)
+    code, _, err = run_cli("calibrate", log_path, "--robot", robot, "--truth", gps, "--window", "60s",
+                           "--plot", tmp_path / "cal.png")
+    assert code == 2 and len(err.strip().splitlines()) == 1 and "--plot" in err and "--window" in err
+    code, out, err = run_cli("calibrate", log_path, "--robot", robot, "--window", "60s",
+                             "--truth-time-offset", "0.5", "--json")
+    assert code == 0, err
+    assert json.loads(out)["truth_time_offset"] == {"value": 0.5, "std_error": 0.0, "fitted": False}
+
+
+def test_a_twist_covariance_at_zero_yaw_rate_says_what_turn_noise_it_leaves_out(run_cli, tmp_path):
+    """robot_localization's twist covariance is given at --twist-speed on a straight line
+    (ω = 0), where TurnNoise adds nothing; a robot file whose heading noise fit-noise put on
+    turning (MRCLAM: σ_gg 8.8e-4 -> 1.8e-4 rad²/s) would publish a yaw-rate variance 4.8×
+    too small for a turning base without a word. The warning gives what it adds per rad/s of
+    yaw rate, α/(W·T), checked against twist_covariance at ω = 1 rad/s."""
+    from odomkit.calibrate.export import twist_covariance
+    from odomkit.noise import GyroNoise, SpeedNoise, TurnNoise
+
+    log, truth = drive(0, duration=300.0)
+    log_path, gps, _ = _write(tmp_path, log, truth)
+    robot = tmp_path / "turning.toml"
+    robot.write_text('[robot]\ntype = "unicycle"\n\n[noise]\nalpha_ss = 1e-3\npsd_gyro = 2e-4\n'
+                     "alpha_turn = 0.01\nalpha_turn_travel = 0.006\n")
+    args = ("calibrate", log_path, "--robot", robot, "--truth", gps, "--truth-sigma", "0.001",
+            "--window", "60s", "--twist-speed", "0.2", "--controller-period", "0.05", "--json")
+    code, out, err = run_cli(*args)
+    assert code == 0, err
+    said = [w for w in json.loads(out)["warnings"] if "TurnNoise" in w]
+    assert len(said) == 1 and "ω = 0" in said[0]
+    per_rad = float(said[0].split("var ω by ")[1].split()[0])
+    models = (SpeedNoise(1e-3), GyroNoise(2e-4), TurnNoise(0.01, 0.006))
+    straight = twist_covariance(Unicycle(), models, 0.2, 0.05, window=10)
+    turning = twist_covariance(Unicycle(), models, 0.2, 0.05, window=10, yaw_rate=1.0)
+    assert per_rad == pytest.approx(turning.var_yaw_rate - straight.var_yaw_rate, rel=1e-3)
+    plain = tmp_path / "plain.toml"
+    plain.write_text('[robot]\ntype = "unicycle"\n\n[noise]\nalpha_ss = 1e-3\npsd_gyro = 2e-4\n')
+    code, out, err = run_cli(*args[:3], plain, *args[4:])
+    assert code == 0, err
+    assert not any("TurnNoise" in w for w in json.loads(out)["warnings"])

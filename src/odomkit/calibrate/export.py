@@ -20,8 +20,8 @@ from odomkit.kinematics import car_measured_steer, car_speed_factor
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
-__all__ = ["diff_drive_controller_parameters", "tricycle_controller_parameters", "twist_covariance",
-           "TwistCovariance"]
+__all__ = ["diff_drive_controller_parameters", "tricycle_controller_parameters", "turn_noise_note",
+           "twist_covariance", "TwistCovariance"]
 
 
 def diff_drive_controller_parameters(
@@ -177,6 +177,32 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
         raise ModelError(f"a twist covariance is computed for diff, tricycle, gyro and compass robots, "
                          f"not a {type(robot).__name__}")
     return OdometryLog(t, channels, source="<steady motion>")
+
+
+def turn_noise_note(noise: object, period: float, window: int = 1) -> str | None:
+    """What a twist covariance at zero yaw rate leaves out of a :class:`~odomkit.noise.TurnNoise`,
+    or None where the noise has none.
+
+    Over the W updates of T [s] a controller averages, a turn at yaw rate ω gathers
+    α_turn·|ω|·W·T of heading variance and α_turn_travel·|ω|·W·T of travel variance, so the
+    published ω and v gain var ω = α_turn·|ω|/(W·T) and var v = α_turn_travel·|ω|/(W·T):
+    nothing on a straight line (:func:`twist_covariance` at ``yaw_rate=0``), the note's
+    figures per rad/s of yaw rate otherwise."""
+    from odomkit.noise import NoiseSet, TurnNoise
+
+    turn = [m for m in NoiseSet.of(noise).white if isinstance(m, TurnNoise)]  # type: ignore[arg-type]
+    heading = sum(m.alpha_turn for m in turn)
+    travel = sum(m.alpha_turn_travel for m in turn)
+    if heading <= 0 and travel <= 0:
+        return None
+    span = validate.positive(period, "period", unit="s") * validate.positive_int(window, "window")
+    return (f"the twist covariance is the robot's on a straight line (ω = 0), where the robot file's "
+            f"TurnNoise (alpha_turn {heading:.3g}, alpha_turn_travel {travel:.3g}) adds nothing; "
+            f"turning, it raises var ω by {heading / span:.4g} rad²/s² and var v by {travel / span:.4g} "
+            "m²/s² per rad/s of yaw rate (α·|ω|/(W·T)): a base whose heading noise fit-noise put on its "
+            "turns publishes a yaw-rate variance too small while it turns; give robot_localization the "
+            "variance at the yaw rate it turns at (odomkit.calibrate.export.twist_covariance(..., "
+            "yaw_rate=ω))")
 
 
 def twist_covariance(
