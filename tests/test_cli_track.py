@@ -150,3 +150,68 @@ def test_track_text_says_nothing_of_a_nees_it_does_not_show(run_cli):
     assert code == 0 and err == "", err
     code, _, err = run_cli("track", run, "--robot", robot, "--json")
     assert code == 0 and "singular covariance" in err
+
+
+def _spinning_log(folder, psd_gyro):
+    """100 s at 0.5 m/s on a circle of 5 m (0.1 rad/s), every 0.1 s, and a unicycle whose
+    only noise is the gyro's: the heading variance is psd_gyro·t exactly (no cov0)."""
+    t = np.round(0.1 * np.arange(1001), 10)
+    log = folder / "spin.csv"
+    np.savetxt(log, np.column_stack((t, np.full(t.size, 0.5), np.full(t.size, 0.1))), delimiter=",",
+               header="t,speed,yaw_rate", comments="")
+    robot = folder / f"spin{psd_gyro:g}.toml"
+    robot.write_text(f'[robot]\ntype = "unicycle"\n\n[noise]\npsd_gyro = {psd_gyro!r}\n')
+    return t, log, robot
+
+
+def test_a_heading_past_the_first_order_limit_is_warned_of_once(run_cli, tmp_path):
+    """User study s25 (MRCLAM, 887 s): track's final σθ of 2.73 rad and a ROS yaw variance of
+    7 rad², beyond a heading spread uniformly round the circle (π²/3), came without a word.
+    With gyro noise of 0.045 rad²/s the heading variance is 0.045·t (by hand): σθ passes
+    FIRST_ORDER_SIGMA_THETA (0.2 rad) at the first row past t = 0.04/0.045 = 0.889 s, i.e.
+    0.9 s, and ends at √4.5 rad with a variance beyond π²/3 in --json's ros_pose_covariance.
+    One warning, in the JSON's warnings and on stderr alike; none at 0.0003 rad²/s (σθ 0.173
+    rad at the end)."""
+    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+
+    t, log, robot = _spinning_log(tmp_path, 0.045)
+    var = 0.045 * t
+    first = t[np.argmax(np.sqrt(var) > FIRST_ORDER_SIGMA_THETA)]
+    assert first == pytest.approx(0.9)
+    code, out, err = run_cli("track", log, "--robot", robot, "--json")
+    assert code == 0, err
+    summary = json.loads(out)
+    assert summary["ros_pose_covariance"][35] == pytest.approx(var[-1], rel=1e-9)  # numbers unchanged
+    said = [w for w in summary.get("warnings", []) if "first-order limit" in w]
+    assert len(said) == 1 and len(summary["warnings"]) == 1, summary.get("warnings")
+    note = said[0]
+    assert f"from {first:.4g} s into the log on" in note and f"reaches {np.sqrt(var[-1]):.3g} rad" in note
+    assert "too small along the arc" in note and "windowed" in note
+    assert f"{var[-1]:.4g} rad²" in note and "π²/3" in note and "robot_localization" in note
+    code, _, err = run_cli("track", log, "--robot", robot)
+    assert code == 0 and err.count("first-order limit") == 1, err
+    _, log, quiet = _spinning_log(tmp_path, 0.0003)
+    code, out, err = run_cli("track", log, "--robot", quiet, "--json")
+    assert code == 0 and "warnings" not in json.loads(out), err
+
+
+def test_a_bag_whose_yaw_variance_passes_the_uniform_circles_says_from_when(run_cli, tmp_path):
+    """--bag-out writes every pose's covariance: the warning names the first message whose yaw
+    variance passes π²/3 (0.045·t > 3.29 from t = 73.2 s on, by hand) and how many do, and
+    that bag's messages read back through rosbags say the same (the numbers are unchanged)."""
+    pytest.importorskip("rosbags", reason="the ros extra (rosbags) is not installed")
+    from odomkit.io.bag import read_bag_odometry
+
+    t, log, robot = _spinning_log(tmp_path, 0.045)
+    beyond = 0.045 * t > np.pi**2 / 3
+    first = t[np.argmax(beyond)]
+    assert first == pytest.approx(73.2)
+    bag = tmp_path / "spin.bag"
+    code, out, err = run_cli("track", log, "--robot", robot, "--bag-out", bag, "--json")
+    assert code == 0, err
+    [note] = [w for w in json.loads(out).get("warnings", []) if "first-order limit" in w]
+    assert f"--bag-out messages from {first:.4g} s into the log on, {int(beyond.sum())} of {t.size}" in note
+    back = read_bag_odometry(bag)
+    yaw = np.array(back.pose_covariance)[:, 35]
+    assert back.t[np.argmax(yaw > np.pi**2 / 3)] - back.t[0] == pytest.approx(first)
+    assert int((yaw > np.pi**2 / 3).sum()) == int(beyond.sum())

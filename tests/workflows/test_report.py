@@ -442,3 +442,101 @@ def test_the_noise_fits_warnings_are_on_the_page_once(with_truth):
     fitted = [w.removeprefix(lead) for w in result["warnings"] if w.startswith(lead)]
     assert fitted
     assert not set(fitted) & set(result["warnings"])
+
+
+def _spinning(folder, psd_gyro, truth=False):
+    """100 s at 0.5 m/s turning at 0.1 ± 0.1 rad/s, every 0.1 s, and a unicycle whose only
+    noise is the gyro's: the heading variance is psd_gyro·t exactly (by hand). With
+    ``truth`` the log also has gt_x, gt_y, gt_theta columns: its poses with the speed 2 %
+    more than measured."""
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Unicycle
+    from odomkit.track import dead_reckon_log
+
+    t = np.round(0.1 * np.arange(1001), 10)
+    speed, yaw_rate = np.full(t.size, 0.5), 0.1 + 0.1 * np.sin(t / 7.0)
+    cols, header = [t, speed, yaw_rate], "t,speed,yaw_rate"
+    if truth:
+        cols += list(dead_reckon_log(OdometryLog(t, {"speed": 1.02 * speed, "yaw_rate": yaw_rate}),
+                                     Unicycle()).poses.T)
+        header += ",gt_x,gt_y,gt_theta"
+    log = folder / ("spin_gt.csv" if truth else "spin.csv")
+    np.savetxt(log, np.column_stack(cols), delimiter=",", header=header, comments="")
+    robot = folder / f"spin{psd_gyro:g}.toml"
+    robot.write_text(f'[robot]\ntype = "unicycle"\n\n[noise]\npsd_gyro = {psd_gyro!r}\n')
+    return t, log, robot
+
+
+#: The report's own phrases: the track's first-order warning and the ROS yaw variance's.
+_FIRST_ORDER, _YAW = "passes the first-order limit", "meaningless"
+
+
+@pytest.mark.parametrize("truth", [False, True])
+def test_a_heading_past_the_first_order_limit_is_said_once(run_cli, tmp_path, truth):
+    """User study s25 (MRCLAM, 887 s): the page showed a final σθ of 0.89 rad (2.7 with a
+    fitted noise) and a ROS 6×6 with a yaw variance of 7 rad², beyond a heading spread
+    uniformly round the circle (π²/3), without a word. With gyro noise of 0.045 rad²/s the
+    heading variance is 0.045·t (by hand): σθ passes FIRST_ORDER_SIGMA_THETA (0.2 rad) at
+    0.9 s (the first row past 0.04/0.045 s) and ends at √4.5 rad. The warnings list says it
+    once, though the report tracks the log twice with truth (before and after calibration),
+    and the ROS section's 4.5 rad² once more; the summary gives the time, keyed, and the
+    track and ROS sections point to it. The numbers are unchanged (the ROS 6×6's yaw is
+    0.045·100 s). A σθ of 0.173 rad at the end (0.0003 rad²/s) gets none of it."""
+    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+
+    t, log, robot = _spinning(tmp_path, 0.045, truth)
+    first = t[np.argmax(np.sqrt(0.045 * t) > FIRST_ORDER_SIGMA_THETA)]
+    assert first == pytest.approx(0.9)
+    out = tmp_path / "r.html"
+    result = _run_json(run_cli, "report", log, "--robot", robot, "--out", out)
+    said = [w for w in result["warnings"] if _FIRST_ORDER in w]
+    assert len(said) == 1, result["warnings"]
+    assert f"from {first:.4g} s into the log on" in said[0] and f"reaches {np.sqrt(4.5):.3g} rad" in said[0]
+    assert "too small along the arc" in said[0]
+    yaw = [w for w in result["warnings"] if _YAW in w]
+    assert len(yaw) == 1 and "reaches 4.5 rad²" in yaw[0] and "robot_localization" in yaw[0], yaw
+    assert len(set(result["warnings"])) == len(result["warnings"])
+    html = out.read_text(encoding="utf-8")
+    page = Page(html)
+    assert page.cells["first_order_limit_passed"][0] == pytest.approx(first)
+    assert page.cells["final_sigma_theta"][0] == pytest.approx(np.sqrt(4.5), rel=1e-9)
+    matrix = re.search(r"covariance: \[([^\]]*)\]", html).group(1)
+    assert float(matrix.split(",")[35]) == pytest.approx(4.5, rel=1e-3)  # shown to 4 digits
+    text = " ".join("".join(page.text).split())
+    assert text.count("past the first-order limit") >= 2  # the track's and the ROS section's pointers
+
+    _, log, quiet = _spinning(tmp_path, 0.0003, truth)
+    result = _run_json(run_cli, "report", log, "--robot", quiet, "--out", out, "--force")
+    assert not [w for w in result["warnings"] if _FIRST_ORDER in w or _YAW in w], result["warnings"]
+    assert "first_order_limit_passed" not in Page(out.read_text(encoding="utf-8")).cells
+
+
+def test_the_ros_covariance_past_the_limit_is_warned_of_where_the_track_was_not():
+    """The ROS section's 6×6 is the calibrated robot's last pose, which may pass the
+    first-order limit where the track on the page (the robot file's) did not: then its own
+    warning says what that means, once; where the track's warning has said it (``said``),
+    only the yaw variance beyond π²/3 is added. Heading variance 0.05·t over 100 s (by hand:
+    past 0.04 rad² from 0.9 s on, 5 rad² at the end)."""
+    from odomkit.track import Track
+    from odomkit.workflows.report import _ros_covariance_note
+    from odomkit.workflows.track import TrackRun
+
+    t = np.round(0.1 * np.arange(1001), 10)
+    cov = np.zeros((t.size, 3, 3))
+    cov[:, 2, 2] = 0.05 * t
+    run = TrackRun(Track(t, np.zeros((t.size, 3)), cov, None), None)  # type: ignore[arg-type]
+    for said, expected in ((False, 2), (True, 1)):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            note = _ros_covariance_note(run, said)
+        texts = [str(w.message) for w in caught]
+        assert len(texts) == expected, texts
+        assert note is not None and "σθ (2.24 rad)" in note and "robot_localization" in note
+        assert "reaches 5 rad²" in texts[-1]
+        if not said:
+            assert "the track whose covariance the ROS section gives" in texts[0]
+            assert "from 0.9 s into the log on" in texts[0]
+    cov[:, 2, 2] = 0.0003 * t  # σθ 0.173 rad at the end
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        assert _ros_covariance_note(run, False) is None and not caught

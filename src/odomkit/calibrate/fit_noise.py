@@ -55,6 +55,7 @@ __all__ = [
     "DEFAULT_WHITE",
     "defaults_left_out",
     "first_order_note",
+    "first_order_track_note",
     "FIRST_ORDER_SIGMA_THETA",
     "TRIM_SHARE",
     "NoiseFit",
@@ -135,6 +136,43 @@ def first_order_note(var_theta: ArrayLike, start_var_theta: ArrayLike | None = N
                     f"up to {np.sqrt(start[big].max()):.3g} rad at the start): shorter windows do not shrink "
                     "that; denser or less noisy fixes, or a truth with heading, do")
     return f"{said}; use shorter windows"
+
+
+def first_order_track_note(t: ArrayLike, var_theta: ArrayLike, what: str = "the track's covariance",
+                           test: str = "odomkit evaluate --window 10s") -> str | None:
+    """The warning that a whole track's first-order covariance has passed
+    :data:`FIRST_ORDER_SIGMA_THETA`, or None where its σθ stays within it.
+
+    ``t`` (N,) [s] are the poses' times and ``var_theta`` (N,) [rad²] their heading
+    variances; the note says from when on σθ passes the limit (the horizon over which the
+    covariance still holds), its largest value and the final one. ``what`` names the
+    covariance and ``test`` the windowed honesty test to use instead.
+
+    Examples
+    --------
+    >>> first_order_track_note([0.0, 1.0, 2.0], [0.0, 0.01, 0.04]) is None
+    True
+    >>> first_order_track_note([0.0, 1.0, 2.0], [0.0, 0.01, 0.09])[:93]
+    "the track's covariance passes the first-order limit: its σθ exceeds 0.2 rad from 2 s into the"
+    """
+    times = np.asarray(t, dtype=float)
+    sigma = np.sqrt(np.clip(np.asarray(var_theta, dtype=float), 0.0, None))
+    big = sigma > FIRST_ORDER_SIGMA_THETA
+    if not big.any():
+        return None
+    first, top = int(np.argmax(big)), int(np.argmax(sigma))
+    start = float(times[0])
+    where = (" at the end" if top == sigma.size - 1 else
+             f" ({float(times[top]) - start:.4g} s into the log; {sigma[-1]:.3g} rad at the end)")
+    horizon = float(times[first]) - start
+    since, shorter = ((f"from {horizon:.4g} s into the log on",
+                       f"shorter horizons (here under {horizon:.3g} s)") if first else
+                      ("from the start (the start pose's own)", "shorter horizons"))
+    return (f"{what} passes the first-order limit: its σθ exceeds {FIRST_ORDER_SIGMA_THETA} rad {since} "
+            f"and reaches {sigma[top]:.3g} rad{where}, so it is no longer a Gaussian claim about the pose: "
+            "the linearised ellipse no longer describes where the robot is (the true spread bends along the "
+            "arc the heading error sweeps, and the position ellipse is too small along the arc); judge the "
+            f"noise with the windowed test ({test}) and trust the covariance over {shorter}")
 
 
 _U_MAX = 1e14  # upper bound of a variance in units of its starting scale

@@ -54,13 +54,18 @@ from odomkit.robot import DiffDrive, Tricycle
 
 __all__ = ["nav2_amcl_yaml", "NAV2_MOTION_MODELS", "ros2_controller_yaml", "ros2_diff_drive_yaml",
            "ros2_tricycle_yaml", "ros_pose_covariance", "ros_twist_covariance",
-           "ros_twist_covariance_diagonal", "UNOBSERVED_VARIANCE", "write_ros2_yaml"]
+           "ros_twist_covariance_diagonal", "UNIFORM_HEADING_VARIANCE", "UNOBSERVED_VARIANCE",
+           "write_ros2_yaml", "yaw_variance_note"]
 
 #: nav2's motion-model plugin class for each ``odomkit fit-amcl --model``.
 NAV2_MOTION_MODELS = {"diff": "nav2_amcl::DifferentialMotionModel", "omni": "nav2_amcl::OmniMotionModel"}
 
 UNOBSERVED_VARIANCE = 1e6
 """Variance given to z [m²], roll and pitch [rad²]."""
+
+UNIFORM_HEADING_VARIANCE = math.pi**2 / 3
+"""Variance of a heading spread uniformly around the circle, (2π)²/12 = π²/3 ≈ 3.29 [rad²]:
+a Gaussian yaw variance beyond it claims more spread than knowing nothing of the heading."""
 
 _ROS_INDEX = (0, 1, 5)  # x, y, yaw in ROS's (x, y, z, roll, pitch, yaw)
 _ROS_TWIST_INDEX = (0, 5)  # v_x, ω_z in ROS's (v_x, v_y, v_z, ω_x, ω_y, ω_z)
@@ -90,6 +95,26 @@ def ros_pose_covariance(
     (1.0, 0.1, 0.2, 2.0, 0.3, 3.0, 1000000.0)
     """
     return _ros_6x6(cov3, _ROS_INDEX, "pose covariance must be 3x3 (x, y, theta)", unobserved_variance)
+
+
+def yaw_variance_note(var_theta: float, where: str) -> str | None:
+    """What is wrong with a ROS pose covariance whose yaw variance ``var_theta`` [rad²] is
+    beyond :data:`UNIFORM_HEADING_VARIANCE`, or None: ``where`` names the covariance
+    exported (the messages of a bag, a JSON key).
+
+    Examples
+    --------
+    >>> yaw_variance_note(3.0, "x") is None
+    True
+    >>> yaw_variance_note(7.0, "the bag's messages")[:68]
+    "the yaw variance of the bag's messages reaches 7 rad², beyond π²/3 ≈"
+    """
+    if not var_theta > UNIFORM_HEADING_VARIANCE:
+        return None
+    return (f"the yaw variance of {where} reaches {var_theta:.4g} rad², beyond π²/3 ≈ "
+            f"{UNIFORM_HEADING_VARIANCE:.3g} rad² (the variance of a heading spread uniformly around the "
+            "circle): as a Gaussian's it is meaningless, yet a consumer such as robot_localization would "
+            "take it literally")
 
 
 def ros_twist_covariance(

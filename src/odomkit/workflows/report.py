@@ -210,6 +210,20 @@ def _track_section(run: TrackRun, figures: ReportFigures, summary: dict[str, Any
             "Covariance elements over distance", panels=(2, 3), size=(10.0, 5.6))
         blocks += [f for f in (fig,) if f is not None]
     blocks.insert(1, Table(("", "value"), tuple(rows), "The track"))
+    passed = _first_order_from(run)
+    if passed is not None:
+        from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA, first_order_track_note
+
+        assert cov is not None
+        said = first_order_track_note(track.t, cov[:, 2, 2],
+                                      "the track's covariance (its ellipses and final σ's on this page)",
+                                      _windowed_test(run))
+        warnings.warn(str(said), stacklevel=2)
+        shown = "the ellipses" + (", the ±2σ band" if run.truth is not None else "") + " and the final σ's"
+        blocks.insert(2, Paragraph(
+            f"From {passed:.4g} s into the log on, σθ is past the first-order limit "
+            f"({FIRST_ORDER_SIGMA_THETA} rad): {shown} are then no Gaussian claim about the pose (see the "
+            "warnings at the top).", "warning"))
     if run.truth is not None and cov is not None:
         err = track.poses - run.truth  # θ wrapped by draw_error_band
         sigma = np.sqrt(np.diagonal(cov, axis1=1, axis2=2))
@@ -412,14 +426,25 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
         return Section("calibration", "Calibration before and after", tuple(blocks))
     params = cal.get("parameters", {})
     errors = cal.get("std_errors", {})
+    # Several runs, or windows: the standard errors from their spread, beside the fit's own.
+    between = cal.get("std_errors_between_runs") or {}
+    clusters = "windows" if cal.get("windows") else "runs"
     rows: list[tuple[str | Cell, ...]] = [
         (name, number(value, "", 6, key=f"calibration.{name}"),
-         number(errors.get(name), "", 2, key=f"calibration.std_error.{name}"))
+         number(errors.get(name), "", 2, key=f"calibration.std_error.{name}"),
+         *([number(between.get(name), "", 2, key=f"calibration.std_error_between.{name}")]
+           if between else []))
         for name, value in params.items()]
     for name in ("E_d", "E_b"):
         if name in cal:
-            rows.append((name, number(cal[name], "", 6, key=f"calibration.{name}"), Cell("")))
-    blocks.append(Table(("parameter", "fitted", "standard error"), tuple(rows),
+            rows.append((name, number(cal[name], "", 6, key=f"calibration.{name}"), Cell(""),
+                         *((Cell(""),) if between else ())))
+    header = (("parameter", "fitted", "standard error, the fit's own", f"standard error between {clusters}")
+              if between else ("parameter", "fitted", "standard error"))
+    if between:
+        n = (cal.get("windows") or {}).get("fitted") if clusters == "windows" else cal.get("n_runs")
+        blocks.append(Paragraph(_which_to_quote(errors, between, clusters, n), "note"))
+    blocks.append(Table(header, tuple(rows),
                         f"Calibration ({cal.get('method', 'exact')}, from {cal.get('source', 'truth')})"))
     pairs = zip(_metric_rows(before, "before."), _metric_rows(after, "after."), strict=True)
     blocks.append(Table(("metric", "before", "after"), tuple((b[0], b[1], a[1]) for b, a in pairs),
@@ -434,6 +459,25 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
                            "Tracks before and after calibration", size=(7.0, 5.6))
         blocks += [f for f in (fig,) if f is not None]
     return Section("calibration", "Calibration before and after", tuple(blocks))
+
+
+def _which_to_quote(own: dict[str, float], between: dict[str, float], clusters: str, n: int | None) -> str:
+    """Which standard errors of a calibration to quote: the between-``clusters`` ones (from
+    ``n`` windows or runs) where they exceed the fit's own by more than
+    :data:`odomkit.calibrate.exact.BETWEEN_RUNS_FACTOR` (calibrate's warning then says so
+    too), else the larger of the two."""
+    from odomkit.calibrate.exact import BETWEEN_RUNS_FACTOR
+
+    one = clusters[:-1]
+    spread = f"the {n} {clusters}' spread" if n else f"the {clusters}' spread"
+    ratios = {name: b / own[name] for name, b in between.items() if own.get(name)}
+    if any(r > BETWEEN_RUNS_FACTOR for r in ratios.values()):
+        listed = ", ".join(f"{name} {r:.0f}×" for name, r in ratios.items())
+        return (f"Quote the between-{one} standard errors (from {spread}): the fit's own take the residuals "
+                f"along a {one} as independent, but the odometry's drift is correlated along each {one}, and "
+                f"here the between-{one} ones are larger ({listed}).")
+    return (f"The between-{one} standard errors (from {spread}) agree with the fit's own within "
+            f"{BETWEEN_RUNS_FACTOR:g}×: quote the larger of the two.")
 
 
 def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dict[str, float],
@@ -520,12 +564,14 @@ def _without_truth_section(robot_type: str = "diff", bag: bool = False) -> Secti
 
 
 def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: str,
-              amcl_yaml: str | None, notes: list[str]) -> list[Code]:
+              amcl_yaml: str | None, notes: list[str], said: bool = False) -> list[Code]:
     """The controller YAML (with the twist covariance of the noise), nav2 AMCL's α's and the
     final pose covariance in ROS's 6×6 layout (robot_localization reads it from odometry).
 
     ``robot_file`` (default ``robot_path``) gives the geometry and the noise, which ``what``
-    names ("the calibrated robot and the fitted noise"); the wheel radius is ``robot_path``'s."""
+    names ("the calibrated robot and the fitted noise"); the wheel radius is ``robot_path``'s.
+    A pose covariance past the first-order limit gets a note (:func:`_ros_covariance_note`;
+    ``said``: the track's own warning has said what that means)."""
     from odomkit.calibrate.export import twist_covariance
     from odomkit.io.robotfile import read_robot
     from odomkit.io.ros import ros2_controller_yaml, ros_pose_covariance
@@ -563,7 +609,54 @@ def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: st
                         "nav_msgs/Odometry pose covariance at the end of the log (x, y, z, roll, pitch, "
                         "yaw; 1e6 on the axes planar odometry does not observe), as odomkit track --bag-out "
                         "writes it"))
+        notes += [n for n in (_ros_covariance_note(run, said),) if n is not None]
     return out
+
+
+def _first_order_from(run: TrackRun) -> float | None:
+    """When [s into the log] the track's σθ first passes the first-order limit
+    (:data:`odomkit.calibrate.fit_noise.FIRST_ORDER_SIGMA_THETA`); None if it never does or
+    there is no covariance."""
+    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+
+    if run.track.cov is None:
+        return None
+    past = run.track.cov[:, 2, 2] > FIRST_ORDER_SIGMA_THETA**2
+    return float(run.track.t[np.argmax(past)] - run.track.t[0]) if past.any() else None
+
+
+def _ros_covariance_note(run: TrackRun, said: bool) -> str | None:
+    """The ROS section's note on its 6×6 (``run``'s last pose) where its σθ is past the
+    first-order limit, or None. The warnings list gets the yaw variance beyond π²/3
+    (:func:`odomkit.io.ros.yaw_variance_note`) and, unless the track's warning has said it
+    (``said``), what the limit means (this track's, the calibrated robot's, may pass where
+    the track's did not)."""
+    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA, first_order_track_note
+    from odomkit.io.ros import yaw_variance_note
+
+    assert run.track.cov is not None
+    var = float(run.track.cov[-1, 2, 2])
+    if not var > FIRST_ORDER_SIGMA_THETA**2:
+        return None
+    yaw = yaw_variance_note(var, "the ROS pose covariance under 'ROS parameters' (the last pose's 6×6)")
+    if not said:
+        whole = first_order_track_note(run.track.t, run.track.cov[:, 2, 2],
+                                       "the track whose covariance the ROS section gives",
+                                       _windowed_test(run))
+        warnings.warn(str(whole), stacklevel=2)
+    if yaw is not None:
+        warnings.warn(yaw, stacklevel=2)
+    said_yaw = (": its yaw variance is beyond π²/3, a heading spread uniformly around the circle, so a "
+                "consumer such as robot_localization should not be given it.") if yaw is not None else "."
+    return (f"This pose covariance is first-order, and its σθ ({np.sqrt(var):.3g} rad) is past the "
+            f"first-order limit ({FIRST_ORDER_SIGMA_THETA} rad): no Gaussian claim about the pose (see the "
+            f"warnings at the top){said_yaw}")
+
+
+def _windowed_test(run: TrackRun) -> str:
+    """Where the report sends a reader whose whole-log covariance is past the first-order limit."""
+    return ("the honesty section's, whose windows restart from the truth" if run.truth is not None else
+            "odomkit evaluate --window 10s, on a log with ground truth")
 
 
 # ---------------------------------------------------------------------------------- the workflow
@@ -623,7 +716,7 @@ def run_report(
     figures = ReportFigures()
     with collected_warnings() as notes:
         run = run_track(log_path, robot_path, method=method, log_options=log_options,  # type: ignore[arg-type]
-                        truth=options, pose0=pose0, progress=progress)
+                        truth=options, pose0=pose0, progress=progress, note_first_order=False)
         # Without the note on its ground_truth block's NEES over the track's rows
         # (odomkit.evaluate.evaluate_track), which the page does not show: its honesty
         # section scores window ends.
@@ -631,7 +724,8 @@ def run_report(
         sections = [_track_section(run, figures, summary)]
         if run.truth is None:
             ros_notes: list[str] = []
-            snippets = _snippets(run, robot_path, None, "the robot file", None, ros_notes)
+            snippets = _snippets(run, robot_path, None, "the robot file", None, ros_notes,
+                                 said=_first_order_from(run) is not None)
             kind, bag = run.track.steps.robot.type_name, run.log.meta.get("format") == "bag"
             sections += [_without_truth_section(kind, bag), _ros_section(snippets, ros_notes)]
             sections.insert(0, _summary_section(run, None, None, None, None, None))
@@ -726,7 +820,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                             "after calibration: ", scored)[1]
             start = run.track.poses[0]  # where the track before calibration started
             run_after = run_track(log, cal_path, method=method, log_options=log_options,  # type: ignore[arg-type]
-                                  truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])))
+                                  truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])),
+                                  note_first_order=False)
         sections.append(_calibration_section(cal, problems[-1] if problems else None, ev, after, run,
                                              run_after, figures, windowed))
         step.advance()
@@ -767,7 +862,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         notes: list[str] = []
         geometry = "the calibrated robot" if cal is not None else "the robot file"
         source, noise = (fit_path, "the fitted noise") if fit else (base, "the robot file's noise")
-        snippets = _snippets(run_after or run, robot, source, f"{geometry} and {noise}", amcl_yaml, notes)
+        snippets = _snippets(run_after or run, robot, source, f"{geometry} and {noise}", amcl_yaml, notes,
+                             said=_first_order_from(run) is not None)
     sections.append(_ros_section(snippets, notes))
     sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit))
     return sections
@@ -781,6 +877,12 @@ def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, An
     if cov is not None:
         rows.append(("predicted σ of the final position (x, y)",
                      Cell(f"{np.sqrt(cov[-1, 0, 0]):.3g} m, {np.sqrt(cov[-1, 1, 1]):.3g} m")))
+        passed = _first_order_from(run)
+        if passed is not None:  # the σ above is then no Gaussian claim: the warnings say why
+            from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+
+            rows.append((f"σθ past the first-order limit ({FIRST_ORDER_SIGMA_THETA} rad) from",
+                         number(passed, "s into the log", key="first_order_limit_passed")))
     if ev is not None:
         rows += [
             ("final position error", number(ev["final_position_error"], "m", key="final_position_error")),

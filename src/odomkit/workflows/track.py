@@ -28,7 +28,7 @@ from odomkit.workflows.logs import LogOptions, load_log
 from odomkit.workflows.results import check_result, numeric_guard
 from odomkit.workflows.truth import TruthOptions, applied_clock, clock_from_robot, load_truth
 
-__all__ = ["TrackRun", "run_track"]
+__all__ = ["first_order_warning", "TrackRun", "run_track"]
 
 
 @dataclass(frozen=True)
@@ -106,6 +106,7 @@ def run_track(
     child_frame_id: str = "base_link",
     progress: Progress = NO_PROGRESS,
     plot: str | Path | None = None,
+    note_first_order: bool = True,
 ) -> TrackRun:
     """Read a robot file and a log, dead-reckon, write the requested outputs.
 
@@ -128,6 +129,9 @@ def run_track(
     refused. ``progress`` (:mod:`odomkit.progress`) sees the stages: reading the log, dead
     reckoning, the covariance chunk by chunk, writing the outputs. ``plot`` (.png, .svg or
     .pdf) draws :func:`odomkit.workflows.figures.track_figure`.
+    A covariance whose σθ passes the first-order limit is warned of, once
+    (:func:`first_order_warning`); ``note_first_order`` False leaves that to the caller (the
+    report, which says it of what its page shows).
     """
     options = truth or TruthOptions()
     inputs = [p for p in (log_path, robot_path, options.path) if p is not None]
@@ -194,11 +198,43 @@ def run_track(
             outputs["kitti"], outputs["kitti_times"] = str(poses), str(times)
             progress.advance()
     run = TrackRun(track, log, outputs, truth_rows)
+    linearised = first_order_warning(track, bag=bag is not None) if note_first_order else None
+    if linearised is not None:
+        warnings.warn(linearised, stacklevel=2)
     if plot is not None:
         from odomkit.workflows.figures import track_figure
 
         outputs["plot"] = str(track_figure(plot, run, robot))
     return run
+
+
+def first_order_warning(track: Track, bag: bool = False) -> str | None:
+    """The warning that ``track``'s covariance has passed the first-order limit
+    (:func:`odomkit.calibrate.fit_noise.first_order_track_note`), or None (also without a
+    covariance); where the ROS pose covariance it exports (--json's
+    ``ros_pose_covariance`` at the end, and with ``bag`` every --bag-out message) has a yaw
+    variance beyond π²/3, it says so too (:func:`odomkit.io.ros.yaw_variance_note`): one
+    warning, since the second follows from the first."""
+    from odomkit.calibrate.fit_noise import first_order_track_note
+    from odomkit.io.ros import UNIFORM_HEADING_VARIANCE, yaw_variance_note
+
+    if track.cov is None:
+        return None
+    var = track.cov[:, 2, 2]
+    note = first_order_track_note(track.t, var)
+    if note is None:
+        return None
+    beyond = var > UNIFORM_HEADING_VARIANCE
+    json_key = "--json's ros_pose_covariance at the end"
+    if bag and beyond.any():
+        first = int(np.argmax(beyond))
+        since = track.t[first] - track.t[0]
+        where = (f"ROS's pose covariance (the --bag-out messages from {since:.4g} s into the log on, "
+                 f"{int(beyond.sum())} of {var.size}" + (f"; {json_key})" if beyond[-1] else ")"))
+        yaw = yaw_variance_note(float(var.max()), where)
+    else:
+        yaw = yaw_variance_note(float(var[-1]), f"ROS's pose covariance ({json_key})")
+    return note if yaw is None else f"{note}; {yaw}"
 
 
 def _lead_within_a_period(t: NDArray[np.float64], truth: Truth, first: int, offset: float,
