@@ -457,3 +457,21 @@ def test_a_heading_in_degrees_or_none_at_all_is_far_off_its_motion():
     assert np.isnan(heading_against_motion(standing)[0])
     with pytest.raises(ValueError):
         heading_against_motion(Truth(truth.t, truth.xy))
+
+
+def test_clocks_that_do_not_overlap_name_the_time_unit_of_the_one_a_factor_longer():
+    """A log in ms against a truth in s (MRCLAM, on the Unix clock): the message said "check
+    --truth-time-unit", but the log needs --time-unit ms. Its span is 1000 times the truth's
+    (within 2x), which tells which one is off; spans not a unit's factor apart keep the
+    general advice."""
+    from odomkit.truth import no_overlap
+
+    t = np.arange(0.0, 900.0, 0.5) + 1248446182.116
+    truth = Truth(t, np.zeros((t.size, 2)))
+    said = no_overlap(truth, 1000 * t)
+    assert "do not overlap in time" in said and "--truth-time-unit" not in said
+    assert said.endswith("a factor 1e+03: the log's time is likely in ms read as seconds (--time-unit ms)")
+    said = no_overlap(Truth(1e9 * t, np.zeros((t.size, 2))), t)
+    assert said.endswith("the truth's time is likely in ns read as seconds (--truth-time-unit ns)")
+    said = no_overlap(truth, t[:100] + 1e4)  # a late truth on the same clock, 18x longer: no unit
+    assert said.endswith("check --truth-time-unit and --truth-time-offset")

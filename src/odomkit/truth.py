@@ -18,7 +18,7 @@ from functools import partial
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from odomkit import validate
+from odomkit import units, validate
 from odomkit.angles import unwrap_angle, wrap_angle
 from odomkit.errors import InputError
 from odomkit.log import OdometryLog, clock_text
@@ -27,7 +27,7 @@ __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "he
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
            "implausible_speed", "PLAUSIBLE_SPEED",
-           "MAX_RESIDUAL_SIGMAS", "no_overlap", "scatter_sigma",
+           "MAX_RESIDUAL_SIGMAS", "clock_unit_hint", "no_overlap", "scatter_sigma",
            "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
 
@@ -215,13 +215,34 @@ def truth_noise(truth: Truth, scatter: float | None = None) -> float:
     return max(truth.sigma, (scatter_sigma(truth) if scatter is None else scatter) or 0.0)
 
 
+def clock_unit_hint(log_span: float, truth_span: float) -> str | None:
+    """Where one clock's span is a time unit's factor times the other's
+    (:func:`odomkit.units.time_unit_factor`: within 2x of 1000, 1e6, 1e9), whose time is
+    likely in that unit read as seconds, and the flag that reads it: ``"the truth spans 900 s
+    and the log 9e+05 s, a factor 1e+03: the log's time is likely in ms read as seconds
+    (--time-unit ms)"``; else None. Spans in seconds as read."""
+    if not (log_span > 0 and truth_span > 0):
+        return None
+    for ratio, whose, flag in ((truth_span / log_span, "the truth's", "--truth-time-unit"),
+                               (log_span / truth_span, "the log's", "--time-unit")):
+        if (unit := units.time_unit_factor(ratio)) is not None:
+            return (f"the truth spans {truth_span:.4g} s and the log {log_span:.4g} s, a factor {ratio:.3g}: "
+                    f"{whose} time is likely in {unit} read as seconds ({flag} {unit})")
+    return None
+
+
 def no_overlap(truth: Truth, times: ArrayLike) -> str:
     """One line on a truth that covers fewer than two of ``times`` (the log's rows): both
-    spans, and the options that move or widen the truth's."""
+    spans, and the options that move or widen the truth's; where one span is a time unit's
+    factor times the other's, the flag that reads the one off (:func:`clock_unit_hint`: a
+    log in ms against a truth in s needs ``--time-unit ms``, not ``--truth-time-unit``)."""
     t = np.asarray(times, dtype=float).reshape(-1)
     spans = (f"the truth ({clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s) and the log "
              f"({clock_text(t[0])}..{clock_text(t[-1])} s)")
     if truth.t[0] > t[-1] or truth.t[-1] < t[0]:
+        hint = clock_unit_hint(float(t[-1] - t[0]), float(truth.t[-1] - truth.t[0]))
+        if hint is not None:
+            return f"{spans} do not overlap in time; {hint}"
         return f"{spans} do not overlap in time; check --truth-time-unit and --truth-time-offset"
     return (f"{spans} overlap, but the log's rows there fall in gaps between fixes longer than "
             "--max-gap; check --max-gap, --truth-time-unit and --truth-time-offset")

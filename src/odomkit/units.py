@@ -4,14 +4,17 @@ odomkit computes in SI (metres, seconds, radians; docs/reference/commands/index.
 arrive in other units: a CAN bus gives a car's speed in km/h or mph and its steering angle
 in degrees, a gyro logs °/s. The readers (:mod:`odomkit.io.csvlog`) convert named columns
 with these factors, and the data check (:mod:`odomkit.calibrate.check_ratios`) recognises a
-track that is off by one of them. Each constant is the SI value of one unit, exactly (the
-international mile and foot are defined in metres: 1609.344 m and 0.3048 m).
+track that is off by one of them. A time column may come in ms, µs or ns
+(``--time-unit``, ``--truth-time-unit``: :data:`TIME_UNITS`); read as seconds, it drives and
+turns a log of rates that factor too far, and spans that factor too long. Each constant is
+the SI value of one unit, exactly (the international mile and foot are defined in metres:
+1609.344 m and 0.3048 m).
 """
 from __future__ import annotations
 
 import math
 
-__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH"]
+__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH", "TIME_UNITS", "time_unit_factor"]
 
 DEGREE = math.pi / 180
 """Radians per degree."""
@@ -23,3 +26,24 @@ FOOT = 0.3048
 """Metres per international foot."""
 MILLIMETRE = 1e-3
 """Metres per millimetre (a motion capture's export: Vicon's x_mm, y_mm)."""
+
+TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
+"""Seconds per unit of a time column (``--time-unit``, ``--truth-time-unit``)."""
+
+
+def time_unit_factor(ratio: float) -> str | None:
+    """The time unit (``"ms"``, ``"us"``, ``"ns"``) whose factor ``ratio`` is, within 2x either
+    way (1000, 1e6, 1e9: a time in that unit read as seconds makes a span, or a travel or turn
+    integrated from rates, that many times too large), or None.
+
+    Examples
+    --------
+    >>> time_unit_factor(1440.0), time_unit_factor(0.9e6), time_unit_factor(57.3)
+    ('ms', 'us', None)
+    """
+    if not (math.isfinite(ratio) and ratio > 0):
+        return None
+    for unit in ("ms", "us", "ns"):
+        if 0.5 <= ratio * TIME_UNITS[unit] <= 2.0:
+            return unit
+    return None

@@ -20,7 +20,7 @@ import pytest
 from odomkit.calibrate.check import check_log
 from odomkit.calibrate.check_channels import check_channels
 from odomkit.log import OdometryLog
-from odomkit.robot import Car, DiffDrive, Unicycle
+from odomkit.robot import Car, DiffDrive, GyroOdometry, Unicycle
 from odomkit.track import dead_reckon_log
 from odomkit.truth import Truth
 
@@ -223,3 +223,77 @@ def test_a_close_other_mapping_is_said_with_how_close():
     assert found.status == "warn"
     assert "misfits 0.108, 3.6x as much, under the 4x that tells them apart" in found.message
     assert "only" not in found.message
+
+
+# --- a speed and a yaw rate swapped (MRCLAM user study: "t v ω" read as t,yaw_rate,speed) ----
+
+def heading_truth(log, true_robot, rate, sigma, rng):
+    """Fixes with heading of the true robot's path at ``rate`` Hz, noise σ [m] and σ/10 [rad]."""
+    poses = dead_reckon_log(log, true_robot, pose0=np.array([3.0, -2.0, 0.7])).poses
+    t = np.arange(log.t[0] + 0.137, log.t[-1], 1.0 / rate)
+    p = np.column_stack([np.interp(t, log.t, poses[:, k]) for k in range(3)])
+    return Truth(t, p[:, :2] + rng.normal(0.0, sigma, (t.size, 2)),
+                 p[:, 2] + rng.normal(0, sigma / 10, t.size))
+
+
+# (speed sign, yaw-rate sign) the spoilt log holds the swapped channels with, and the words
+# that name the mapping undoing it: the speed read from the column given as the yaw rate.
+SWAPS = [((1, 1), "speed and yaw rate swapped"),
+         ((-1, 1), "speed and yaw rate swapped, with the speed also negated"),
+         ((1, -1), "speed and yaw rate swapped, with the yaw rate also negated"),
+         ((-1, -1), "speed and yaw rate swapped, with the speed and the yaw rate also negated")]
+
+
+def swapped(log, speed_sign, yaw_sign):
+    """The log as read with its columns swapped: the channel named speed holds the yaw rate
+    (times ``yaw_sign``), the one named yaw_rate the speed (times ``speed_sign``)."""
+    return OdometryLog(log.t, {"speed": yaw_sign * log.channels["yaw_rate"],
+                               "yaw_rate": speed_sign * log.channels["speed"]})
+
+
+@pytest.mark.parametrize("robot", [UNI, GyroOdometry()], ids=["unicycle", "gyro"])
+@pytest.mark.parametrize(("signs", "words"), SWAPS)
+def test_a_speed_and_yaw_rate_swapped_are_named_against_a_heading_truth(robot, signs, words):
+    """check said "matches the truth poorly ... and no other channel mapping does better":
+    the swap was not among the mappings tried. Each swap (with either sign) is named, and
+    the mapping as given still passes."""
+    log, rng = unicycle_log()
+    truth = heading_truth(log, TRUE_UNI, 50.0, 0.01, rng)
+    assert channels_finding(log, robot, truth).status == "ok"
+    f = channels_finding(swapped(log, *signs), robot, truth)
+    assert f.status == "fail" and f.message.startswith(f"the channels look mapped wrong: with {words} the"), f
+    assert f.advice == f"fix the channel mapping ({words}) and check again"
+
+
+@pytest.mark.parametrize(("signs", "words"), [SWAPS[0], SWAPS[2]])
+def test_a_speed_and_yaw_rate_swapped_are_named_against_positions(signs, words):
+    log, rng = unicycle_log()
+    truth = position_truth(log, TRUE_UNI, 50.0, 0.01, rng)
+    f = channels_finding(swapped(log, *signs), UNI, truth)
+    assert f.status == "fail" and f"with {words} the odometry" in f.message, f
+
+
+def test_a_speed_and_yaw_rate_swap_is_tried_only_where_both_are_rates():
+    """A gyro's travel in ticks or metres is no rate: nothing to swap with the yaw rate; a
+    differential drive's and a car's mappings are as they were (8 and 4)."""
+    from odomkit.calibrate.check_channels import _hypotheses
+    from odomkit.robot import GyroOdometry
+
+    log, _ = unicycle_log()
+    ticks = OdometryLog(log.t, {"ticks": 1e4 * log.channels["speed"], "yaw_rate": log.channels["yaw_rate"]})
+    assert [w for w, _ in _hypotheses(GyroOdometry(1e-4), ticks)] == [
+        "as given", "the yaw-rate sign flipped", "the distance sign flipped", "both signs flipped"]
+    assert len(_hypotheses(UNI, log)) == 8
+    assert len(_hypotheses(DIFF, diff_log()[0])) == 8 and len(_hypotheses(CAR, car_log()[0])) == 4
+
+
+def test_a_truth_that_does_not_overlap_the_log_says_why_with_the_time_unit():
+    """A log in ms against its truth in s: check said "the truth barely moves while it
+    overlaps the log"; it does not overlap at all, and the log's span, 1000 times the truth's,
+    names the log's time unit."""
+    log, rng = unicycle_log()
+    truth = heading_truth(log, TRUE_UNI, 50.0, 0.01, rng)
+    in_ms = OdometryLog(1000 * (log.t + 100.0), log.channels)
+    f = channels_finding(in_ms, UNI, truth)
+    assert f.status == "warn" and "do not overlap in time" in f.message, f
+    assert "the log's time is likely in ms read as seconds (--time-unit ms)" in f.message

@@ -399,3 +399,88 @@ def test_with_a_truth_the_standard_errors_match_the_spread_of_calibrations_over_
     spread = np.std(np.array(fits), axis=0, ddof=1)  # c_scale, yaw-rate bias, yaw-rate scale
     ratio = np.median(np.array(figures), axis=0) / spread
     assert np.all((ratio > 1 / 3) & (ratio < 3)), ratio
+
+
+# --- a robot that stands still for part of the run (MRCLAM user study) ----------------------
+
+def _standing_unicycle(still_from, still_to, seed=0, n=6000, dt=0.1):
+    """10 min of :func:`_drifting_unicycle`'s robot, but standing (speed and yaw rate read
+    exactly 0, the truth where it stopped) from ``still_from`` to ``still_to`` [s]; fixes at
+    5 Hz with 1 mm of noise and no σ stated (a motion capture's, as MRCLAM's Vicon)."""
+    from odomkit.robot import Unicycle
+    from odomkit.truth import Truth
+
+    rng = np.random.default_rng(seed)
+    t = dt * np.arange(n)
+    knots = rng.uniform(-0.5, 0.5, n // 50 + 2) * (rng.random(n // 50 + 2) < 0.6)
+    w = np.interp(t, np.arange(knots.size) * 5.0, knots)
+    v = 0.5 + 0.2 * np.sin(t / 23)
+    moving = (t < still_from) | (t >= still_to)
+    v, w = v * moving, w * moving
+    poses = dead_reckon_log(OdometryLog(t, {"speed": v, "yaw_rate": w}), Unicycle(), pose0=np.zeros(3)).poses
+    log = OdometryLog(t, {"speed": moving * (v / 1.02 + rng.normal(0, 0.02, n)),
+                          "yaw_rate": moving * ((w - 0.003) / 1.01 + rng.normal(0, 0.02, n))})
+    return log, Truth(t[::2], poses[::2, :2] + rng.normal(0, 0.001, (n // 2, 2)))
+
+
+def _windows_standing(log, still_from, still_to):
+    """By hand: how many of the 4 windows the drift check fits stand wholly still. The
+    windows cut the compared rows (every 10th row from the 10th, at 10 rows a second; every
+    one has truth) into 4 runs of equal count."""
+    times = log.t[sampled_rows(log)]
+    edges = np.linspace(0, times.size, 5).astype(int)
+    return sum(bool(np.all((times[a:b] >= still_from) & (times[a:b] < still_to)))
+               for a, b in zip(edges[:-1], edges[1:], strict=True))
+
+
+def test_a_window_where_the_robot_stands_still_is_left_out_and_counted_not_the_end_of_check():
+    """MRCLAM ds7 robot 4 stands from about 460 s to 600 s: check stopped with "SE(2)
+    alignment is undetermined: the points do not spread (no motion)", every other finding
+    lost. The window that stands is left out of the windows' spread, and the figures say how
+    many of the 4 were fitted and how many left out (counted by hand here)."""
+    from odomkit.calibrate.check import check_log
+    from odomkit.robot import Unicycle
+
+    log, truth = _standing_unicycle(300.0, 460.0)
+    assert _windows_standing(log, 300.0, 460.0) == 1
+    found = check_log(log, Unicycle(), truth)
+    checks = {f.check for f in found}
+    assert {"travel_ratio", "turn_ratio", "turning", "identifiable"} <= checks
+    windowed = [f for f in found if f.check == "identifiable" and "windows' own fits" in f.message]
+    assert windowed, found
+    for f in windowed:
+        assert "spread of 3 windows' own fits" in f.message and "(1 of 4 left out:" in f.message, f.message
+        assert math.isfinite(f.value)
+
+
+def test_with_no_two_windows_moving_the_spread_is_said_to_be_unmeasured_and_the_checks_go_on():
+    """Standing from 150 s to the end: 3 of the 4 windows stand (by hand), one is left: no
+    spread of fits. That is a warning, the figures fall back to the drift's σ, and every
+    other check still runs."""
+    from odomkit.calibrate.check import check_log
+    from odomkit.robot import Unicycle
+
+    log, truth = _standing_unicycle(150.0, 1e9)
+    assert _windows_standing(log, 150.0, 1e9) == 3
+    found = check_log(log, Unicycle(), truth)
+    assert {"travel_ratio", "turn_ratio", "distance", "turning"} <= {f.check for f in found}
+    (said,) = [f for f in found if f.check == "identifiable" and "not measured" in f.message]
+    assert said.status == "warn" and "3 of them hold no motion" in said.message and "1 left" in said.message
+    figures = [f for f in found if f.check == "identifiable" and f is not said]
+    assert len(figures) == 3 and all("correlated over" in f.message for f in figures), figures
+
+
+def test_a_robot_that_never_moves_is_a_finding_not_an_alignment_error():
+    """Odometry reading 0 throughout against a truth that stands: no track to align (the
+    quick drift fit's alignment is undetermined); check reports the distance, not an error."""
+    from odomkit.calibrate.check import check_log
+    from odomkit.robot import Unicycle
+    from odomkit.truth import Truth
+
+    t = 0.1 * np.arange(600)
+    log = OdometryLog(t, {"speed": np.zeros(t.size), "yaw_rate": np.zeros(t.size)})
+    rng = np.random.default_rng(1)
+    truth = Truth(t, np.array([1.0, 2.0]) + rng.normal(0, 0.001, (t.size, 2)), rng.normal(0, 0.001, t.size))
+    found = check_log(log, Unicycle(), truth)
+    (distance,) = [f for f in found if f.check == "distance"]
+    assert distance.status == "fail" and "travels 0 m" in distance.message

@@ -454,3 +454,66 @@ def test_a_truth_in_millimetres_read_as_metres_is_named():
     assert travel.status == "fail" and travel.value == pytest.approx(1e-3, rel=0.03)
     assert "the truth's millimetres read as metres" in travel.message
     assert "x_mm, y_mm" in (travel.advice or "")
+
+
+# --- times in ms (µs, ns) read as seconds (MRCLAM user study) --------------------------------
+
+def _in_unit(log, truth, factor):
+    """The log and its truth with both clocks counting 1/``factor`` s, as a file in ms holds them."""
+    from dataclasses import replace
+
+    return OdometryLog(factor * log.t, dict(log.channels)), replace(truth, t=factor * truth.t)
+
+
+@pytest.mark.parametrize("robot", [GyroOdometry(), Unicycle()], ids=["gyro", "unicycle"])
+@pytest.mark.parametrize(("unit", "factor"), [("ms", 1e3), ("us", 1e6)])
+def test_both_clocks_in_a_finer_time_unit_name_the_time_unit_not_the_yaw_rate(robot, unit, factor):
+    """Log and truth both in ms, no flags: check said "turns 1.44e+03 ×" and advised the yaw
+    rate's unit (yaw_rate_deg). A speed and a yaw rate integrated over 1000 times the time
+    both come out 1000 times too far while the truth, on the same clock, does not: the
+    finding names the time unit and both flags. The ratios it reports read in that unit are
+    those of the same drive written in seconds (motion_ratios on it, independently)."""
+    _, log, poses, rng = _gyro_drive(straight_legs=True)
+    t = log.t
+    truth = Truth(t[::2], poses[::2, :2] + rng.normal(0, 0.002, (t[::2].size, 2)), poses[::2, 2], 0.002)
+    honest = motion_ratios(log, robot, truth)
+    assert math.isfinite(honest.travel) and math.isfinite(honest.turn)
+    log_in, truth_in = _in_unit(log, truth, factor)
+    found = by_check(check_truth_motion(log_in, robot, truth_in))
+    turn = found["turn_ratio"]
+    assert turn.status == "fail" and 0.5 * factor < turn.value < 2 * factor, turn
+    assert f"times in {unit} read as seconds?" in turn.message, turn.message
+    assert f"travels {honest.travel:.3g} × and turns {honest.turn:.3g} ×" in turn.message, turn.message
+    assert turn.advice == (f"read the times in {unit}: --time-unit {unit} for the log and --truth-time-unit "
+                           f"{unit} for the truth file")
+    assert "yaw_rate_deg" not in turn.advice
+    if found["travel_ratio"].status != "ok":
+        assert found["travel_ratio"].advice == turn.advice
+
+
+def test_a_yaw_rate_a_thousand_times_too_large_is_no_time_unit():
+    """A yaw rate in mrad/s read as rad/s turns 1000 × as much too, but the speed's travel does
+    not follow: that is no time unit, and the finding does not name one."""
+    robot, log, poses, rng = _gyro_drive(straight_legs=True)
+    t = log.t
+    truth = Truth(t[::2], poses[::2, :2] + rng.normal(0, 0.002, (t[::2].size, 2)), poses[::2, 2], 0.002)
+    found = by_check(check_truth_motion(with_channel(log, "yaw_rate", 1000.0), robot, truth))
+    assert found["travel_ratio"].status == "ok" and found["turn_ratio"].status == "fail"
+    assert "read as seconds" not in found["turn_ratio"].message
+    assert "--time-unit" not in (found["turn_ratio"].advice or "")
+
+
+def test_a_wheeled_base_of_wheel_speeds_in_ms_names_the_time_unit_or_the_speeds_unit():
+    """A differential drive's turning follows its wheels' distance: times in ms and wheel
+    speeds in mm/s read as m/s scale travel and turning alike, so both are named."""
+    robot = DiffDrive(0.4)
+    t = 0.02 * np.arange(15000)
+    v, w = 0.3 + 0.1 * np.sin(t / 7), 0.6 * np.sin(t / 11) * (np.arange(t.size) // 250 % 2)
+    log = OdometryLog(t, {"speed_left": v - 0.2 * w, "speed_right": v + 0.2 * w})
+    poses = dead_reckon_log(log, robot, pose0=np.zeros(3)).poses
+    truth = Truth(t[::5], poses[::5, :2], poses[::5, 2], 0.001)
+    log_in, truth_in = _in_unit(log, truth, 1e3)
+    travel = by_check(check_truth_motion(log_in, robot, truth_in))["travel_ratio"]
+    assert travel.status == "fail"
+    assert "times in ms read as seconds (or the speeds' distance unit" in travel.message
+    assert "--time-unit ms" in travel.advice and "the speeds' unit" in travel.advice

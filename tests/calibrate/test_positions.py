@@ -333,3 +333,22 @@ def test_runs_of_cars_that_differ_get_standard_errors_between_runs(spread, warne
         assert np.all((between / own > 0.4) & (between / own < 2.5)), between / own
         assert not said
     assert cal.to_dict()["std_errors_between_runs"]["c_scale"] == pytest.approx(between[0])
+
+
+def test_a_log_in_ms_against_a_truth_in_s_names_the_logs_time_unit():
+    """MRCLAM user study: a log in ms against its truth in s (both on the Unix clock) was told
+    to check --truth-time-unit; the log spans 1000 times the truth, so it is the log's time
+    that is off (--time-unit ms). The other way round names the truth's flag."""
+    log, truth = drive(3, TRUE_CAR, n=500)
+    epoch = 1248444187.156
+    in_ms = OdometryLog(1000 * (log.t + epoch), log.channels)
+    on_epoch = Truth(truth.t + epoch, truth.xy, None, 3.0, "truth.txt")
+    with pytest.raises(InputError) as caught:
+        calibrate_positions([in_ms], [on_epoch], NOMINAL_CAR)
+    said = str(caught.value)
+    assert "the log's time is likely in ms read as seconds (--time-unit ms)" in said
+    assert "--truth-time" not in said
+    truth_in_us = Truth(1e6 * (truth.t + epoch), truth.xy, None, 3.0, "truth.txt")
+    with pytest.raises(InputError, match=r"the truth's time is likely in us read as seconds "
+                                         r"\(--truth-time-unit us\)"):
+        calibrate_positions([OdometryLog(log.t + epoch, log.channels)], [truth_in_us], NOMINAL_CAR)

@@ -179,3 +179,24 @@ def test_noise_comes_in_the_documented_order_whatever_the_files_and_is_found_by_
     assert found.get(LateralSlipNoise) == LateralSlipNoise(3e-5)
     doc = read_robot.__doc__
     assert "NOISE_MODELS" in doc and "NoiseSet.of(noise).get(" in doc
+
+
+@pytest.mark.parametrize(("body", "said"), [
+    ('[robot]\ntype = "unicycle"\n[noise]\nk_left = 0.001\nk_right = 0.001\n',
+     "[noise] k_left, k_right: WheelNoise applies to a DiffDrive robot, not a Unicycle (the file's [robot] "
+     "type is 'unicycle')"),
+    (DIFF + "m_per_tick = 1e-4\n[noise]\nalpha_turn = 0.01\n",
+     "[noise] alpha_turn: TurnNoise applies to a GyroOdometry or Unicycle robot, not a DiffDrive"),
+    ('[robot]\ntype = "unicycle"\n[noise.parameters]\nsigma_wheel_base = 0.01\n',
+     "[noise.parameters] sigma_wheel_base: ParameterUncertainty.sigma_wheel_base does not apply to a "
+     "Unicycle"),
+])
+def test_noise_that_does_not_fit_the_files_robot_names_the_file_and_its_keys(tmp_path, body, said):
+    """MRCLAM user study: a unicycle file with a differential drive's k_left, k_right said
+    only "WheelNoise applies to a DiffDrive robot, not a Unicycle", from deep in track,
+    naming neither the file nor the keys (and check and calibrate read the file happily)."""
+    path = robot_file(tmp_path, body)
+    with pytest.raises(InputError) as info:
+        read_robot(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: {said}"), text

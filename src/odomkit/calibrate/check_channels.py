@@ -1,5 +1,5 @@
 """The channel-mapping check before calibrating (part of ``odomkit check``): are left and
-right swapped, or a sign flipped?
+right swapped, a speed and a yaw rate swapped, or a sign flipped?
 
 :func:`check_channels` compares every mapping a robot's log can get wrong with the truth
 (a truth with heading: each mapping's travel and turn over half-second windows; a
@@ -22,7 +22,7 @@ from odomkit.calibrate.check_finding import Finding
 from odomkit.calibrate.check_ratios import judging_noise
 from odomkit.log import WHEEL_PAIRS, OdometryLog
 from odomkit.robot import DiffDrive, Robot, Tricycle
-from odomkit.truth import Truth, truth_at
+from odomkit.truth import Truth, no_overlap, truth_at
 
 __all__ = ["check_channels"]
 
@@ -54,9 +54,20 @@ def _hypotheses(robot: Robot, log: OdometryLog) -> list[tuple[str, dict[str, Any
     turn = next((c for c in ("steer", "yaw_rate", "heading") if c in log.channels), None)
     what = {"steer": "steering", "yaw_rate": "yaw-rate", "heading": "heading", None: "turn"}[turn]
     dist = "traction" if isinstance(robot, Tricycle) else "distance"
-    return [(d, {"distance": sd, **({turn: st} if turn else {})}) for d, sd, st in (
+    out = [(d, {"distance": sd, **({turn: st} if turn else {})}) for d, sd, st in (
         ("as given", 1, 1), (f"the {what} sign flipped", 1, -1),
         (f"the {dist} sign flipped", -1, 1), ("both signs flipped", -1, -1)) if turn or st > 0]
+    if {"speed", "yaw_rate"} <= set(log.channels):
+        # A speed and a yaw rate are both rates, one column apart in most logs (MRCLAM's
+        # "t v ω" read as t,yaw_rate,speed): swapped, each possibly with its sign flipped.
+        # "swap_rate" reads the speed from the column given as the yaw rate and back; the
+        # signs then apply to the channels as swapped.
+        for sd, st in ((1, 1), (1, -1), (-1, 1), (-1, -1)):
+            flipped = [name for name, sign in (("speed", sd), ("yaw rate", st)) if sign < 0]
+            words = "speed and yaw rate swapped" + (
+                f", with the {' and the '.join(flipped)} also negated" if flipped else "")
+            out.append((words, {"swap_rate": True, "distance": sd, "yaw_rate": st}))
+    return out
 
 
 def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
@@ -69,6 +80,8 @@ def _remapped(log: OdometryLog, change: dict[str, Any]) -> OdometryLog:
                     a, b = b, a
                 ch[left], ch[right] = change["left"] * a, change["right"] * b
     else:
+        if change.get("swap_rate"):
+            ch["speed"], ch["yaw_rate"] = ch["yaw_rate"], ch["speed"]
         for name in ("ticks", "dist", "speed"):
             if name in ch:
                 ch[name] = change["distance"] * ch[name]
@@ -83,7 +96,8 @@ def _reversed(change: dict[str, Any]) -> dict[str, Any]:
 
     A differential drive's wheels swapped and both negated; a distance sign flipped, and
     with it a steering angle's (whose turn is distance × tan δ / L), not a yaw rate's or
-    heading's (whose turn does not depend on the distance).
+    heading's (whose turn does not depend on the distance); a speed and yaw rate swapped
+    stay swapped.
     """
     if "swap" in change:
         return {"swap": not change["swap"], "left": -change["right"], "right": -change["left"]}
@@ -124,7 +138,8 @@ def check_channels(log: OdometryLog, robot: Robot, truth: Truth | None = None, *
     """Are the channels mapped right (left/right, signs)?
 
     With truth: every mapping a robot's log can get wrong (differential: swapped, either
-    sign flipped; otherwise each sign) is compared with the truth, and a mapping that fits
+    sign flipped; otherwise each sign, and, for a log with a speed and a yaw rate (a
+    unicycle, a gyro), the two swapped with either sign) is compared with the truth, and a mapping that fits
     it clearly better (under half the misfit) than the one given is reported; the one given
     passes only if every other misfits at least 4 times as much (else a warning: the log
     cannot tell them apart). A truth with heading: each mapping dead-reckoned over
@@ -196,6 +211,11 @@ def _channels_from_spin(log: OdometryLog, robot: Robot, spin: str) -> list[Findi
 
 def _channels_against_truth(log: OdometryLog, robot: Robot, truth: Truth,
                             max_gap: float | None) -> list[Finding]:
+    if truth.t[0] > log.t[-1] or truth.t[-1] < log.t[0]:
+        # A log in ms against a truth in s: the message names the flag that reads the one off.
+        return [Finding("channels", "warn", f"{no_overlap(truth, log.t)}: channels not checked",
+                        "read both clocks in seconds (the time unit named), or shift the truth's "
+                        "(--truth-time-offset)")]
     if not truth.has_heading:
         return _channels_against_positions(log, robot, truth, max_gap)
     dt = np.diff(log.t)

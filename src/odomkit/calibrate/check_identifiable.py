@@ -163,7 +163,11 @@ class AssumedSigma:
     ``"given"`` a number the caller passed, ``"drift"`` the odometry's drift against the
     truth (:func:`identifiability_sigma` with a log: ``rms`` [m] the residuals' RMS per axis
     of a quick fit to the truth, ``correlation`` [s] the time over which they are
-    correlated, ``value`` = ``rms`` · √(``correlation`` / 1 s)).
+    correlated, ``value`` = ``rms`` · √(``correlation`` / 1 s)); ``"windows"`` the spread of
+    the fits of :data:`_WINDOWS` windows of the run (``windows``: the σ [m per axis] per free
+    parameter that matches it, empty where it was not measured). ``fitted`` windows gave that
+    spread; ``still`` were left out, their truth or odometry not spreading (a robot standing
+    or turning on the spot: no start pose to fit).
     """
 
     value: float
@@ -171,12 +175,15 @@ class AssumedSigma:
     rms: float = math.nan
     correlation: float = math.nan
     windows: tuple[float, ...] = ()
+    fitted: int = 0
+    still: int = 0
 
     def for_parameter(self, k: int) -> AssumedSigma:
         """The σ of the ``k``-th free parameter: the spread of the windows' fits where it is
         larger (``windows``), else this one."""
         if k < len(self.windows) and self.windows[k] > self.value:
-            return AssumedSigma(self.windows[k], "windows", self.rms, self.correlation)
+            return AssumedSigma(self.windows[k], "windows", self.rms, self.correlation, (), self.fitted,
+                                self.still)
         return self
 
     @property
@@ -190,7 +197,9 @@ class AssumedSigma:
         def shown(x: float) -> str:
             return f"{1000 * x:.3g} mm" if x < 1 else f"{x:.3g} m"
         if self.source == "windows":  # an equivalent σ of metres would only puzzle
-            return f"the spread of {_WINDOWS} windows' own fits to the truth, each from its own start pose"
+            return (f"the spread of {self.fitted or _WINDOWS} windows' own fits to the truth, each from its "
+                    "own start pose" + (f" ({self.still} of {self.fitted + self.still} left out: standing "
+                                        "or turning on the spot)" if self.still else ""))
         if self.source == "drift":
             return (f"σ = {shown(self.value)} per axis ({_SOURCES['drift']}: {shown(self.rms)} RMS, "
                     f"correlated over {self.correlation:.3g} s)")
@@ -240,7 +249,9 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
     errors correlated over τ (n/τ independent ones). None for a robot ``calibrate`` does not
     calibrate, or fewer than 10 positions with truth.
     """
+    from odomkit.calibrate.positions import truth_spreads
     from odomkit.calibrate.residuals import CALIBRATED_ROBOTS, calibration_model, integrate_with_sensitivity
+    from odomkit.errors import ModelError
     from odomkit.evaluate import umeyama_se2
     from odomkit.truth import truth_at
 
@@ -280,11 +291,19 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
             D = np.concatenate((np.einsum("ij,njp->nip", turn, J), start), axis=2).reshape(2 * n, -1)
             return (target - placed - shift).reshape(-1), D
 
+        def whole(p: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]] | None:
+            """:func:`misfit` over the whole run; None where its track does not spread (a
+            robot that never drives: no rotation aligns it to the truth)."""
+            try:
+                return misfit(p)
+            except ModelError:
+                return None
+
         # Gauss–Newton from the robot's values, each step kept only where it lowers the misfit
         # (halved otherwise): a long drive's nominal track is far from the truth, and one
         # linear step from it leaves metres that a fit does not.
         p = np.array(model.p0, dtype=float)
-        got = misfit(p)
+        got = whole(p)
         if got is None:
             return None
         error, D = got
@@ -293,7 +312,7 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
             for _ in range(10):
                 trial = p.copy()
                 trial[free] += step[: len(free)]
-                again = misfit(trial)
+                again = whole(trial)
                 if again is not None and again[0] @ again[0] < error @ error:
                     break
                 step = 0.5 * step
@@ -306,10 +325,11 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
         step, *_ = np.linalg.lstsq(D, error, rcond=None)
         n = error.size // 2
         resid = (error - D @ step).reshape(n, 2)
-        whole = p.copy()
-        whole[free] += step[: len(free)]
-        batch = _between_windows(misfit, whole, free, n, float(np.sqrt(np.mean(resid**2))),
-                                 D[:, : len(free)])
+        best = p.copy()
+        best[free] += step[: len(free)]
+        batch, fitted, still = _between_windows(misfit, best, free, n, float(np.sqrt(np.mean(resid**2))),
+                                                D[:, : len(free)],
+                                                lambda keep: truth_spreads(fixes[keep], truth))
         dof = 2 * n - D.shape[1]
         if dof <= 0:
             return None
@@ -339,43 +359,62 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
             if robot.type_name == "diff":  # (c_left, c_right) shown as (E_s, E_d): either's
                 batch[:2] = [max(batch[:2])] * 2
             windows = tuple(max(value, x) for x in batch)
-    return AssumedSigma(value, "drift", rms, tau_rows * period, windows)
+    return AssumedSigma(value, "drift", rms, tau_rows * period, windows, fitted, still)
 
 
 def _between_windows(misfit: Callable[..., Any], start: NDArray[np.float64], free: list[int], n: int,
-                     rms: float, design: NDArray[np.float64]) -> list[float] | None:
+                     rms: float, design: NDArray[np.float64], spreads: Callable[[NDArray[np.bool_]], bool]
+                     ) -> tuple[list[float] | None, int, int]:
     """Per free parameter, the σ [m per axis] at which its figure (σ over the part of its
     column, in ``design`` (2n, P), that the others cannot mimic) matches the spread of its fits
     to :data:`_WINDOWS` consecutive windows of the run, each fitted alone from its own start
     pose; ``rms`` (the whole fit's residuals') where that spread is no more than 1.5 times
     what each window's own fit claims at its residuals' RMS (the windows' own geometry, not
     drift: a window of an S-curve pins a steering offset far less than the whole curve does).
-    None where a window's fit fails.
+    None where a window's fit fails, or fewer than two windows are fitted.
+
+    A window whose truth does not spread (``spreads(keep)`` False for its rows ``keep``: a
+    robot standing or turning on the spot, :func:`odomkit.calibrate.positions.truth_spreads`)
+    or whose odometry does not (no rotation aligns it to the truth) has no start pose to fit:
+    it is left out and counted. Returned with the windows fitted and those left out.
 
     The spread is taken over windows^¼, not √windows: drift builds along a run (a heading's
     random walk), so the whole run pins a parameter little better than one window does
     (simulated unicycles with a gyro's white noise: the whole runs' fits spread 1.2-3.6x the
     windows' spread over √4; within a factor 3 of it over 4^¼)."""
+    from odomkit.errors import ModelError
+
     # misfit(p, keep) is the residuals and design over the kept rows only.
-    fits, claimed = [], []
+    fits: list[NDArray[np.float64]] = []
+    claimed: list[NDArray[np.float64]] = []
+    still = 0
     edges = np.linspace(0, n, _WINDOWS + 1).astype(int)
     for lo, hi in zip(edges[:-1], edges[1:], strict=True):
         keep = np.zeros(n, dtype=bool)
         keep[lo:hi] = True
+        if not spreads(keep):
+            still += 1
+            continue
         p = start.copy()
-        for _ in range(3):
-            got = misfit(p, keep)
-            if got is None:
-                return None
-            step, *_ = np.linalg.lstsq(got[1], got[0], rcond=None)
-            p[free] += step[: len(free)]
+        try:
+            for _ in range(3):
+                got = misfit(p, keep)
+                if got is None:
+                    return None, len(fits), still
+                step, *_ = np.linalg.lstsq(got[1], got[0], rcond=None)
+                p[free] += step[: len(free)]
+        except ModelError:  # the odometry stands while the truth moves (a stuck encoder's finding)
+            still += 1
+            continue
         error, D = got
         dof = D.shape[0] - D.shape[1]
         if dof <= 0:
-            return None
+            return None, len(fits), still
         left = error - D @ step
         claimed.append(np.diag(float(left @ left) / dof * np.linalg.pinv(D.T @ D))[: len(free)])
         fits.append(p[free])
+    if len(fits) < 2:
+        return None, len(fits), still
     spread = np.std(np.array(fits), axis=0, ddof=1)
     own = np.sqrt(np.mean(np.array(claimed), axis=0))
     sigmas = []
@@ -386,8 +425,8 @@ def _between_windows(misfit: Callable[..., Any], start: NDArray[np.float64], fre
         others = np.delete(design, i, axis=1)
         coef, *_ = np.linalg.lstsq(others, design[:, i], rcond=None)
         unique = float(np.linalg.norm(design[:, i] - others @ coef))
-        sigmas.append(float(spread[i] / _WINDOWS**0.25 * unique))
-    return sigmas if all(math.isfinite(x) for x in sigmas) else None
+        sigmas.append(float(spread[i] / len(fits)**0.25 * unique))
+    return (sigmas if all(math.isfinite(x) for x in sigmas) else None), len(fits), still
 
 
 def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSigma | None = None
@@ -442,6 +481,15 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSig
                         "range that they overflow", "check the log's values, its time unit and its columns")]
     found = [Finding("identifiable", "ok", f"{label}: not calibrated from this log ({why}): calibrate "
                      "holds it at the robot file's value") for label, why in unused.items()]
+    if assumed.source == "drift" and assumed.still and not assumed.windows:
+        # MRCLAM user study: a robot standing 140 s stopped check ("SE(2) alignment is
+        # undetermined") with every other finding lost.
+        found.append(Finding(
+            "identifiable", "warn", f"the spread of {_WINDOWS} windows' own fits to the truth is not "
+            f"measured: {assumed.still} of them hold no motion to fit (standing or turning on the spot), "
+            f"{assumed.fitted} left and two needed; the figures below count the drift by its correlation "
+            "time alone, which understates a heading's random walk",
+            "check a --span where the robot drives throughout, or record a drive that keeps moving"))
     norms = np.linalg.norm(A, axis=0)
     for i, (par, value) in enumerate(params):
         others = np.delete(A, i, axis=1)

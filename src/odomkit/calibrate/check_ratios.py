@@ -24,13 +24,17 @@ Each is a ratio of sums (odometry over truth), with a standard error from the sp
 stretches' own ratios. The ratios name a likely cause where they sit on a known unit factor,
 and the robot-file entry that would absorb them otherwise (for a differential drive, the
 turning ratio over the travel ratio is the wheel base's error; for a car, about the
-steering ratio's).
+steering ratio's). A log of rates (speeds, a yaw rate) whose times are in ms read as seconds
+drives and turns 1000 times as far, both alike: where every ratio a time unit scales sits
+near its factor (1000, 1e6, 1e9) and the ratios measured again with the times read in that
+unit come out near 1, the finding names the time unit (:func:`time_unit_off`), not a speed's
+or a yaw rate's.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,7 +46,8 @@ from odomkit.robot import Car, CompassOdometry, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
 __all__ = ["check_truth_motion", "judging_noise", "motion_problems", "MotionRatios", "motion_ratios",
-           "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "unit_mixup"]
+           "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "time_unit_off", "TimeUnitOff",
+           "unit_mixup"]
 
 #: A stretch's truth chord counts where it exceeds this many times the chord's own noise
 #: (σ√2 for two fixes of σ per axis): a 7 % error on one stretch's ratio at worst, and a
@@ -392,6 +397,69 @@ def unit_mixup(travel: float, turn: float) -> str | None:
     return None
 
 
+@dataclass(frozen=True)
+class TimeUnitOff:
+    """Times in ``unit`` (``"ms"``, ``"us"``, ``"ns"``) read as seconds (:func:`time_unit_off`):
+    ``again`` the ratios measured with the log's and the truth's times read in that unit;
+    ``or_distance`` where a speed's distance unit off by the same factor would read alike (a
+    wheeled base's turning follows its distance)."""
+
+    unit: str
+    again: MotionRatios
+    or_distance: bool = False
+
+    def cause(self) -> str:
+        """What the finding says: the unit, and the ratios read in it."""
+        ratios = (("travels", self.again.travel), ("turns", self.again.turn))
+        said = [f"{what} {x:.3g} ×" for what, x in ratios if math.isfinite(x)]
+        other = " (or the speeds' distance unit that many times too small)" if self.or_distance else ""
+        return (f"times in {self.unit} read as seconds{other}? (read in {self.unit}, the odometry "
+                f"{' and '.join(said)} as much as the truth)")
+
+    def advice(self) -> str:
+        other = ", or check the speeds' unit" if self.or_distance else ""
+        return (f"read the times in {self.unit}: --time-unit {self.unit} for the log and --truth-time-unit "
+                f"{self.unit} for the truth file{other}")
+
+
+def time_unit_off(log: OdometryLog, robot: Robot, truth: Truth, r: MotionRatios,
+                  max_gap: float | None = 0.5, noise: float | None = None) -> TimeUnitOff | None:
+    """Whether the log's and the truth's times are in ms, µs or ns read as seconds.
+
+    Read so, a log of rates integrates each over 1000 (1e6, 1e9) times the time it held: its
+    travel (from a speed) and its turning (from a yaw rate, or a wheeled base's from the
+    distance) both come out near that factor (within 2x: :func:`odomkit.units.time_unit_factor`),
+    while the truth, on the same clock, moves as it did. The unit is named where the log's
+    travel comes from a speed and its turning from a yaw rate or the distance, every ratio of
+    ``r`` measured (at least one) sits near the same factor, and :func:`motion_ratios` again,
+    with both clocks read in that unit, gives every ratio it measures (at least one) within
+    :data:`RATIO_FAIL` of 1. Not for a log of increments (its travel is metres in any time
+    unit: a yaw rate in mrad/s read as rad/s would pass for a time unit) nor for a measured
+    heading (a speed in mm/s would). A wheeled base's turning follows its distance, so a
+    speed's distance unit reads alike (``or_distance``). None otherwise. (A log in ms against
+    a truth in s: their spans differ by the factor, :func:`odomkit.truth.clock_unit_hint`.)"""
+    from odomkit.units import TIME_UNITS, time_unit_factor
+
+    by_distance = isinstance(robot, (DiffDrive, Car, Tricycle))
+    if (SPEED_CHANNELS.isdisjoint(log.channels) or isinstance(robot, CompassOdometry)
+            or not (by_distance or "yaw_rate" in log.channels)):
+        return None
+    measured = [x for x in (r.travel, r.turn) if math.isfinite(x)]
+    found = {time_unit_factor(x) for x in measured}
+    if not measured or len(found) != 1 or None in found:
+        return None
+    (unit,) = found
+    assert unit is not None
+    seconds = TIME_UNITS[unit]
+    with np.errstate(all="ignore"):
+        again = motion_ratios(replace(log, t=log.t * seconds), robot, replace(truth, t=truth.t * seconds),
+                              max_gap, noise)
+    near = [x for x in (again.travel, again.turn) if math.isfinite(x)]
+    if not near or not all(x > 0 and abs(math.log(x)) <= math.log(RATIO_FAIL) for x in near):
+        return None
+    return TimeUnitOff(unit, again, by_distance)
+
+
 def _status(ratio: float, warn: float, se: float = math.nan) -> Status:
     if abs(ratio - 1) <= COVERS_ONE * se:  # no evidence against 1 (NaN: none either way)
         return "ok"
@@ -409,13 +477,16 @@ def _covers_one(ratio: float, warn: float, se: float) -> str:
     return f": within {COVERS_ONE:g} standard errors of 1, not told apart from it"
 
 
-def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool, judged: str = "") -> Finding:
+def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool, judged: str = "",
+                    clock: TimeUnitOff | None = None) -> Finding:
     said = (f"the odometry travels {r.travel:.3g} ± {r.travel_se:.2g} × the truth's distance "
             f"over {r.travel_stretches} straight stretches of {r.span:.3g} s{judged}")
     status = _status(r.travel, TRAVEL_WARN, r.travel_se)
     if status == "ok":
         return Finding("travel_ratio", "ok", said + _covers_one(r.travel, TRAVEL_WARN, r.travel_se),
                        value=r.travel)
+    if clock is not None:
+        return Finding("travel_ratio", status, f"{said}: {clock.cause()}", clock.advice(), r.travel)
     unit = _unit(r.travel, _TRAVEL_UNITS)
     if unit is not None:
         return Finding("travel_ratio", status, f"{said}: {unit[0]}?", unit[1], r.travel)
@@ -434,7 +505,8 @@ def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool, judged: str 
                    f"check {entry} in the robot file and the log's distance unit", r.travel)
 
 
-def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "") -> Finding:
+def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "", clock: TimeUnitOff | None = None
+                  ) -> Finding:
     per_metre = r.turn / r.travel if math.isfinite(r.travel) and r.travel > 0 else math.nan
     said = (f"the odometry turns {r.turn:.3g} ± {r.turn_se:.2g} × as much as the truth "
             f"({r.odometry_turned:.3g} rad against {r.truth_turned:.3g} rad over {r.turns} turns"
@@ -451,6 +523,9 @@ def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "") -> Finding:
     status = _status(gain, TURN_WARN, gain_se)
     if status == "ok":
         return Finding("turn_ratio", "ok", said + _covers_one(gain, TURN_WARN, gain_se), value=gain)
+    if clock is not None:
+        # MRCLAM user study: both clocks in ms turned 1.44e+03 × and advised yaw_rate_deg.
+        return Finding("turn_ratio", status, f"{said}: {clock.cause()}", clock.advice(), gain)
     unit = _unit(gain, _TURN_UNITS)
     if unit is not None:
         return Finding("turn_ratio", status, f"{said}: {unit[0]}?", unit[1], gain)
@@ -521,15 +596,16 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
     judged = "" if estimate is None else (
         f" (judged at the {used:.3g} m sigma the fixes state, not their {estimate:.2g} m scatter about a "
         "smooth path, which misses a GPS's error correlated in time; --truth-sigma sets it)")
+    clock = time_unit_off(log, robot, truth, r, max_gap, noise)
     found = []
     if math.isfinite(r.travel):
-        found.append(_travel_finding(r, robot, not SPEED_CHANNELS.isdisjoint(log.channels), judged))
+        found.append(_travel_finding(r, robot, not SPEED_CHANNELS.isdisjoint(log.channels), judged, clock))
     else:
         found.append(Finding("travel_ratio", "ok", f"only {r.travel_stretches} straight stretch(es) where "
                              "the truth moves beyond its noise: the odometry's travel not compared with the "
                              "truth's"))
     if math.isfinite(r.turn):
-        found.append(_turn_finding(r, robot, judged))
+        found.append(_turn_finding(r, robot, judged, clock))
     else:
         found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
                              "odometry's turning not compared with the truth's"))

@@ -74,12 +74,12 @@ from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
 from odomkit.kinematics import Method, body_steps
 from odomkit.log import OdometryLog, clock_text
-from odomkit.truth import Truth
+from odomkit.truth import Truth, clock_unit_hint
 from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
 __all__ = ["DRIFT_GIST", "DRIFT_SHARE", "DRIFT_WINDOW", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET",
            "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES", "calibrate_positions", "compared_fixes", "drift_bias",
-           "runs_disagree", "scale_range"]
+           "runs_disagree", "scale_range", "truth_spreads"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -152,10 +152,17 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
         tau = truth.t[inside]
         if tau.size < 4:
             within = f" (less {margin:g} s at each end, the largest clock offset fitted)" if margin else ""
+            # A log in ms against a truth in s wants --time-unit ms, not the truth's flags (the
+            # log's span before --span cut it: a cut log spans less by design).
+            uncut = log.meta.get("uncut_clock")
+            start, end = uncut if isinstance(uncut, tuple) else (t[0], t[-1])
+            hint = clock_unit_hint(float(end - start), float(truth.t[-1] - truth.t[0]))
             raise InputError(f"only {tau.size} truth fixes lie inside the log's time span "
                              f"({clock_text(t[0])}..{clock_text(t[-1])} s{within}; the truth covers "
-                             f"{clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s): check the clocks "
-                             "(--truth-time-unit, --truth-time-offset)", source=truth.source)
+                             f"{clock_text(truth.t[0])}..{clock_text(truth.t[-1])} s): " + (
+                                 hint if hint is not None else
+                                 "check the clocks (--truth-time-unit, --truth-time-offset)"),
+                             source=truth.source)
         beyond = int(np.count_nonzero(~compared_fixes(t, truth.t)))
         out.append(_Run(t, truth.xy[inside], tau, beyond, int(np.count_nonzero(~inside)) - beyond, margin))
     return out
@@ -330,6 +337,14 @@ def _min_spread(truth: Truth) -> float:
     """How far [m] a run's fixes must spread to be calibrated from: three times the truth's
     σ, at least 1 cm (a robot standing or turning on the spot gives no start pose)."""
     return max(3.0 * truth.sigma, 0.01)
+
+
+def truth_spreads(xy: NDArray[np.float64], truth: Truth) -> bool:
+    """Whether fixes (n, 2) [m] of ``truth`` spread enough to align a track to: their RMS
+    distance from their centroid is at least three times the truth's σ, and at least 1 cm (a
+    robot standing or turning on the spot gives no rotation to align by). The rule by which
+    ``calibrate --window`` and ``check``'s windows leave a window out."""
+    return _spread(xy) >= _min_spread(truth)
 
 
 def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float],
@@ -513,7 +528,7 @@ def _cut_windows(runs: Sequence[OdometryLog], truths: Sequence[Truth], with_trut
             if np.count_nonzero(inside) < MIN_WINDOW_FIXES:
                 few += 1
                 continue
-            if _spread(run.xy[inside]) < _min_spread(truth):
+            if not truth_spreads(run.xy[inside], truth):
                 still += 1
                 continue
             i0 = max(int(np.searchsorted(t, a - margin, side="right")) - 1, 0)

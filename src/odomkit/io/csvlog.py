@@ -299,7 +299,7 @@ def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -
 
 def read_csv_log(
     path: str | Path,
-    columns: Mapping[str, str] | Sequence[str] | None,
+    columns: str | Mapping[str, str] | Sequence[str] | None,
     *,
     time_unit: str | float = "s",
     cumulative: bool = False,
@@ -315,7 +315,10 @@ def read_csv_log(
     path : the file
     columns : which column holds what; None: the header's own names, where it names every
         column by odomkit's (``t,speed,yaw_rate``; :data:`TIME_NAMES` for time; a ROS Twist's
-        ``linear_x``, ``angular_z``: :data:`HEADER_ALIASES`). A sequence
+        ``linear_x``, ``angular_z``: :data:`HEADER_ALIASES`). A string is ``--columns``'s
+        text (``"t,speed,yaw_rate"``, ``"t=time,ticks_left=L"``), read by
+        :func:`parse_columns` as the command line reads it, as ``read_truth`` and
+        :class:`~odomkit.workflows.logs.LogOptions` take theirs. A sequence
         names the columns in order
         (``["t", "ticks_left", "_", "ticks_right"]``; ``_`` skips one; columns after the
         last name are ignored; a header line, if any, is skipped); a mapping goes from
@@ -358,9 +361,8 @@ def read_csv_log(
     seconds = seconds_per_unit(time_unit)
     if wrap_bits is not None and not cumulative:
         raise InputError("wrap-around can only be undone on cumulative counters (--cumulative)")
-    if isinstance(columns, str):
-        raise InputError("columns must be a mapping or a sequence of names, not a string "
-                         "(parse --columns text with parse_columns)")
+    if isinstance(columns, str):  # --columns text, as the command line gives it
+        columns = parse_columns(columns)
     text = read_text(path)
     try:
         return _log_of_text(path, select_record(text, source, record), columns, seconds, cumulative,

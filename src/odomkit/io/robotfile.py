@@ -233,10 +233,22 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
     return robot
 
 
-def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, ...]:
+def _applies(model: NoiseModel, robot: Robot, where: str, source: str) -> NoiseModel:
+    """``model`` where it applies to the file's ``robot``; else the error names the file, the
+    keys that gave it (``where``: ``"[noise] k_left, k_right"``) and the robot's type."""
+    try:
+        model.check_robot(robot)
+    except ModelError as exc:
+        raise InputError(f"{where}: {exc} (the file's [robot] type is {robot.type_name!r})",
+                         source=source) from None
+    return model
+
+
+def _noise_from_table(table: dict[str, Any], source: str, robot: Robot) -> tuple[NoiseModel, ...]:
     """The noise models of a ``[noise]`` table: each registered model
     (:data:`odomkit.noise.NOISE_MODELS`) whose keys (its fields) are present, plus the
-    models of sub-tables such as ``[noise.parameters]``."""
+    models of sub-tables such as ``[noise.parameters]``; each must apply to ``robot`` (the
+    file's own), or the error names its keys."""
     models: list[NoiseModel] = []
     sub_tables = {cls.toml_table.split(".", 1)[1]: cls for cls in NOISE_MODELS.values()
                   if cls.toml_table.startswith("noise.")}
@@ -255,7 +267,7 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
             missing = ", ".join(sorted(required - present))
             raise InputError(f"[noise] {cls.__name__} also needs {missing}", source=source)
         kwargs = {k: f.number(k) for k in sorted(required | (optional & set(plain)))}
-        models.append(cls(**kwargs))
+        models.append(_applies(cls(**kwargs), robot, f"[noise] {', '.join(kwargs)}", source))
     f.check_unused()
     for name, cls in sub_tables.items():
         sub = table.get(name)
@@ -272,7 +284,7 @@ def _noise_from_table(table: dict[str, Any], source: str) -> tuple[NoiseModel, .
                     kwargs[fld.name] = sub[fld.name]
             elif fld.name in sub:
                 kwargs[fld.name] = pf.number(fld.name)
-        models.append(cls(**kwargs))
+        models.append(_applies(cls(**kwargs), robot, f"[noise.{name}] {', '.join(sub)}", source))
         pf.check_unused()
     return tuple(models)
 
@@ -317,7 +329,7 @@ def read_robot(path: str | Path) -> tuple[Robot, tuple[NoiseModel, ...]]:
     doc = _document(path)
     try:
         robot = _robot_from_table(doc["robot"], str(path))
-        noise = _noise_from_table(doc.get("noise", {}), str(path))
+        noise = _noise_from_table(doc.get("noise", {}), str(path), robot)
     except ModelError as exc:
         raise InputError(str(exc), source=str(path)) from None
     return robot, noise

@@ -29,6 +29,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from odomkit import units
 from odomkit.errors import InputError
 
 __all__ = ["check_record_columns", "content_lines", "DELIMITERS", "GZIP_MAGIC", "is_number",
@@ -112,8 +113,9 @@ DELIMITERS: tuple[str | None, ...] = (",", ";", "\t", None)
 """The field separators a text table may use, tried in this order: comma, semicolon, tab,
 and any run of whitespace (None)."""
 
-TIME_UNITS = {"s": 1.0, "ms": 1e-3, "us": 1e-6, "µs": 1e-6, "ns": 1e-9}
-"""Seconds per unit of a time column (``--time-unit``, ``--truth-time-unit``)."""
+TIME_UNITS = units.TIME_UNITS
+"""Seconds per unit of a time column (``--time-unit``, ``--truth-time-unit``):
+:data:`odomkit.units.TIME_UNITS`."""
 
 _NAMES = {",": "comma", ";": "semicolon", "\t": "tab", None: "whitespace"}
 # What numpy's parser takes as a float: Python's float() also takes '1_000' and Unicode

@@ -178,12 +178,11 @@ def _warn_if_heading_off_motion(truth: Truth) -> None:
 def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     """Warn where the truth moves faster than a wheeled vehicle
     (:func:`odomkit.truth.implausible_speed`), or where its span and the log's differ by a
-    time unit's factor (within 2x of 1000, 1e6, 1e9: :data:`odomkit.io.text.TIME_UNITS`)
+    time unit's factor (within 2x of 1000, 1e6, 1e9: :func:`odomkit.truth.clock_unit_hint`)
     while both start together: a truth stamped in ms read as s spans 1000 times the log's
     seconds and overlaps it only in its first thousandth, which evaluate reported as "no
     window travels --min-travel", not as a unit."""
-    from odomkit.io.text import TIME_UNITS
-    from odomkit.truth import implausible_speed
+    from odomkit.truth import clock_unit_hint, implausible_speed
 
     if note := implausible_speed(truth):
         warnings.warn(f"{truth.source}: {note}", stacklevel=3)
@@ -196,15 +195,8 @@ def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     # that merely runs far longer (a GPS logging the whole day) starts elsewhere as a rule.
     if not (ours > 0 and theirs > 0) or abs(float(truth.t[0] - start)) > 0.01 * max(ours, theirs):
         return
-    for unit in ("ms", "us", "ns"):
-        seconds = TIME_UNITS[unit]
-        for ratio, whose, flag in ((theirs / ours, "the truth's", "--truth-time-unit"),
-                                   (ours / theirs, "the log's", "--time-unit")):
-            if 0.5 / seconds <= ratio <= 2.0 / seconds:
-                warnings.warn(f"{truth.source}: the truth spans {theirs:.4g} s and the log {ours:.4g} s, a "
-                              f"factor {ratio:.3g}: {whose} time is likely in {unit} read as seconds "
-                              f"({flag} {unit})", stacklevel=3)
-                return
+    if (hint := clock_unit_hint(ours, theirs)) is not None:
+        warnings.warn(f"{truth.source}: {hint}", stacklevel=3)
 
 
 def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
