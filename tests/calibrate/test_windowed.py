@@ -431,3 +431,29 @@ def test_a_twist_covariance_at_zero_yaw_rate_says_what_turn_noise_it_leaves_out(
     code, out, err = run_cli(*args[:3], plain, *args[4:])
     assert code == 0, err
     assert not any("TurnNoise" in w for w in json.loads(out)["warnings"])
+
+
+def test_a_single_window_is_judged_as_a_whole_run_and_windows_that_drift_are_said():
+    """A window as long as the drive is one run from one start pose, biased as a whole run is:
+    the whole-run warning names it (before, it said nothing and described between-window
+    standard errors that one window does not have). Windows whose median drift share passes
+    twice DRIFT_SHARE are said (windows_drift, checked here on residuals made by hand: a
+    window of fixes on a 1 m circle, spread 1 m, with residuals of RMS 0.3 m per axis beyond
+    no truth noise is 30 % drift)."""
+    from odomkit.calibrate.positions import DRIFT_SHARE, drift_shares, windows_drift
+
+    log, truth = drive(0)
+    cal, said = quiet(calibrate_positions, [log], [truth], Unicycle(), window="800s")
+    assert cal.n_windows == 1 and cal.drift_dominated
+    assert any("drift-dominated and biased" in s for s in said)
+    assert not any("allow for it" in s for s in said)  # no between-window errors to point to
+    angle = np.linspace(0.0, 2 * np.pi, 50, endpoint=False)
+    circle = np.column_stack((np.cos(angle), np.sin(angle)))
+    residuals = np.full(100, 0.3)
+    assert drift_shares(residuals, [100], [circle], 0.0)[0] == pytest.approx((0.3, 1.0, 0.3))
+    quiet_truth = Truth(np.arange(50.0), circle, None, 0.0)
+    drifting = windows_drift(np.concatenate([residuals] * 3), [100] * 3, [circle] * 3, [quiet_truth], "60 s")
+    assert drifting is not None and "30 %" in drifting and "shorten --window" in drifting
+    calm = np.full(100, 0.9 * 2 * DRIFT_SHARE)
+    assert windows_drift(np.concatenate([calm] * 3), [100] * 3, [circle] * 3, [quiet_truth], "60 s") is None
+    assert windows_drift(residuals, [100], [circle], [quiet_truth], "60 s") is None  # one window: a run

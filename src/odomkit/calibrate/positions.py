@@ -79,7 +79,7 @@ from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_w
 
 __all__ = ["DRIFT_GIST", "DRIFT_SHARE", "DRIFT_WINDOW", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET",
            "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES", "calibrate_positions", "compared_fixes", "drift_bias",
-           "runs_disagree", "scale_range", "truth_spreads"]
+           "drift_shares", "runs_disagree", "scale_range", "truth_spreads", "windows_drift"]
 
 #: Fewest truth fixes in the first (shortest) stage of the growing horizon.
 MIN_FIRST_FIXES = 30
@@ -376,7 +376,7 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
 
 #: A whole run whose residuals beyond the truth's noise (RMS per axis) reach this share of how
 #: far its truth spreads (RMS distance from the centroid) is drift-dominated (:func:`drift_bias`).
-#: Measured: the ten 15-minute MRCLAM runs (Vicon, commanded velocities) 0.22–0.37 where
+#: Measured: the ten 15-minute MRCLAM runs (Vicon, commanded velocities) 0.19–0.37 where
 #: fitted; the first run of every OptiOdom experiment (motion capture, 19–211 s) at most 0.032;
 #: simulated 400–600 s drives against a 0.5–1 m GPS at most 0.014.
 DRIFT_SHARE = 0.1
@@ -387,6 +387,39 @@ DRIFT_WINDOW = "60s"
 #: How :func:`drift_bias`'s gist begins, in the error of a whole-run fit that ran to the edge
 #: of its range on a drifting run.
 DRIFT_GIST = "a whole-run fit of a drifting run is biased"
+
+
+def drift_shares(res: NDArray[np.float64], sizes: Sequence[int], xy: Sequence[NDArray[np.float64]],
+                 sigma: float) -> list[tuple[float, float, float]]:
+    """Each run's (or window's) (residual RMS [m], spread [m], drift share): the RMS of its
+    residuals ``res`` (its ``sizes[i]`` of them, run after run) beyond the truth's noise
+    ``sigma`` [m], over how far its fixes ``xy[i]`` (n_i, 2) spread (:data:`DRIFT_SHARE` is
+    the share beyond which a fit from one start pose is drift-dominated; 0 where the fixes do
+    not spread)."""
+    out, start = [], 0
+    for size, fixes in zip(sizes, xy, strict=True):
+        r = res[start:start + size]
+        start += size
+        rms = float(np.sqrt(np.mean(r**2))) if size else 0.0
+        drift, spread = float(np.sqrt(max(rms**2 - sigma**2, 0.0))), _spread(fixes)
+        out.append((rms, spread, drift / spread if spread > 0 else 0.0))
+    return out
+
+
+def windows_drift(res: NDArray[np.float64], sizes: Sequence[int], xy: Sequence[NDArray[np.float64]],
+                  truths: Sequence[Truth], length: str | None) -> str | None:
+    """A warning where the windows of a windowed fit are themselves drift-dominated, else None:
+    the median window's drift share (:func:`drift_shares`) beyond twice :data:`DRIFT_SHARE`
+    (a window is a short run fitted from its own start pose, biased as a whole run is; on the
+    MRCLAM runs 60 s windows have a median share of 5–11 %, up to 25 % for single windows)."""
+    sigma, _ = truth_noise(truths)
+    shares = [share for _, _, share in drift_shares(res, sizes, xy, sigma)]
+    if len(shares) < 2 or float(np.median(shares)) <= 2 * DRIFT_SHARE:
+        return None
+    return (f"the windows ({length}) are themselves drift-dominated: the median window's residual RMS "
+            f"beyond the truth's noise is {100 * float(np.median(shares)):.0f} % of how far its fixes spread "
+            f"(the largest {100 * max(shares):.0f} %, over {len(shares)} windows), so each window's fit "
+            "shrinks its track as a whole run's does and the calibration is biased: shorten --window")
 
 
 def drift_bias(sources: Sequence[str], res: NDArray[np.float64], sizes: Sequence[int],
@@ -414,16 +447,9 @@ def drift_bias(sources: Sequence[str], res: NDArray[np.float64], sizes: Sequence
     short : the gist alone, for the end of an error message
     """
     sigma, _ = truth_noise(truths)
-    said = []
-    start = 0
-    for source, size, fixes in zip(sources, sizes, xy, strict=True):
-        r = res[start:start + size]
-        start += size
-        rms = float(np.sqrt(np.mean(r**2))) if size else 0.0
-        drift, spread = float(np.sqrt(max(rms**2 - sigma**2, 0.0))), _spread(fixes)
-        if spread > 0 and drift > DRIFT_SHARE * spread:
-            said.append(f"{source}: residual RMS {rms:.3g} m against a spread of {spread:.3g} m "
-                        f"({100 * drift / spread:.0f} %)")
+    said = [f"{source}: residual RMS {rms:.3g} m against a spread of {spread:.3g} m ({100 * share:.0f} %)"
+            for source, (rms, spread, share) in zip(sources, drift_shares(res, sizes, xy, sigma), strict=True)
+            if share > DRIFT_SHARE]
     if not said:
         return None
     if short:
@@ -690,8 +716,10 @@ def calibrate_positions(
         problem.horizon = horizon
     # The shared parameters' rows with each run's (window's) start pose marginalised.
     res, jac, starts, sizes = problem.reduced(g, starts)
+    # One window is one run from one start pose: judged as a whole run is.
+    single = joint or len(fitted_runs) == 1
     biased = drift_bias([log.source for log in fitted_logs], res, sizes, [r.xy for r in fitted_runs],
-                        truths) if joint else None
+                        truths) if single else None
     names = [*(model.names[k] for k in free), *(["truth time offset"] if fit_time_offset else [])]
     at_bound = [name for j, name in enumerate(names)
                 if np.isclose(g[j], lower[j], rtol=1e-6, atol=0.0)
@@ -714,9 +742,12 @@ def calibrate_positions(
         raise InputError(f"{res.size} position residuals cannot determine {g.size + n_starts} parameters "
                          "(the robot's and each run's start pose): give longer runs or more truth")
     var_res = float(res @ res) / dof
-    warn_if_drifting(var_res, res.size, truths, windowed=cut is not None)
+    warn_if_drifting(var_res, res.size, truths, windowed=not single)
     if biased is not None:
         warnings.warn(biased, UserWarning, stacklevel=2)
+    elif cut is not None and (drifting := windows_drift(res, sizes, [r.xy for r in fitted_runs], truths,
+                                                         cut.length)):
+        warnings.warn(drifting, UserWarning, stacklevel=2)
     # The shared block of σ̂²(JᵀJ)⁻¹ with the start poses marginalised: the reduced Jacobian's.
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
     p, delta, _ = problem.split(g)
