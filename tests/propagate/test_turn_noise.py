@@ -258,3 +258,20 @@ def test_predict_and_simulate_flags(run_cli):
         assert f"--turn-noise does not apply to --model {model}" in err
     code, out, err = run_cli("predict", *base, "--turn-noise", "-1", *segs)
     assert code == 2 and "--turn-noise must be a non-negative number" in err
+
+
+def test_turn_noise_alone_needs_no_gyro_noise_flag(run_cli):
+    """A base whose heading noise is all turning (MRCLAM's fit puts σ_gg near zero): the
+    reviewer's `predict --model gyro --turn-noise 1e-3` was refused for want of --gyro-noise;
+    with a turn-noise flag the time-driven heading noise defaults to 0, and the covariance is
+    predict's of SpeedNoise + GyroNoise(0) + TurnNoise. With neither flag --gyro-noise is
+    still required."""
+    segs = ["--segment", "arc:0.3,0.8,2", "--segment", "straight:0.4,1"]
+    code, out, err = run_cli("predict", "--model", "gyro", "--speed-noise", "3e-4", "--turn-noise", "1e-3",
+                             *segs, "--json")
+    assert code == 0, err
+    path = [KellyArc(0.3, 0.8, 2.0), KellyArc(0.4, 0.0, 1.0)]
+    expected = predict(path, (SpeedNoise(3e-4), GyroNoise(0.0), TurnNoise(alpha_turn=1e-3)))
+    np.testing.assert_allclose(json.loads(out)["cov"], expected.cov, rtol=1e-12, atol=1e-18)
+    code, _, err = run_cli("predict", "--model", "gyro", "--speed-noise", "3e-4", *segs)
+    assert code == 2 and "--gyro-noise is required" in err

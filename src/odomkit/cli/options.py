@@ -150,8 +150,12 @@ def _base_noise(model: str, noise: str, given: dict[str, float | None]) -> Noise
         raise ModelError(f"--noise must be 'wheel' or 'classical', got {noise!r}")
     speed = SpeedNoise(_non_negative("--speed-noise", given["--speed-noise"] or 0.0, "m"))
     if model == "gyro":
-        gyro = GyroNoise(_non_negative("--gyro-noise", given["--gyro-noise"], "rad^2/s"))
         turn, travel = given.get("--turn-noise"), given.get("--turn-travel-noise")
+        # A base whose heading noise is all turning needs no time-driven density: 0 then.
+        density = given["--gyro-noise"]
+        if density is None and (turn is not None or travel is not None):
+            density = 0.0
+        gyro = GyroNoise(_non_negative("--gyro-noise", density, "rad^2/s"))
         if turn is None and travel is None:
             return speed, gyro
         return speed, gyro, TurnNoise(_non_negative("--turn-noise", turn or 0.0, "rad^2/rad"),
