@@ -275,3 +275,20 @@ def test_turn_noise_alone_needs_no_gyro_noise_flag(run_cli):
     np.testing.assert_allclose(json.loads(out)["cov"], expected.cov, rtol=1e-12, atol=1e-18)
     code, _, err = run_cli("predict", "--model", "gyro", "--speed-noise", "3e-4", *segs)
     assert code == 2 and "--gyro-noise is required" in err
+
+
+def test_a_predicted_yaw_variance_beyond_a_uniform_heading_is_said(run_cli):
+    """predict's JSON ros_pose_covariance is what a ROS consumer takes literally: a yaw
+    variance past π²/3 (a heading spread uniformly around the circle) is no Gaussian's, and
+    predict says so as track and report do (io.ros.yaw_variance_note); a small one is quiet.
+    Gyro noise 0.05 rad²/s over 100 s: var θ = 5 rad², by Kelly's closed form exactly."""
+    base = ["predict", "--model", "gyro", "--speed-noise", "1e-4", "--segment", "straight:0.1,100", "--json"]
+    code, out, err = run_cli(*base[:5], "--gyro-noise", "0.05", *base[5:])
+    assert code == 0, err
+    result = json.loads(out)
+    assert result["ros_pose_covariance"][35] == pytest.approx(5.0, rel=1e-9)
+    assert "beyond π²/3" in err and "ros_pose_covariance" in err and err.startswith("odomkit: warning:")
+    assert any("beyond π²/3" in w for w in result["warnings"])  # in the JSON too, as other commands do
+    code, out, err = run_cli(*base[:5], "--gyro-noise", "1e-4", *base[5:])
+    assert code == 0, err
+    assert "π²/3" not in err

@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from odomkit.cli.application import app
+from odomkit.cli.log_options import reported_warnings, with_warnings
 from odomkit.cli.options import (
     CompassPeriodOption,
     GyroNoiseOption,
@@ -107,13 +108,14 @@ def predict_command(
          "--heading-noise": heading_noise, "--compass-period": compass_period,
          "--lateral-noise": lateral_noise, "--sample-period": sample_period},
         initial_pose, initial_cov, initial_cov_matrix, robot)
-    result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
-                         pose0=problem.pose0, cov0=problem.cov0, engine=engine,
-                         partitions=partitions, compass_period=problem.compass_period,
-                         robot=problem.robot, sample_period=problem.sample_period,
-                         plot=plot, overwrite=force)
+    with reported_warnings() as warned:
+        result = run_predict(problem.segments, problem.noise, wheel_base=problem.wheel_base,
+                             pose0=problem.pose0, cov0=problem.cov0, engine=engine,
+                             partitions=partitions, compass_period=problem.compass_period,
+                             robot=problem.robot, sample_period=problem.sample_period,
+                             plot=plot, overwrite=force)
     if json_out:
-        print_json(result)
+        print_json(with_warnings(result, warned))
     else:
         _print_table(result)
         for kind, path in result.get("outputs", {}).items():

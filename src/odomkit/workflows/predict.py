@@ -7,6 +7,7 @@ command's output also carries the covariance in ROS's 6×6 layout
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -15,7 +16,7 @@ from numpy.typing import ArrayLike
 
 from odomkit import validate
 from odomkit.errors import ModelError
-from odomkit.io.ros import ros_pose_covariance
+from odomkit.io.ros import ros_pose_covariance, yaw_variance_note
 from odomkit.path import Segment
 from odomkit.robot import Robot
 from odomkit.workflows.results import check_result, numeric_guard
@@ -47,6 +48,9 @@ def add_ros_pose_covariance(summary: dict[str, Any]) -> dict[str, Any]:
         out[key] = value
         if key == "cov":
             out["ros_pose_covariance"] = ros_pose_covariance(value)
+            # A consumer takes the yaw variance literally (io.ros.yaw_variance_note says why).
+            if note := yaw_variance_note(float(out["ros_pose_covariance"][35]), "ros_pose_covariance"):
+                warnings.warn(note, UserWarning, stacklevel=2)
     return out
 
 
