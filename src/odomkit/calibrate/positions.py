@@ -675,7 +675,8 @@ def calibrate_positions(
 
     # A window holds fewer fixes than a run: its first stage needs no more than it has.
     first_fixes = min_first_fixes if cut is None else min(min_first_fixes, min(r.t.size for r in fitted_runs))
-    horizon = _first_horizon(problem, first_fixes, min_spread, [log.source for log in fitted_logs])
+    sources = [log.source for log in fitted_logs]
+    horizon = _first_horizon(problem, first_fixes, min_spread, sources)
     g = np.concatenate([model.p0[free], [0.0] if fit_time_offset else []])
     n_global, n_starts = g.size, 3 * len(fitted_runs)
     # Whole runs: the parameters and the start poses fitted together, from each run's SE(2)
@@ -718,8 +719,8 @@ def calibrate_positions(
     res, jac, starts, sizes = problem.reduced(g, starts)
     # One window is one run from one start pose: judged as a whole run is.
     single = joint or len(fitted_runs) == 1
-    biased = drift_bias([log.source for log in fitted_logs], res, sizes, [r.xy for r in fitted_runs],
-                        truths) if single else None
+    fitted_xy = [r.xy for r in fitted_runs]
+    biased = drift_bias(sources, res, sizes, fitted_xy, truths) if single else None
     names = [*(model.names[k] for k in free), *(["truth time offset"] if fit_time_offset else [])]
     at_bound = [name for j, name in enumerate(names)
                 if np.isclose(g[j], lower[j], rtol=1e-6, atol=0.0)
@@ -734,9 +735,8 @@ def calibrate_positions(
         raise ModelError(f"the calibration ran to the edge of the plausible range for "
                          f"{', '.join(at_bound)} ({said}): check the channel signs, the robot file and the "
                          "truth's clock, and that the runs turn both ways"
-                         + ("" if biased is None else "; " + str(drift_bias(
-                             [log.source for log in fitted_logs], res, sizes, [r.xy for r in fitted_runs],
-                             truths, short=True))))
+                         + ("" if biased is None else
+                            "; " + str(drift_bias(sources, res, sizes, fitted_xy, truths, short=True))))
     dof = res.size - g.size - n_starts
     if dof <= 0:
         raise InputError(f"{res.size} position residuals cannot determine {g.size + n_starts} parameters "
@@ -745,8 +745,7 @@ def calibrate_positions(
     warn_if_drifting(var_res, res.size, truths, windowed=not single)
     if biased is not None:
         warnings.warn(biased, UserWarning, stacklevel=2)
-    elif cut is not None and (drifting := windows_drift(res, sizes, [r.xy for r in fitted_runs], truths,
-                                                         cut.length)):
+    elif cut is not None and (drifting := windows_drift(res, sizes, fitted_xy, truths, cut.length)):
         warnings.warn(drifting, UserWarning, stacklevel=2)
     # The shared block of σ̂²(JᵀJ)⁻¹ with the start poses marginalised: the reduced Jacobian's.
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
