@@ -54,6 +54,7 @@ __all__ = [
     "DEFAULT_TRIM",
     "DEFAULT_WHITE",
     "defaults_left_out",
+    "first_order_horizon",
     "first_order_note",
     "first_order_track_note",
     "FIRST_ORDER_SIGMA_THETA",
@@ -138,6 +139,21 @@ def first_order_note(var_theta: ArrayLike, start_var_theta: ArrayLike | None = N
     return f"{said}; use shorter windows"
 
 
+def first_order_horizon(t: ArrayLike, var_theta: ArrayLike) -> float | None:
+    """How long [s from ``t[0]``] a track's first-order covariance holds: when its σθ first
+    passes :data:`FIRST_ORDER_SIGMA_THETA`, from the poses' times ``t`` (N,) [s] and heading
+    variances ``var_theta`` (N,) [rad²]; None where it never does.
+
+    Examples
+    --------
+    >>> first_order_horizon([0.0, 1.0, 2.0], [0.0, 0.01, 0.09]), first_order_horizon([0.0, 1.0], [0.0, 0.01])
+    (2.0, None)
+    """
+    times = np.asarray(t, dtype=float)
+    big = np.sqrt(np.clip(np.asarray(var_theta, dtype=float), 0.0, None)) > FIRST_ORDER_SIGMA_THETA
+    return float(times[int(np.argmax(big))] - times[0]) if big.any() else None
+
+
 def first_order_track_note(t: ArrayLike, var_theta: ArrayLike, what: str = "the track's covariance",
                            test: str = "odomkit evaluate --window 10s") -> str | None:
     """The warning that a whole track's first-order covariance has passed
@@ -155,19 +171,18 @@ def first_order_track_note(t: ArrayLike, var_theta: ArrayLike, what: str = "the 
     >>> first_order_track_note([0.0, 1.0, 2.0], [0.0, 0.01, 0.09])[:93]
     "the track's covariance passes the first-order limit: its σθ exceeds 0.2 rad from 2 s into the"
     """
+    horizon = first_order_horizon(t, var_theta)
+    if horizon is None:
+        return None
     times = np.asarray(t, dtype=float)
     sigma = np.sqrt(np.clip(np.asarray(var_theta, dtype=float), 0.0, None))
-    big = sigma > FIRST_ORDER_SIGMA_THETA
-    if not big.any():
-        return None
-    first, top = int(np.argmax(big)), int(np.argmax(sigma))
-    start = float(times[0])
+    top = int(np.argmax(sigma))
     where = (" at the end" if top == sigma.size - 1 else
-             f" ({float(times[top]) - start:.4g} s into the log; {sigma[-1]:.3g} rad at the end)")
-    horizon = float(times[first]) - start
-    since, shorter = ((f"from {horizon:.4g} s into the log on",
-                       f"shorter horizons (here under {horizon:.3g} s)") if first else
-                      ("from the start (the start pose's own)", "shorter horizons"))
+             f" ({float(times[top] - times[0]):.4g} s into the log; {sigma[-1]:.3g} rad at the end)")
+    at_start = sigma[0] > FIRST_ORDER_SIGMA_THETA  # the start pose's own σθ is past it
+    since, shorter = (("from the start (the start pose's own)", "shorter horizons") if at_start else
+                      (f"from {horizon:.4g} s into the log on",
+                       f"shorter horizons (here under {horizon:.3g} s)"))
     return (f"{what} passes the first-order limit: its σθ exceeds {FIRST_ORDER_SIGMA_THETA} rad {since} "
             f"and reaches {sigma[top]:.3g} rad{where}, so it is no longer a Gaussian claim about the pose: "
             "the linearised ellipse no longer describes where the robot is (the true spread bends along the "

@@ -615,14 +615,12 @@ def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: st
 
 def _first_order_from(run: TrackRun) -> float | None:
     """When [s into the log] the track's σθ first passes the first-order limit
-    (:data:`odomkit.calibrate.fit_noise.FIRST_ORDER_SIGMA_THETA`); None if it never does or
+    (:func:`odomkit.calibrate.fit_noise.first_order_horizon`); None if it never does or
     there is no covariance."""
-    from odomkit.calibrate.fit_noise import FIRST_ORDER_SIGMA_THETA
+    from odomkit.calibrate.fit_noise import first_order_horizon
 
-    if run.track.cov is None:
-        return None
-    past = run.track.cov[:, 2, 2] > FIRST_ORDER_SIGMA_THETA**2
-    return float(run.track.t[np.argmax(past)] - run.track.t[0]) if past.any() else None
+    cov = run.track.cov
+    return None if cov is None else first_order_horizon(run.track.t, cov[:, 2, 2])
 
 
 def _ros_covariance_note(run: TrackRun, said: bool) -> str | None:
