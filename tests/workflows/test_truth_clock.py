@@ -47,6 +47,9 @@ def drive(folder: Path, delta: float, seed: int = 3, minutes: float = 5.0) -> di
     read = load_log(log, TRUE_CAR, LogOptions(columns=COLUMNS))
     poses = dead_reckon_log(read, TRUE_CAR, pose0=(20.0, -10.0, 0.4)).poses
     stamps = np.arange(0.013, t[-1], 0.2)
+    # Fixes only while the car is logged: np.interp would hold the path's ends still, and a
+    # fix held still while the car drives at 8 m/s is a spike no vehicle can make.
+    stamps = stamps[(stamps - delta >= 0.0) & (stamps - delta <= t[-1])]
     xy = np.column_stack([np.interp(stamps - delta, read.t, poses[:, i]) for i in (0, 1)])
     gps = folder / "gps.csv"
     np.savetxt(gps, np.column_stack([stamps, xy + rng.normal(0.0, GPS_SIGMA, xy.shape)]), delimiter=",",

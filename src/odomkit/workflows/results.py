@@ -337,7 +337,7 @@ def truths_given(truths: Truth | Sequence[Truth | None] | None, logs: Sequence[O
     [rad], ``time_sigma`` [s]; what :func:`odomkit.workflows.fit_noise.fit_noise_in_memory`
     returns as ``truth``), replaces those of every truth; None keeps each truth's own."""
     from odomkit.truth import Truth, truth_from_log
-    from odomkit.workflows.truth import warn_of_truth
+    from odomkit.workflows.truth import warn_of_truth, without_spikes
 
     if truths is None or isinstance(truths, Truth):
         items: list[Truth | None] = [truths] * len(logs)
@@ -368,7 +368,8 @@ def truths_given(truths: Truth | Sequence[Truth | None] | None, logs: Sequence[O
             raise InputError("no truth: the log has no ground truth of its own; give a Truth "
                              "(odomkit.truth.Truth, or odomkit.io.truth.read_truth) for it",
                              source=log.source)
-        warn_of_truth(found, log)  # as a truth file is asked when a command reads it
+        found = without_spikes(found)  # as a truth file is screened and asked when a command reads it
+        warn_of_truth(found, log)
         if noise:
             from dataclasses import replace
 

@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
 
 __all__ = ["applied_clock", "clock_from_robot", "load_truth", "resolved_truth", "TruthOptions",
-           "truth_options_per_log", "warn_of_truth", "with_truth_topic"]
+           "truth_options_per_log", "warn_of_truth", "with_truth_topic", "without_spikes"]
 
 
 @dataclass(frozen=True)
@@ -146,10 +146,42 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None, *,
     offset = applied_clock(options, log)
     if offset:
         truth = replace(truth, t=truth.t - offset)
+    truth = without_spikes(truth)
     warn_of_truth(truth, log, heading=heading_warning)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
     return replace(truth, sigma=sigma, heading_sigma=heading_sigma, time_sigma=time_sigma)
+
+
+def without_spikes(truth: Truth) -> Truth:
+    """The truth without the fixes that jump off its path and back
+    (:func:`odomkit.truth_spikes.spike_fixes`: a GPS's multipath jumps, a motion capture's
+    marker swaps), said in one warning; the truth itself where it has none. Every truth a
+    command reads (:func:`load_truth`) and every one handed to a workflow in memory
+    (:func:`odomkit.workflows.results.truths_given`) is screened: a spike is the truth's
+    error, and scored as a window's end, or in a start heading fitted around it, it reads as
+    the odometry's."""
+    import numpy as np
+
+    from odomkit.log import clock_text
+    from odomkit.truth_spikes import MAX_ACCELERATION, SPIKE_SIGMAS, spike_fixes
+
+    found = spike_fixes(truth.t, truth.xy)
+    if not len(found):
+        return truth
+    keep = np.ones(len(truth), dtype=bool)
+    keep[found.index] = False
+    lo, hi = f"{found.off.min():.3g}", f"{found.off.max():.3g}"
+    times = ", ".join(f"{clock_text(float(t))} s" for t in found.t[:3]) + (", ..." if len(found) > 3 else "")
+    warnings.warn(f"{truth.source}: {len(found)} of {len(truth)} truth fixes left out as spikes, each "
+                  f"{lo if lo == hi else f'{lo}..{hi}'} m off the line through its neighbours (more "
+                  f"than {SPIKE_SIGMAS:g}x the fixes' scatter about those lines, {found.scatter:.3g} m, and "
+                  f"than a vehicle accelerating at {MAX_ACCELERATION:g} m/s^2 could be), at {times}: a "
+                  "GPS's multipath jumps or a motion capture's marker swaps are the truth's errors, not the "
+                  "odometry's; rows between the fixes kept are interpolated as usual (--max-gap)",
+                  stacklevel=3)
+    return replace(truth, t=truth.t[keep], xy=truth.xy[keep],
+                   theta=None if truth.theta is None else truth.theta[keep])
 
 
 def warn_of_truth(truth: Truth, log: OdometryLog | None = None, *, heading: bool = True) -> None:
