@@ -1,7 +1,7 @@
 """How honest is the covariance? The tables of docs/results/honesty.md (issue 11's targets), one command.
 
-    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--mrclam DIR]
-        [--part optiodom snowhite gps speed car mrclam]
+    .venv/bin/python benchmarks/honesty.py [--data ../shared/data] [--mrclam DIR] [--victoria DIR]
+        [--part optiodom snowhite gps speed car mrclam victoria]
 
 (a) OptiOdom, differential and tricycle. The experiments of each kind (diff: square,
     circular, ivanjko, free; tricycle: square, circular, free) are sorted by name; every
@@ -29,6 +29,13 @@
     MRCLAM_Dataset7/, ... each with Robot1..5_Odometry.dat and Robot1..5_Groundtruth.dat):
     ``odomkit fit-noise --window 10s --window 30s`` on robots 1 and 2, ``odomkit evaluate
     --window`` on robots 3, 4 and 5 with that one fitted robot file, through the CLI.
+(g) A real car against its GPS (``--part victoria --victoria DIR``; the Victoria Park
+    drive of Guivant and Nebot, not shipped: DIR holds aa3_gpsx.mat and aa3_dr.mat, or
+    the VictoriaParkSinSincronizar.mat of github.com/ezamorag/EKFSLAM_for_Victoria_Park_Benchmark):
+    25 min of rear-left wheel speed and steering angle at 40 Hz against a 5 Hz GPS with
+    gaps and jumps. Calibrated (``--window 60s``) and noise-fitted (10 s and 30 s windows)
+    on the first half, scored on the second: its whole track's error with the nominal and
+    the calibrated robot, and the windows' coverage.
 """
 
 from __future__ import annotations
@@ -435,15 +442,88 @@ def mrclam(root: Path | None) -> None:
                 print(f"| {folder.name} | {name} | {fitted} | {' | '.join(cells)} |")
 
 
+#: The Victoria Park car as its authors give it: wheel base L = 2.83 m, the speed measured
+#: at the rear-left wheel, H = 0.76 m left of the rear axle's centre.
+VICTORIA_ROBOT = '[robot]\ntype = "car"\nwheel_base = 2.83\nencoder_offset = 0.76\nencoder_at = "rear"\n'
+
+
+def _victoria_files(root: Path, folder: Path) -> tuple[Path, Path]:
+    """The drive (t [s], speed [m/s], steer [rad]) and GPS (t [s], x, y [m]) of the Victoria
+    Park .mat files in ``root`` as text files in ``folder`` (odomkit reads text, not .mat)."""
+    from scipy.io import loadmat
+
+    gps = loadmat(root / "aa3_gpsx.mat")
+    if (root / "aa3_dr.mat").is_file():
+        dr = loadmat(root / "aa3_dr.mat")
+        drive = np.column_stack([dr["time"].ravel() / 1000.0, dr["speed"].ravel(), dr["steering"].ravel()])
+    else:
+        dr = loadmat(root / "VictoriaParkSinSincronizar.mat")
+        drive = np.column_stack([dr["time"].ravel(), dr["u"][0], dr["u"][1]])
+    log, fixes = folder / "drive.csv", folder / "gps.csv"
+    np.savetxt(log, drive, delimiter=",", header="t,speed,steer", comments="", fmt="%.9g")
+    np.savetxt(fixes, np.column_stack([gps["timeGps"].ravel() / 1000.0, gps["Lo_m"].ravel(), gps["La_m"].ravel()]),
+               delimiter=",", header="t,x,y", comments="", fmt="%.9g")
+    return log, fixes
+
+
+def victoria(root: Path | None) -> None:
+    """Calibrate and fit-noise on the first half of the Victoria Park drive, score the second."""
+    import tempfile
+
+    if root is None or not (root / "aa3_gpsx.mat").is_file():
+        print("\n## Victoria Park: skipped (give --victoria DIR or ODOMKIT_VICTORIA: aa3_gpsx.mat and aa3_dr.mat "
+              "of the Victoria Park dataset, not shipped)")
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        log, gps = _victoria_files(root, folder)
+        nominal = folder / "car.toml"
+        nominal.write_text(VICTORIA_ROBOT)
+        truth = ("--truth", gps, "--columns", "t,speed,steer")
+        print("\n## Victoria Park: a car against its GPS, calibrated and fitted on the first half\n")
+        print("| robot file | c_scale | steering offset [rad] | wheel base [m] | steering cubic | "
+              "second half: ATE / final error [m] |\n|---|---|---|---|---|---|")
+        rows = [("nominal", nominal, {})]
+        for name, extra in (("calibrated (--window 60s)", ()),
+                            ("calibrated (--window 60s --fit-steering-cubic)", ("--fit-steering-cubic",))):
+            out = folder / f"cal{len(rows)}.toml"
+            cal = _odomkit_json("calibrate", log, "--robot", nominal, *truth, "--span", ":50%", "--window", "60s",
+                                *extra, "--out-robot", out)
+            rows.append((name, out, cal["parameters"]))
+        for name, robot, fitted in rows:
+            ev = _odomkit_json("evaluate", log, "--robot", robot, *truth, "--span", "50%:")
+            print(f"| {name} | {fitted.get('c_scale', 1.0):.4f} | {fitted.get('steering_offset', 0.0):.4f} | "
+                  f"{fitted.get('wheel_base', 2.83):.3f} | {fitted.get('steering_cubic', 0.0):.3f} | "
+                  f"{ev['ate_rmse']:.1f} / {ev['final_position_error']:.1f} |")
+        print("\n| calibration | noise fitted (first half, 10 s + 30 s windows) | second half: 10 s | 30 s | 60 s "
+              "(inside 95 % / 50 %, NEES mean (bounds), ends) |\n|---|---|---|---|---|")
+        for name, robot, _ in rows[1:]:
+            fitted_file = folder / f"fit-{robot.stem}.toml"
+            fit = _odomkit_json("fit-noise", "--robot", robot, "--log", log, *truth, "--span", ":50%",
+                                "--window", "10s", "--window", "30s", "--out", fitted_file)
+            noise = ", ".join(f"{k} {v:.2g}" for k, v in fit["parameters"].items() if v > 0)
+            cells = []
+            for window in ("10s", "30s", "60s"):
+                ev = _odomkit_json("evaluate", log, "--robot", fitted_file, *truth, "--span", "50%:",
+                                   "--window", window)
+                lo, hi = ev["nees_bounds"]
+                cells.append(f"{ev['coverage']['0.95']:.2f} / {ev['coverage']['0.5']:.2f}, "
+                             f"{ev['nees_position_mean']:.2f} ({lo:.2f}–{hi:.2f}), {ev['windows']}")
+            print(f"| {name} | {noise} | {' | '.join(cells)} |")
+
+
 def main() -> None:
     default = Path(os.environ.get("ODOMKIT_DATA", REPO.parent / "shared" / "data"))
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--data", type=Path, default=default)
     parser.add_argument("--part", nargs="*",
-                        default=["optiodom", "snowhite", "gps", "speed", "car", "mrclam"])
+                        default=["optiodom", "snowhite", "gps", "speed", "car", "mrclam", "victoria"])
     mrclam_dir = os.environ.get("ODOMKIT_MRCLAM")
     parser.add_argument("--mrclam", type=Path, default=Path(mrclam_dir) if mrclam_dir else None,
                         help="folder of UTIAS MRCLAM datasets (MRCLAM_DatasetN/RobotK_*.dat)")
+    victoria_dir = os.environ.get("ODOMKIT_VICTORIA")
+    parser.add_argument("--victoria", type=Path, default=Path(victoria_dir) if victoria_dir else None,
+                        help="folder of the Victoria Park dataset's aa3_gpsx.mat and aa3_dr.mat")
     args = parser.parse_args()
     import warnings
 
@@ -451,7 +531,8 @@ def main() -> None:
     for name in args.part:
         {"optiodom": lambda: optiodom(args.data / "optiodom"), "snowhite": lambda: snowhite(args.data),
          "gps": lambda: gps(args.data), "car": lambda: car(args.data),
-         "speed": lambda: speed(args.data / "optiodom"), "mrclam": lambda: mrclam(args.mrclam)}[name]()
+         "speed": lambda: speed(args.data / "optiodom"), "mrclam": lambda: mrclam(args.mrclam),
+         "victoria": lambda: victoria(args.victoria)}[name]()
 
 
 if __name__ == "__main__":
