@@ -90,6 +90,21 @@ def test_values_and_time():
     assert statuses(found, "values") == ["fail"] and "row(s) 8" in found[0].message
 
 
+@pytest.mark.parametrize(("scale", "unit"), [(1e3, "ms"), (1e6, "us")])
+def test_a_time_column_in_another_unit_is_named(scale, unit):
+    """A 20 Hz log whose time is in ms (or µs) read as seconds has a period of 50 s (or
+    50 000 s): the time finding warns and names the flag, where it said "steady period 50 s,
+    ok"; the same log in seconds, and a 1 Hz one, pass."""
+    left, right = square_both_ways()
+    log = make_log(left, right)
+    assert np.median(np.diff(log.t)) == pytest.approx(0.05)
+    found = check_time(OdometryLog(log.t * scale, log.channels))
+    assert statuses(found, "time") == ["warn"]
+    assert f"--time-unit {unit}" in found[0].advice and "slower than any odometry logger" in found[0].message
+    assert statuses(check_time(log), "time") == ["ok"]
+    assert statuses(check_time(OdometryLog(log.t * 20, log.channels)), "time") == ["ok"]  # 1 s rows
+
+
 def test_time_jumps_in_a_log_of_rates_are_said_but_not_warned_about():
     """A log of commanded speed and yaw rate written when a command changes (cmd_vel, the
     MRCLAM robots: 10 ms to 1 s between rows) loses nothing in its gaps, since each row's
