@@ -461,8 +461,8 @@ def _victoria_files(root: Path, folder: Path) -> tuple[Path, Path]:
         drive = np.column_stack([dr["time"].ravel(), dr["u"][0], dr["u"][1]])
     log, fixes = folder / "drive.csv", folder / "gps.csv"
     np.savetxt(log, drive, delimiter=",", header="t,speed,steer", comments="", fmt="%.9g")
-    np.savetxt(fixes, np.column_stack([gps["timeGps"].ravel() / 1000.0, gps["Lo_m"].ravel(), gps["La_m"].ravel()]),
-               delimiter=",", header="t,x,y", comments="", fmt="%.9g")
+    east_north = np.column_stack([gps["timeGps"].ravel() / 1000.0, gps["Lo_m"].ravel(), gps["La_m"].ravel()])
+    np.savetxt(fixes, east_north, delimiter=",", header="t,x,y", comments="", fmt="%.9g")
     return log, fixes
 
 
@@ -471,8 +471,8 @@ def victoria(root: Path | None) -> None:
     import tempfile
 
     if root is None or not (root / "aa3_gpsx.mat").is_file():
-        print("\n## Victoria Park: skipped (give --victoria DIR or ODOMKIT_VICTORIA: aa3_gpsx.mat and aa3_dr.mat "
-              "of the Victoria Park dataset, not shipped)")
+        print("\n## Victoria Park: skipped (give --victoria DIR or ODOMKIT_VICTORIA: aa3_gpsx.mat and "
+              "aa3_dr.mat of the Victoria Park dataset, not shipped)")
         return
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -487,16 +487,16 @@ def victoria(root: Path | None) -> None:
         for name, extra in (("calibrated (--window 60s)", ()),
                             ("calibrated (--window 60s --fit-steering-cubic)", ("--fit-steering-cubic",))):
             out = folder / f"cal{len(rows)}.toml"
-            cal = _odomkit_json("calibrate", log, "--robot", nominal, *truth, "--span", ":50%", "--window", "60s",
-                                *extra, "--out-robot", out)
+            cal = _odomkit_json("calibrate", log, "--robot", nominal, *truth, "--span", ":50%", "--window",
+                                "60s", *extra, "--out-robot", out)
             rows.append((name, out, cal["parameters"]))
         for name, robot, fitted in rows:
             ev = _odomkit_json("evaluate", log, "--robot", robot, *truth, "--span", "50%:")
             print(f"| {name} | {fitted.get('c_scale', 1.0):.4f} | {fitted.get('steering_offset', 0.0):.4f} | "
                   f"{fitted.get('wheel_base', 2.83):.3f} | {fitted.get('steering_cubic', 0.0):.3f} | "
                   f"{ev['ate_rmse']:.1f} / {ev['final_position_error']:.1f} |")
-        print("\n| calibration | noise fitted (first half, 10 s + 30 s windows) | second half: 10 s | 30 s | 60 s "
-              "(inside 95 % / 50 %, NEES mean (bounds), ends) |\n|---|---|---|---|---|")
+        print("\n| calibration | noise fitted (first half, 10 s + 30 s windows) | second half: 10 s | 30 s | "
+              "60 s (inside 95 % / 50 %, NEES mean (bounds), ends) |\n|---|---|---|---|---|")
         for name, robot, _ in rows[1:]:
             fitted_file = folder / f"fit-{robot.stem}.toml"
             fit = _odomkit_json("fit-noise", "--robot", robot, "--log", log, *truth, "--span", ":50%",
