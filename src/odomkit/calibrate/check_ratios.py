@@ -45,7 +45,8 @@ from odomkit.log import SPEED_CHANNELS, OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
-__all__ = ["check_truth_motion", "judging_noise", "motion_problems", "MotionRatios", "motion_ratios",
+__all__ = ["check_truth_motion", "FOLLOWS", "follows_note", "judging_noise", "motion_follows",
+           "motion_problems", "MotionRatios", "motion_ratios",
            "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "time_unit_off", "TimeUnitOff",
            "unit_mixup"]
 
@@ -581,6 +582,74 @@ def _no_turn_finding(said: str, gain: float, robot: Robot) -> Finding:
     return Finding("turn_ratio", "fail", f"{said}: {what}", advice, gain)
 
 
+#: Stretches of :func:`motion_follows` [s]: long enough that a robot's stops and starts
+#: show, short enough that a run holds tens of them.
+FOLLOW_SPAN = 2.0
+#: Fewest stretches :func:`motion_follows` judges on.
+FOLLOW_STRETCHES = 50
+#: A correlation below this between the odometry's and the truth's travel per stretch is a
+#: truth that does not follow the log (another robot's, another run's, a clock far off).
+FOLLOWS = 0.4
+
+
+def motion_follows(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5,
+                   noise: float | None = None) -> tuple[float, int]:
+    """How closely the truth's motion follows the odometry's: the correlation, over
+    consecutive stretches of :data:`FOLLOW_SPAN` seconds (wider for a sparse truth), of the
+    distance the odometry rolls in each with the truth's chord over it, and the number of
+    stretches. A robot's own truth moves when its odometry does, stops when it stops (r
+    near 1, whatever the calibration: a scale error keeps the correlation); another robot's
+    truth, another run's, or one whose clock is seconds off does not (r near 0).
+
+    NaN where it cannot tell: fewer than :data:`FOLLOW_STRETCHES` stretches, or travel per
+    stretch that hardly varies (a constant speed correlates with nothing: the odometry's
+    spread under a tenth of its mean, or the truth's chords' spread under 4 × their noise
+    σ√2, ``noise`` as in :func:`motion_ratios`)."""
+    from odomkit.kinematics import body_steps
+
+    t = np.asarray(log.t, dtype=float)
+    inside = (truth.t >= t[0]) & (truth.t <= t[-1])
+    tt, xy = truth.t[inside], truth.xy[inside]
+    if tt.size < 3:
+        return math.nan, 0
+    span = max(FOLLOW_SPAN, heading_span(truth))
+    first, last = _stretch_ends(tt, tt[0], tt[-1], span, longest_gap(truth, max_gap))
+    if first.size < FOLLOW_STRETCHES:
+        return math.nan, int(first.size)
+    steps = body_steps(robot, log)
+    rolled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(np.abs(steps.dd)))))
+    odometry = rolled[last] - rolled[first]
+    chord = np.linalg.norm(xy[last] - xy[first], axis=1)
+    sigma = judging_noise(truth, noise)[0]
+    if not (np.std(odometry) >= 0.1 * np.mean(odometry) and np.std(chord) >= 4.0 * math.sqrt(2.0) * sigma):
+        return math.nan, int(first.size)
+    return float(np.corrcoef(odometry, chord)[0, 1]), int(first.size)
+
+
+def _follows_finding(r: float, stretches: int) -> Finding | None:
+    if not math.isfinite(r):
+        return None
+    said = (f"over {stretches} stretches, the distance the odometry rolls in each and the truth's chord "
+            f"over it correlate at r = {r:.2f}")
+    if r >= FOLLOWS:
+        return Finding("truth_follows", "ok", f"the truth moves when the odometry does: {said}")
+    return Finding("truth_follows", "fail", f"the truth does not move when the odometry does: {said} (a "
+                   "robot's own truth: near 1): the truth of another robot or run, or on a clock seconds off",
+                   "give this log's own truth (the i-th --truth belongs to the i-th log), or its clock "
+                   "offset (--truth-time-offset)")
+
+
+def follows_note(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5) -> str | None:
+    """The ``truth_follows`` failure as one warning (message; advice), for the honesty test: a
+    covariance scored against another robot's truth reads "optimistic" (MRCLAM: NEES 97),
+    with nothing to say why. None where the truth follows, or it cannot tell."""
+    with np.errstate(all="ignore"):
+        found = _follows_finding(*motion_follows(log, robot, truth, max_gap))
+    if found is None or found.status == "ok":
+        return None
+    return f"{found.message}; {found.advice}"
+
+
 def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
                        max_gap: float | None = 0.5, noise: float | None = None) -> list[Finding]:
     """The ``travel_ratio`` and ``turn_ratio`` findings (none without truth); ``max_gap`` and
@@ -609,6 +678,11 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
     else:
         found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
                              "odometry's turning not compared with the truth's"))
+    with np.errstate(all="ignore"):
+        follows = _follows_finding(*motion_follows(log, robot, truth, max_gap, noise))
+    if follows is not None:
+        # First: a truth that is not the log's makes every ratio after it meaningless.
+        found.insert(0, follows)
     return found
 
 

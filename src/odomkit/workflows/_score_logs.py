@@ -231,11 +231,12 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
     if noise is None:  # the errors alone (score_logs' errors_only)
         return [whole for _ in specs]
     if any(spec is not None for spec in specs):  # once per log, whatever the lengths
+        from odomkit.calibrate.check_ratios import follows_note
         from odomkit.truth_knots import interpolated_note
 
-        knots = interpolated_note(truth)
-        if knots:
-            whole = replace(whole, warnings=[*whole.warnings, f"{log.source}: {knots}"])
+        for said in (interpolated_note(truth), follows_note(log, robot, truth, max_gap)):
+            if said:
+                whole = replace(whole, warnings=[*whole.warnings, f"{log.source}: {said}"])
     return [_score_windows(log, robot, noise, truth, samples, whole, spec, first=first,
                            first_valid=int(rows[0]), travel=travel, min_travel=min_travel, method=method)
             for spec in specs]
