@@ -156,3 +156,13 @@ def test_a_truth_in_memory_is_screened_as_a_file_is():
         (kept,) = truths_given(Truth(t, xy, source="truth"), [log])
     assert len(kept) == 149 and 10.0 not in kept.t
     assert math.isclose(SPIKE_SIGMAS, 6.0)
+
+
+def test_the_spikes_are_said_at_their_times_in_the_truth_file(noisy_diff_log, tmp_path):
+    """A truth on a clock 2 s late (--truth-time-offset 2): the spike stamped 50 s in the file
+    is said at 50 s, where the user finds it, not at the log's 48 s."""
+    log, _, robot = noisy_diff_log(tmp_path, 0.01, 0.01, 100.0, seed=2, truth_noise=0.02)
+    spiky = _spiky(tmp_path / "xy.csv", [500])
+    with pytest.warns(UserWarning, match=r"1 of 1001 truth fixes left out as spikes, .* at 50 s:"):
+        evaluate_logs([log], robot, [TruthOptions(spiky, sigma=0.02, time_offset=2.0)],
+                      log_options=LogOptions(columns=SIM_COLUMNS), window="10s")

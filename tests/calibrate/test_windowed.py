@@ -316,6 +316,11 @@ def test_the_report_calibrates_a_drifting_run_in_windows_and_says_so(run_cli, tm
 
     log, truth = drive(0)
     log_path, gps, robot = _write(tmp_path, log, truth)
+    # One fix 5 m off its path (a GPS's multipath): left out wherever the truth is read, and
+    # said once as a fact of the truth file, not as one of the replaced whole-run fit's.
+    fixes = np.loadtxt(gps, delimiter=",", skiprows=1)
+    fixes[len(fixes) // 2, 2] += 5.0
+    np.savetxt(gps, fixes, delimiter=",", header="t,x,y", comments="")
     code, out, err = run_cli("calibrate", log_path, "--robot", robot, "--truth", gps,
                              "--truth-sigma", "0.001", "--window", "60s", "--json")
     assert code == 0, err
@@ -324,6 +329,8 @@ def test_the_report_calibrates_a_drifting_run_in_windows_and_says_so(run_cli, tm
     code, out, err = run_cli("report", log_path, "--robot", robot, "--truth", gps,
                              "--truth-sigma", "0.001", "--out", page, "--json")
     assert code == 0, err
+    said = [line for line in err.splitlines() if "truth fixes left out as spikes" in line]
+    assert len(said) == 1 and said[0].startswith(f"odomkit: warning: {gps}: 1 of "), said
     html = page.read_text(encoding="utf-8")
     shown = {m.group(1): float(m.group(2)) for m in re.finditer(
         r'data-key="calibration\.([a-z_]+)" data-value="([^"]+)"', html)}

@@ -809,7 +809,9 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
             [log], robot, out_robot=cal_path, overwrite=True, log_options=log_options,
             cubic_hint=_CUBIC_FROM_REPORT, window=DRIFT_WINDOW, **in_windows))
         for w in whole_said:  # what the whole-run fit said, named as such where windows replaced it
-            message = w.message if windowed is None else type(w.message)(
+            # What it said of the truth file itself (its spikes, its units) holds for every fit.
+            of_truth = options.path is not None and str(w.message).startswith(f"{options.path}:")
+            message = w.message if windowed is None or of_truth else type(w.message)(
                 f"the whole-run calibration, replaced by the one in windows: {w.message}")
             warnings.warn_explicit(message, w.category, w.filename, w.lineno)
         after = run_after = None

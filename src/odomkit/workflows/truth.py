@@ -143,10 +143,10 @@ def load_truth(options: TruthOptions, log: OdometryLog | None = None, *,
         # Kept apart from sigma: no fit uses it unasked, but a check judges against it (a GPS's
         # error is correlated in time, which its fixes' scatter about a smooth path misses).
         truth = replace(truth, stated_sigma=stated)
+    truth = without_spikes(truth)  # before the clock moves: the spikes' times as the file has them
     offset = applied_clock(options, log)
     if offset:
         truth = replace(truth, t=truth.t - offset)
-    truth = without_spikes(truth)
     warn_of_truth(truth, log, heading=heading_warning)
     if (sigma, heading_sigma, time_sigma) == (truth.sigma, truth.heading_sigma, truth.time_sigma):
         return truth
