@@ -37,7 +37,18 @@ its noise, and rows without truth. Here:
   from a start pose of its own, the robot's parameters and δ shared. There each window's
   start pose is eliminated for the parameters tried (variable projection: its SE(2)
   alignment to the fixes), so no column per window is held: the windows are
-  the clusters of the between-run standard errors.
+  the clusters of the between-run standard errors;
+* with ``heading_weight`` W > 0 [m/rad] and a truth that measures heading (a TUM file, text
+  t,x,y,theta, a motion capture), each fix adds a third residual W·wrap(θ(t) + θ₀ − θ_truth(t))
+  [m] beside its two position residuals (:func:`~odomkit.calibrate.residuals.heading_residual`,
+  as the exact calibration compares the log's own gt_θ), θ(t) the dead-reckoned heading
+  from the origin interpolated at the fix as the positions are, in a fit of whole runs and of
+  windows alike. A commanded-velocity robot that slows in its turns fits its path from
+  positions alone with the yaw-rate scale pulled towards the path's curvature (ω/v: the
+  speed lost in the turns reads as turning), while the heading's change is ∫ω dt whatever
+  the speed: it pins the turning gain. The start pose a window's variable projection
+  eliminates is then the optimum of all three residuals: the positions' SE(2) alignment
+  refined by Gauss–Newton steps in (x₀, y₀, θ₀) (:meth:`_Problem._refine`).
 
 The parameter-to-body-step maps are :mod:`odomkit.calibrate.residuals`' (diff, tricycle,
 car) and the integration with sensitivities its
@@ -68,6 +79,7 @@ from odomkit.calibrate.residuals import (
     CalibrationModel,
     CarCalibrationModel,
     calibration_model,
+    heading_residual,
     integrate_with_sensitivity,
 )
 from odomkit.errors import InputError, ModelError
@@ -99,6 +111,7 @@ class _Run:
     outside: int  # fixes outside the log's span
     near_ends: int = 0  # fixes inside it but within the margin of its ends
     margin: float = 0.0  # [s]
+    theta: NDArray[np.float64] | None = None  # (n,) truth headings [rad], continuous; None: positions only
 
     def at(self, delta: float, keep: NDArray[np.bool_]) -> _FixRows:
         """Where the kept fixes fall on the log's clock at offset ``delta`` (each at its
@@ -125,11 +138,11 @@ class _FixRows:
         return (1.0 - w) * values[self.row] + w * values[self.row + 1]
 
     def rate(self, values: NDArray[np.float64]) -> NDArray[np.float64]:
-        """d/dt of that interpolation of ``values`` (N, 2) at the fixes (zero inside a
+        """d/dt of that interpolation of ``values`` (N, ...) at the fixes (zero inside a
         segment of zero length)."""
         step = values[self.row + 1] - values[self.row]
         inverse = np.divide(1.0, self.span, out=np.zeros_like(self.span), where=self.span > 0)
-        return step * inverse[:, None]
+        return step * inverse.reshape(inverse.shape + (1,) * (step.ndim - 1))
 
 
 def compared_fixes(log_t: ArrayLike, fix_t: ArrayLike, margin: float = 0.0) -> NDArray[np.bool_]:
@@ -164,14 +177,21 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
                                  "check the clocks (--truth-time-unit, --truth-time-offset)"),
                              source=truth.source)
         beyond = int(np.count_nonzero(~compared_fixes(t, truth.t)))
-        out.append(_Run(t, truth.xy[inside], tau, beyond, int(np.count_nonzero(~inside)) - beyond, margin))
+        out.append(_Run(t, truth.xy[inside], tau, beyond, int(np.count_nonzero(~inside)) - beyond, margin,
+                        None if truth.theta is None else truth.theta[inside]))
     return out
+
+
+#: Most Gauss–Newton steps that refine a start pose with the heading compared (:meth:`_Problem._refine`):
+#: three unknowns, from the positions' alignment; a few steps reach round-off.
+_START_STEPS = 20
 
 
 class _Problem:
     """Position residuals of all runs over their first ``horizon`` fraction, for
     q = (free robot parameters, the truth's clock offset δ if fitted, then x₀, y₀, θ₀ of
-    each run).
+    each run); with ``heading_weight`` W > 0 each fix's heading residual W·wrap(θ − θ_truth)
+    [m] third (:attr:`per_fix` residuals a fix).
 
     :meth:`residuals_and_jacobian` is the full problem in q. :meth:`reduced` is the same
     problem with every run's start pose at its best for the shared parameters g (the first
@@ -182,11 +202,17 @@ class _Problem:
     run's own start-pose columns (Kaufman 1975), the Frisch–Waugh–Lovell form whose
     ``JᵀJ`` is the shared block of the full problem's information with the start poses
     marginalised. The two have the same minima; the reduced one holds a dense Jacobian of
-    residuals × shared parameters only, so many runs (windows) cost no memory per run."""
+    residuals × shared parameters only, so many runs (windows) cost no memory per run. With
+    the heading compared the best start pose is no longer the positions' alignment alone: it
+    is refined to the optimum of every residual (:meth:`_refine`), where the start-pose
+    columns are orthogonal to the residuals, so the reduced gradient Jᵀr is still the
+    reduced cost's."""
 
     def __init__(self, model: CalibrationModel, runs: list[_Run], logs: Sequence[OdometryLog],
-                 free: NDArray[np.intp], method: Method, fit_time_offset: bool):
+                 free: NDArray[np.intp], method: Method, fit_time_offset: bool, heading_weight: float = 0.0):
         self.model, self.runs, self.free, self.method = model, runs, free, method
+        self.w = heading_weight  # [m/rad]; 0: positions only
+        self.per_fix = 3 if heading_weight > 0 else 2  # residuals a fix
         self.p_fixed = model.p0.copy()
         self.t0 = [float(log.t[0]) for log in logs]
         self.t1 = [float(log.t[-1]) for log in logs]
@@ -211,8 +237,9 @@ class _Problem:
     def _block(self, i: int, p: NDArray[np.float64], delta: float, start: NDArray[np.float64] | None
                ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """Run ``i`` over the current horizon from ``start`` (x₀, y₀, θ₀), or from the start
-        that fits its fixes best (None): residuals (n, 2) [m], their derivatives in the shared
-        parameters (n, 2, n_global) and in the start pose (n, 2, 3), and the start pose (3,)."""
+        that fits its fixes best (None): residuals (n, k) [m] (k = :attr:`per_fix`: x, y and
+        with the heading compared W·wrap(θ − θ_truth)), their derivatives in the shared
+        parameters (n, k, n_global) and in the start pose (n, k, 3), and the start pose (3,)."""
         dd, dth, ddd, ddt = self.model.steps(p, i)
         # From the origin, then moved rigidly: dead reckoning from a start pose is the track
         # from the origin rotated by θ₀ and shifted (the parameters' derivatives rotate alike).
@@ -221,32 +248,81 @@ class _Problem:
         keep = self.used(i)
         run = self.runs[i]
         fixes = run.at(delta, keep)
-        xy = run.xy[keep]
-        pos = fixes.interpolate(poses[:, :2])
+        track = _Track(fixes.interpolate(poses[:, :2]), fixes.interpolate(dposes[:, :2]),
+                       fixes.rate(poses[:, :2]) if self.fit_time_offset else None, run.xy[keep])
+        if self.w > 0:
+            assert run.theta is not None  # calibrate_positions refuses a truth without heading
+            # The heading from the origin, interpolated at the fixes as the positions are.
+            track = replace(track, theta=fixes.interpolate(poses[:, 2]),
+                            dtheta=fixes.interpolate(dposes[:, 2]),
+                            theta_rate=fixes.rate(poses[:, 2]) if self.fit_time_offset else None,
+                            truth_theta=run.theta[keep])
         if start is None:
             try:
-                phi, shift = umeyama_se2(pos, xy)
+                phi, shift = umeyama_se2(track.xy0, track.xy)
             except ModelError:
                 raise InputError("the odometry does not move over the run's first "
                                  f"{self.horizon * (self.t1[i] - self.t0[i]):.3g} s while the truth does: "
                                  "check the log's channels and --columns", source=self.sources[i]) from None
             start = np.array([shift[0], shift[1], phi])
+            if self.w > 0:
+                start = self._refine(start, track)
+        r, jg, js = self._at(start, track)
+        return r, jg, js, np.asarray(start, dtype=float)
+
+    def _at(self, start: NDArray[np.float64], track: _Track
+            ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """One run's residuals (n, k) [m] from ``start`` (x₀, y₀, θ₀) and their derivatives in
+        the shared parameters (n, k, n_global) and in the start pose (n, k, 3)."""
         c, s = np.cos(start[2]), np.sin(start[2])
         rot = np.array([[c, -s], [s, c]])
-        pos = pos @ rot.T + start[:2]
+        pos = track.xy0 @ rot.T + start[:2]
         n_free = self.free.size
-        jg = np.zeros((pos.shape[0], 2, self.n_global))
-        jg[:, :, :n_free] = np.einsum("ab,nbk->nak", rot, fixes.interpolate(dposes[:, :2]))
-        if self.fit_time_offset:
+        jg = np.zeros((pos.shape[0], self.per_fix, self.n_global))
+        jg[:, :2, :n_free] = np.einsum("ab,nbk->nak", rot, track.dxy0)
+        if track.velocity is not None:
             # a later δ compares each fix with the odometry earlier: −velocity there
-            jg[:, :, n_free] = -(fixes.rate(poses[:, :2]) @ rot.T)
-        js = np.zeros((pos.shape[0], 2, 3))
+            jg[:, :2, n_free] = -(track.velocity @ rot.T)
+        js = np.zeros((pos.shape[0], self.per_fix, 3))
         js[:, 0, 0] = 1.0
         js[:, 1, 1] = 1.0
         # a turn of the start by dθ₀ swings every position about the start
         js[:, 0, 2] = -(pos[:, 1] - start[1])
         js[:, 1, 2] = pos[:, 0] - start[0]
-        return pos - xy, jg, js, np.asarray(start, dtype=float)
+        res = pos - track.xy
+        if self.per_fix == 3:
+            assert track.theta is not None and track.dtheta is not None and track.truth_theta is not None
+            # θ(t) + θ₀ against the truth's, as the exact calibration compares gt_θ
+            res = np.column_stack([res, heading_residual(track.theta + start[2], track.truth_theta, self.w)])
+            jg[:, 2, :n_free] = self.w * track.dtheta
+            if track.theta_rate is not None:
+                jg[:, 2, n_free] = -self.w * track.theta_rate
+            js[:, 2, 2] = self.w
+        return res, jg, js
+
+    def _refine(self, start: NDArray[np.float64], track: _Track) -> NDArray[np.float64]:
+        """The start pose that minimises all of one run's residuals, positions and heading,
+        from ``start`` (the positions' SE(2) alignment): Gauss–Newton steps in (x₀, y₀, θ₀),
+        each halved until it lowers the sum of squares, until θ₀ moves less than 1e-12 rad
+        (at most :data:`_START_STEPS`). There the start-pose columns are orthogonal to the
+        residuals, as variable projection's reduced Jacobian takes them to be."""
+        r, _, js = self._at(start, track)
+        cost = float(np.sum(r**2))
+        for _ in range(_START_STEPS):
+            step = np.linalg.lstsq(js.reshape(-1, 3), -r.reshape(-1), rcond=None)[0]
+            for _ in range(40):
+                trial = start + step
+                r_trial, _, js_trial = self._at(trial, track)
+                cost_trial = float(np.sum(r_trial**2))
+                if cost_trial <= cost:
+                    break
+                step = step / 2
+            else:
+                break  # no step lowers the sum of squares: at its minimum to round-off
+            start, r, js, cost = trial, r_trial, js_trial, cost_trial
+            if abs(step[2]) < 1e-12:
+                break
+        return start
 
     def residuals_and_jacobian(self, q: NDArray[np.float64]
                                ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
@@ -255,7 +331,7 @@ class _Problem:
         res, jac = [], []
         for i in range(len(self.runs)):
             r, jg, js, _ = self._block(i, p, delta, starts[i])
-            j = np.zeros((r.shape[0], 2, q.size))
+            j = np.zeros((r.shape[0], r.shape[1], q.size))
             j[:, :, : self.n_global] = jg
             col = self.n_global + 3 * i
             j[:, :, col:col + 3] = js
@@ -289,6 +365,33 @@ class _Problem:
         if starts is None:
             self._last = (key, self.horizon, out)
         return out
+
+    def positions(self, res: NDArray[np.float64], sizes: Sequence[int]
+                  ) -> tuple[NDArray[np.float64], list[int]]:
+        """The position residuals (x, y of each fix) [m] of ``res`` (m,), run after run in
+        blocks of ``sizes``, and each run's count of them: ``res`` itself where the heading is
+        not compared."""
+        if self.per_fix == 2:
+            return res, list(sizes)
+        return res.reshape(-1, 3)[:, :2].reshape(-1), [2 * (size // 3) for size in sizes]
+
+
+@dataclass(frozen=True)
+class _Track:
+    """One run's dead-reckoned track from the origin at its fixes, for :meth:`_Problem._at`:
+    positions (n, 2) [m], their derivatives in the free parameters (n, 2, n_free), its
+    velocity there (n, 2) [m/s] (None without the clock offset), the truth's positions
+    (n, 2); with the heading compared the heading (n,) [rad], its derivatives (n, n_free),
+    its rate (n,) [rad/s] (None without the clock offset) and the truth's heading (n,)."""
+
+    xy0: NDArray[np.float64]
+    dxy0: NDArray[np.float64]
+    velocity: NDArray[np.float64] | None
+    xy: NDArray[np.float64]
+    theta: NDArray[np.float64] | None = None
+    dtheta: NDArray[np.float64] | None = None
+    theta_rate: NDArray[np.float64] | None = None
+    truth_theta: NDArray[np.float64] | None = None
 
 
 #: [rad] a steering offset beyond this from the robot file's is a wrong steering channel, not an
@@ -563,7 +666,7 @@ def _cut_windows(runs: Sequence[OdometryLog], truths: Sequence[Truth], with_trut
             into = f"{a - t[0]:.4g}..{b - t[0]:.4g} s into the log"
             out.logs.append(replace(piece, source=f"{log.source}, window {j + 1} of {len(edges)} ({into})"))
             out.runs.append(_Run(np.asarray(piece.t, dtype=float), run.xy[inside], run.t[inside], 0, 0,
-                                 margin))
+                                 margin, None if run.theta is None else run.theta[inside]))
             out.min_spread.append(_min_spread(truth))
         out.cut.append(len(edges))
         out.few.append(few)
@@ -591,6 +694,7 @@ def calibrate_positions(
     steering_cubic: bool = False,
     window: WindowSpec | str | None = None,
     windows: Sequence[Sequence[tuple[float, float]]] | None = None,
+    heading_weight: float = 0.0,
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to truth positions on the truth's own clock.
 
@@ -599,7 +703,8 @@ def calibrate_positions(
     runs : sequence of OdometryLog
         The logs (their own ground truth, if any, is not used).
     truths : sequence of Truth
-        One per run (:class:`odomkit.truth.Truth`; heading, if any, is not used).
+        One per run (:class:`odomkit.truth.Truth`; its heading, if any, is compared only with
+        ``heading_weight``).
     robot : DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
         Nominal parameters, the starting point: diff (c_left, c_right, c_wheel_base),
         tricycle (c_scale, steering_offset, wheel_to_axle), unicycle (c_scale,
@@ -632,6 +737,11 @@ def calibrate_positions(
     windows : sequence (one per run) of sequences of (start, end) [s], optional
         The windows given instead, as log times (in order, not overlapping, inside the log);
         fixes stamped between them are not compared.
+    heading_weight : float
+        W [m/rad] ≥ 0 (``--heading-weight``). W > 0 compares the truth's heading too: each fix
+        adds W·wrap(θ(t) + θ₀ − θ_truth(t)) [m] beside its position residuals, in runs and in
+        windows alike (every truth must have a heading: an InputError names one without).
+        The default 0 compares positions only, as before.
 
     Returns
     -------
@@ -641,7 +751,11 @@ def calibrate_positions(
         ``time_offset_std_error`` [s] when fitted (and ``time_offset_std_error_between_runs``
         from the runs' or windows' spread); ``notes`` list the stages and each run's
         fitted start pose (with windows: each run's windows fitted and left out);
-        ``n_windows``, ``windows_left_out`` and ``window`` with windows.
+        ``n_windows``, ``windows_left_out`` and ``window`` with windows. With
+        ``heading_weight``, ``residual_variance``, ``n_residuals`` and the standard errors
+        are of every residual, the weighted headings [m] with the positions (as
+        :func:`~odomkit.calibrate.exact.calibrate_exact`'s are), and a note gives the two
+        apart; the drift checks hold the position residuals alone against the truth's noise.
     """
     if len(runs) < 1:
         raise InputError("calibration needs at least one run")
@@ -649,6 +763,14 @@ def calibrate_positions(
         raise ModelError(f"calibration from truth positions supports DiffDrive, Tricycle, Car, Unicycle "
                          f"and GyroOdometry robots, got {type(robot).__name__}")
     min_first_fixes = validate.positive_int(min_first_fixes, "min_first_fixes")
+    heading_weight = validate.non_negative(heading_weight, "heading_weight", unit="m/rad", error=InputError)
+    if heading_weight > 0:
+        for truth in truths:
+            if truth.theta is None:
+                raise InputError("the truth has positions only, no heading to compare (the heading weight "
+                                 f"{heading_weight:g} m/rad needs a truth with a heading column: TUM, text "
+                                 "t,x,y,theta, a motion capture); leave out the heading weight",
+                                 source=truth.source)
     if window is not None and windows is not None:
         raise InputError("give window (a length) or windows (the (start, end) times), not both")
     spec = parse_window(window) if isinstance(window, str) else window
@@ -671,7 +793,7 @@ def calibrate_positions(
         cut = _cut_windows(runs, truths, with_truth, robot, spec, windows, margin)
         fitted_logs, fitted_runs, min_spread = cut.logs, cut.runs, cut.min_spread
         model = calibration_model(robot, fitted_logs, steering_cubic=steering_cubic)
-    problem = _Problem(model, fitted_runs, fitted_logs, free, method, fit_time_offset)
+    problem = _Problem(model, fitted_runs, fitted_logs, free, method, fit_time_offset, heading_weight)
 
     # A window holds fewer fixes than a run: its first stage needs no more than it has.
     first_fixes = min_first_fixes if cut is None else min(min_first_fixes, min(r.t.size for r in fitted_runs))
@@ -686,7 +808,7 @@ def calibrate_positions(
     starts = problem.reduced(g)[2] if joint else None
     lower, upper = _bounds(model, free, len(fitted_runs) if joint else 0, fit_time_offset)
     while True:
-        n_res = sum(2 * int(np.count_nonzero(problem.used(i))) for i in range(len(fitted_runs)))
+        n_res = sum(problem.per_fix * int(np.count_nonzero(problem.used(i))) for i in range(len(fitted_runs)))
         if n_res > n_global + n_starts and (joint or n_global):
             # Bounded (trust-region reflective): over a short first horizon a parameter the
             # path does not yet excite (the wheel base before the first turn) is free to run
@@ -709,7 +831,8 @@ def calibrate_positions(
             g = sol.x[:n_global]
             if joint:
                 starts = sol.x[n_global:].reshape(-1, 3)
-            notes.append(f"horizon {horizon:.4g} of each {'run' if joint else 'window'}: {n_res // 2} fixes, "
+            notes.append(f"horizon {horizon:.4g} of each {'run' if joint else 'window'}: "
+                         f"{n_res // problem.per_fix} fixes, "
                          f"residual rms {float(np.sqrt(np.mean(sol.fun**2))):.4g} m")
         if horizon >= 1.0:
             break
@@ -717,10 +840,13 @@ def calibrate_positions(
         problem.horizon = horizon
     # The shared parameters' rows with each run's (window's) start pose marginalised.
     res, jac, starts, sizes = problem.reduced(g, starts)
+    # The drift checks hold the positions alone against the truth's noise (the same arrays
+    # where the heading is not compared).
+    res_xy, sizes_xy = problem.positions(res, sizes)
     # One window is one run from one start pose: judged as a whole run is.
     single = joint or len(fitted_runs) == 1
     fitted_xy = [r.xy for r in fitted_runs]
-    biased = drift_bias(sources, res, sizes, fitted_xy, truths) if single else None
+    biased = drift_bias(sources, res_xy, sizes_xy, fitted_xy, truths) if single else None
     names = [*(model.names[k] for k in free), *(["truth time offset"] if fit_time_offset else [])]
     at_bound = [name for j, name in enumerate(names)
                 if np.isclose(g[j], lower[j], rtol=1e-6, atol=0.0)
@@ -736,16 +862,19 @@ def calibrate_positions(
                          f"{', '.join(at_bound)} ({said}): check the channel signs, the robot file and the "
                          "truth's clock, and that the runs turn both ways"
                          + ("" if biased is None else
-                            "; " + str(drift_bias(sources, res, sizes, fitted_xy, truths, short=True))))
+                            "; " + str(drift_bias(sources, res_xy, sizes_xy, fitted_xy, truths, short=True))))
     dof = res.size - g.size - n_starts
     if dof <= 0:
-        raise InputError(f"{res.size} position residuals cannot determine {g.size + n_starts} parameters "
+        kind = "position residuals" if problem.per_fix == 2 else "residuals"
+        raise InputError(f"{res.size} {kind} cannot determine {g.size + n_starts} parameters "
                          "(the robot's and each run's start pose): give longer runs or more truth")
     var_res = float(res @ res) / dof
-    warn_if_drifting(var_res, res.size, truths, windowed=not single)
+    # The positions' variance per axis, for the truth's noise: their share of the degrees of freedom.
+    var_xy = var_res if res_xy is res else float(res_xy @ res_xy) / (dof * res_xy.size / res.size)
+    warn_if_drifting(var_xy, res_xy.size, truths, windowed=not single)
     if biased is not None:
         warnings.warn(biased, UserWarning, stacklevel=2)
-    elif cut is not None and (drifting := windows_drift(res, sizes, fitted_xy, truths, cut.length)):
+    elif cut is not None and (drifting := windows_drift(res_xy, sizes_xy, fitted_xy, truths, cut.length)):
         warnings.warn(drifting, UserWarning, stacklevel=2)
     # The shared block of σ̂²(JᵀJ)⁻¹ with the start poses marginalised: the reduced Jacobian's.
     cov_q = var_res * np.linalg.pinv(jac.T @ jac)
@@ -779,11 +908,19 @@ def calibrate_positions(
             + [f"{cut.few[k]} with fewer than {MIN_WINDOW_FIXES} truth fixes"] * bool(cut.few[k]))
         notes.append(f"{log.source}: {cut.cut[k] - out} of {cut.cut[k]} window(s) ({cut.length}) fitted, "
                      "each from its own start pose" + (f"; left out: {why}" if out else "") + left_out)
-    if any(truth.theta is not None for truth in truths):
+    if heading_weight > 0:
+        heading = res.reshape(-1, 3)[:, 2] / heading_weight  # [rad]
+        rms_xy, rms_heading = float(np.sqrt(np.mean(res_xy**2))), float(np.sqrt(np.mean(heading**2)))
+        notes.append(f"the truth's heading compared at every fix, weighted {heading_weight:g} m/rad: "
+                     f"residual RMS {rms_xy:.4g} m in position, {rms_heading:.4g} rad in heading (mean "
+                     f"{float(np.mean(heading)):+.4g} rad); the residual RMS and the standard errors pool "
+                     "both, a heading residual as weight × rad [m]")
+    elif any(truth.theta is not None for truth in truths):
         # The fit is on positions so that any truth, GPS included, enters it alike; a truth
         # that measures heading still pins the start heading better than positions alone.
-        notes.append("the truth's heading is not compared (every fix is compared as a position); "
-                     "it is used where the track starts from the truth (evaluate, track)")
+        notes.append("the truth's heading is not compared (every fix is compared as a position; "
+                     "heading_weight, --heading-weight, compares it too); it is used where the track starts "
+                     "from the truth (evaluate, track)")
     between = offset_between = None
     clusters = "windows" if cut is not None else "runs"
     if len(fitted_runs) > 1:

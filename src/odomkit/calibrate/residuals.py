@@ -45,7 +45,7 @@ from odomkit.track import initial_pose
 
 __all__ = ["CALIBRATED_ROBOTS", "CalibratedRobot", "CalibrationModel", "CarCalibrationModel",
            "DiffCalibrationModel", "GyroCalibrationModel", "ResidualProblem", "TricycleCalibrationModel",
-           "UnicycleCalibrationModel", "calibration_model", "endpoint_whitening",
+           "UnicycleCalibrationModel", "calibration_model", "endpoint_whitening", "heading_residual",
            "integrate_with_sensitivity"]
 
 CalibratedRobot: TypeAlias = DiffDrive | Tricycle | Car | Unicycle | GyroOdometry
@@ -112,6 +112,19 @@ def integrate_with_sensitivity(
     np.cumsum(ddy, axis=0, out=dposes[1:, 1])
     dposes[:, 2] = dtheta_p
     return poses, dposes
+
+
+def heading_residual(theta: NDArray[np.float64], truth_theta: NDArray[np.float64],
+                     weight: float = 1.0) -> NDArray[np.float64]:
+    """The heading residual of a calibration against a truth that measures heading:
+    ``weight``·wrap(θ − θ_truth), odometry minus truth, wrapped into [−π, π)
+    (:func:`odomkit.angles.wrap_angle`). With ``weight`` a length [m/rad] it is a metre
+    beside the position residuals (a heading error δθ counts like a lateral miss of
+    weight·δθ); its derivative in anything θ depends on is ``weight`` times θ's. Shapes
+    alike, (n,). :class:`ResidualProblem` (the log's own gt_θ) and
+    :func:`odomkit.calibrate.positions.calibrate_positions` (a truth file's heading) compare
+    by it."""
+    return weight * wrap_angle(theta - truth_theta)
 
 
 class DiffCalibrationModel:
@@ -396,7 +409,7 @@ class ResidualProblem:
         poses, dposes = integrate_with_sensitivity(dd, dth, ddd, ddt, self.pose0[i], self.method)
         rows, gt = self.truth[i]
         res = poses[rows] - gt
-        res[:, 2] = wrap_angle(res[:, 2])
+        res[:, 2] = heading_residual(poses[rows, 2], gt[:, 2])
         jac = dposes[rows]
         if self.whiten is not None:
             # Endpoint GLS: r ← L⁻¹ r with C = L Lᵀ the predicted end-pose covariance.

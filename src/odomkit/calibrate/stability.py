@@ -189,7 +189,8 @@ def weakly_pinned(joint: ExactCalibration, start: Robot) -> list[str]:
 
 
 def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
-                     steering_cubic: bool = False, nominal: Robot | None = None) -> list[HalfFit]:
+                     steering_cubic: bool = False, nominal: Robot | None = None,
+                     heading_weight: float = 0.0) -> list[HalfFit]:
     """Each half of one drive calibrated alone from its fixes, and each half's parameters
     tried on the other half, beside the nominal robot's.
 
@@ -203,6 +204,8 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
     steering_cubic : fit a car's steering_cubic in each half too
     nominal : the uncalibrated robot (the robot file's) that each half's calibration is
         held against on the other half (default ``robot``)
+    heading_weight : W [m/rad] comparing the truth's heading in each half's fit as in the
+        whole drive's (:func:`odomkit.calibrate.positions.calibrate_positions`)
 
     Returns
     -------
@@ -231,7 +234,8 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
         try:
             with warnings.catch_warnings():  # the whole drive's fit has said what they would say
                 warnings.simplefilter("ignore")
-                fits.append(calibrate_positions([half], [fixes], robot, steering_cubic=steering_cubic))
+                fits.append(calibrate_positions([half], [fixes], robot, steering_cubic=steering_cubic,
+                                                heading_weight=heading_weight))
         except (InputError, ModelError) as exc:
             raise type(exc)(f"the {label} alone: {exc}") from exc
     base = robot if nominal is None else nominal

@@ -17,6 +17,8 @@ each run's start pose (:func:`odomkit.calibrate.positions.calibrate_positions`):
 position-only, noisy truth such as GPS works. ``--window`` cuts each run into windows, each
 fitted from its own start pose (a long drive whose heading wanders biases a whole-run fit);
 without ``--truth`` the logs' own ground truth is then compared as position fixes.
+``--heading-weight`` W [m/rad] compares the truth's heading too, W·wrap(θ − θ_truth) beside
+each fix's position.
 """
 
 from __future__ import annotations
@@ -60,7 +62,8 @@ def calibrate_command(
         "--side", help="Square side [m]: required by umbmark; with exact, E_max,syst is reported.")] = None,
     heading_weight: Annotated[float | None, typer.Option(
         "--heading-weight",
-        help="exact: weight of the heading residual [m/rad] (default 0: positions only).")] = None,
+        help="exact: weight of the heading residual [m/rad] (default 0: positions only); with --truth "
+             "or --window the truth's heading (TUM, t,x,y,theta, motion capture) beside each fix.")] = None,
     out_robot: Annotated[Path | None, typer.Option(
         "--out-robot", help="Write the corrected robot file.")] = None,
     ros_yaml: Annotated[Path | None, typer.Option(

@@ -107,7 +107,9 @@ def calibrate_files(
         Exact only: compare every truth fix, on the truth's own clock, with the odometry
         and fit each run's start pose with the robot's parameters
         (:func:`odomkit.calibrate.positions.calibrate_positions`; position-only, noisy truth
-        such as GPS is enough). ``--from`` and ``--heading-weight`` do not apply.
+        such as GPS is enough). ``--from`` does not apply; ``--heading-weight`` W > 0 [m/rad]
+        compares a truth's heading too, W·wrap(θ − θ_truth) beside each fix's position (an
+        error naming a truth that has none).
     own_truth : how to take the logs' own position-only truth (a ROS bag's GPS topic,
         ``--truth-topic``: σ, clock offset) where ``truth`` is None; such logs are then
         calibrated from their fixes as with ``truth``.
@@ -125,8 +127,8 @@ def calibrate_files(
         (:func:`odomkit.calibrate.positions.calibrate_positions` ``window=``): a long drive
         whose dead-reckoned heading wanders biases a fit of the whole run. Exact only; with
         the logs' own ground truth (no ``truth``) their positions are compared as fixes on the
-        log's own clock (no clock offset fitted; the heading is not compared), so ``--from``
-        and ``--heading-weight`` do not apply. JSON ``windows`` (length, fitted, left_out);
+        log's own clock (no clock offset fitted; their heading compared only with
+        ``--heading-weight``), so ``--from`` does not apply. JSON ``windows`` (length, fitted, left_out);
         ``std_errors_between_runs`` are then between windows, and a single run's halves are
         not calibrated alone (``halves`` absent).
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
@@ -223,9 +225,11 @@ def calibrate_files(
             # truths above are already on the log's clock).
             given = truth[0].time_offset
             gaps = [o.max_gap for o in truth]
+            heading_weight = float(exact_kwargs.get("heading_weight", 0.0))  # the truth's heading compared
             def fit_from(start: Any) -> ExactCalibration:
                 return calibrate_positions(runs, truths, start, fit_time_offset=given is None,
-                                           steering_cubic=steering_cubic, window=spec)
+                                           steering_cubic=steering_cubic, window=spec,
+                                           heading_weight=heading_weight)
 
             try:
                 first = _fit_said(fit_from, robot)
@@ -252,10 +256,11 @@ def calibrate_files(
                 # Each run alone (each half) from the start the joint fit came from.
                 summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_positions(
                     [runs[i]], [truths[i]], start, fit_time_offset=given is None,
-                    steering_cubic=steering_cubic, window=spec))
+                    steering_cubic=steering_cubic, window=spec, heading_weight=heading_weight))
             elif spec is None:  # windows: their spread is the between-window standard errors
                 summary["halves"] = _each_half_alone(cal, runs[0], truths[0], start, given is None,
-                                                     steering_cubic, cubic_hint, nominal=robot)
+                                                     steering_cubic, cubic_hint, nominal=robot,
+                                                     heading_weight=heading_weight)
             new_robot = cal.robot
             if own_columns and given:  # a --truth-time-offset moved the gt_* columns: said
                 summary["truth_time_offset"] = {"value": given, "std_error": 0.0, "fitted": False}
@@ -569,7 +574,8 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog],
 
 def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
                      clock_fitted: bool, steering_cubic: bool = False, cubic_hint: str = CUBIC_HINT, *,
-                     nominal: Robot | None = None) -> list[dict[str, Any]] | None:
+                     nominal: Robot | None = None, heading_weight: float = 0.0
+                     ) -> list[dict[str, Any]] | None:
     """One drive's halves calibrated alone from ``robot`` and tried on each other, beside the
     ``nominal`` robot (the robot file's; JSON ``halves``), and a warning where the calibration
     does not hold along the drive (:func:`odomkit.calibrate.stability.halves_disagree`). None
@@ -582,7 +588,8 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     if clock_fitted and joint.time_offset is not None:  # the fixes on the log's clock
         truth = replace(truth, t=truth.t - joint.time_offset)
     try:
-        halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic, nominal=nominal)
+        halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic, nominal=nominal,
+                                  heading_weight=heading_weight)
     except ModelError as exc:
         weak = weakly_pinned(joint, robot)
         # Where the whole drive pins a parameter near the edge of its range, a half may reach
@@ -612,15 +619,17 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
 def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any],
                              why: str = "--truth") -> None:
     """Calibration from truth fixes (``--truth``, a bag's GPS topic, or ``--window``: ``why``)
-    takes none of the trajectory fit's flags: one line naming the ones given."""
+    takes none of the trajectory fit's flags but ``--heading-weight`` (which compares the
+    truth's heading too): one line naming the ones given."""
     if method != "exact":
         raise InputError(f"{why} applies to --method exact")
     stray = (["--from"] if source is not None else []) + [
-        _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None]
+        _EXACT_FLAGS.get(k, k) for k, v in exact_kwargs.items() if v is not None and k not in _FIX_FLAGS]
     if stray:
         each = "window's" if why == "--window" else "run's"
         raise InputError(f"{', '.join(stray)} does not apply with {why}: every truth fix is compared "
-                         f"as a position, and each {each} start pose is fitted")
+                         f"as a position (and with --heading-weight a heading), and each {each} start pose "
+                         "is fitted")
 
 
 def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,
@@ -684,6 +693,8 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
 
 # The CLI flag of each keyword argument of calibrate_exact, for messages.
 _EXACT_FLAGS = {"heading_weight": "--heading-weight"}
+# Those that a calibration from truth fixes takes too (calibrate_positions' heading_weight).
+_FIX_FLAGS = ("heading_weight",)
 
 
 def _check_twist(speed: float | None, period: float | None, noise: Sequence[object],
