@@ -17,14 +17,18 @@ $(STAMP): $(BIN)/python pyproject.toml
 demo: $(STAMP)
 	$(BIN)/odomkit demo --out demo-output --force
 
-# The whole suite, then the linters (ruff, mypy): CI runs exactly this.
+# The whole suite, then the linters (ruff, mypy): CI runs exactly this. The tests run in one
+# pytest-xdist worker per core (`-n auto`; PYTEST_XDIST_AUTO_NUM_WORKERS=N sets how many),
+# each test file in one worker, so that a module's fixtures are built once; `pytest FILE`
+# by hand stays serial.
+PYTEST_PARALLEL := -n auto --dist loadfile
 test: $(STAMP)
-	$(BIN)/python -m pytest src tests
+	$(BIN)/python -m pytest $(PYTEST_PARALLEL) src tests
 	$(BIN)/ruff check src tests benchmarks
 	$(BIN)/mypy src
 
 test-fast: $(STAMP)
-	$(BIN)/python -m pytest src tests -m "not slow"
+	$(BIN)/python -m pytest $(PYTEST_PARALLEL) src tests -m "not slow"
 
 # The HTML report in a real browser: Chromium and its driver from Debian's packages
 # (installed when missing, as root or through sudo), the `browser` extra (selenium), then
