@@ -35,7 +35,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MAX_ACCELERATION", "SPIKE_SIGMAS", "Spikes", "spike_fixes", "without_spikes"]
+__all__ = ["MAX_ACCELERATION", "SPIKE_SIGMAS", "Spikes", "spike_fixes"]
 
 #: No wheeled vehicle accelerates harder than this [m/s²] (2 g): a fix whose departure from
 #: its neighbours' line needs more is not the vehicle's motion.
@@ -55,7 +55,8 @@ class Spikes:
     t : ndarray, shape (S,)
         Their times [s].
     off : ndarray, shape (S,)
-        How far each lay off its neighbours' line when it was taken [m].
+        How far each lies off the line through its two neighbours [m] (beside a gap, where
+        that line is not asked, off the farthest line that found it).
     scatter : float
         The truth's robust noise σ per axis [m], from the fixes' scatter about their
         neighbours' lines.
@@ -133,7 +134,6 @@ def spike_fixes(t: NDArray[np.float64], xy: NDArray[np.float64]) -> Spikes:
     # Robust unit scatter: the median radius of a 2-D Gaussian is σ√(ln 4).
     unit = off_between[usable] / np.sqrt(noise_between[usable])
     scatter = float(np.median(unit)) / math.sqrt(math.log(4.0))
-    spike = np.zeros(k, dtype=bool)
     asked_any = np.zeros(k, dtype=bool)
     passed_any = np.zeros(k, dtype=bool)
     worst = np.zeros(k)
@@ -154,10 +154,3 @@ def spike_fixes(t: NDArray[np.float64], xy: NDArray[np.float64]) -> Spikes:
     off_spike = np.where(between[index] > 0, between[index], worst[index])
     return Spikes(index, t[index], off_spike, scatter)
 
-
-def without_spikes(t: NDArray[np.float64], xy: NDArray[np.float64]) -> tuple[NDArray[np.bool_], Spikes]:
-    """The mask of fixes to keep (K,) and the :class:`Spikes` left out (:func:`spike_fixes`)."""
-    found = spike_fixes(t, xy)
-    keep = np.ones(np.asarray(t).shape[0], dtype=bool)
-    keep[found.index] = False
-    return keep, found
