@@ -621,7 +621,9 @@ def motion_follows(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float 
     odometry = rolled[last] - rolled[first]
     chord = np.linalg.norm(xy[last] - xy[first], axis=1)
     sigma = judging_noise(truth, noise)[0]
-    if not (np.std(odometry) >= 0.1 * np.mean(odometry) and np.std(chord) >= 4.0 * math.sqrt(2.0) * sigma):
+    spread, chord_spread = float(np.std(odometry)), float(np.std(chord))
+    if not (spread > 0 and spread >= 0.1 * float(np.mean(odometry))
+            and chord_spread > 0 and chord_spread >= 4.0 * math.sqrt(2.0) * sigma):
         return math.nan, int(first.size)
     return float(np.corrcoef(odometry, chord)[0, 1]), int(first.size)
 
