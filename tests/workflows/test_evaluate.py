@@ -350,3 +350,47 @@ def test_a_robot_file_without_noise_gives_the_errors_alone(tmp_path, run_cli):
     assert code == 2 and "no [noise] table" in err and "--window" in err
     code, out, err = run_cli("evaluate", RUN, "--robot", bare)
     assert code == 0 and "position error: final" in out and "NEES" not in out
+
+
+def test_the_python_api_draws_the_plot_the_command_draws(tmp_path, monkeypatch):
+    """evaluate_in_memory(plot=...) draws what evaluate_logs (the command) draws: the same
+    coverage series, the noise given and, since it has bias models, its white models alone,
+    each with as many window ends; the figure is written (before, the in-memory form had no
+    plot at all)."""
+    import warnings
+
+    import odomkit.workflows.evaluate as evaluate
+    from odomkit.data import builtin_data_path
+    from odomkit.io.optiodom import read_run
+    from odomkit.io.robotfile import read_robot
+
+    robot_file = tmp_path / "robot.toml"
+    robot_file.write_text(Path(builtin_data_path("optiodom_diff.toml")).read_text()
+                          + "\n[noise.parameters]\nsigma_scale_left = 0.01\nsigma_scale_right = 0.01\n")
+    run = builtin_data_path("230620202042_run-01.csv")
+    drawn = []
+    real = evaluate._honesty_plot
+
+    def capture(plot, scored, coverages, windows, length=None):
+        drawn.append((coverages, windows, length))
+        return real(plot, scored, coverages, windows, length)
+
+    monkeypatch.setattr(evaluate, "_honesty_plot", capture)
+    robot, noise = read_robot(robot_file)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        command = evaluate.evaluate_logs([run], robot_file, window="10s", plot=tmp_path / "cli.png")
+        memory = evaluate.evaluate_in_memory(read_run(run), robot, noise, window="10s",
+                                             plot=tmp_path / "api.png")
+    assert drawn[0] == drawn[1]
+    coverages, windows, length = drawn[1]
+    assert set(coverages) == {"window ends (white + bias)", "window ends (white only)",
+                              "window ends (white + bias), heading"} and length == "10 s"
+    assert coverages["window ends (white + bias), heading"] == memory["coverage_heading"]
+    assert coverages["window ends (white + bias)"] == memory["coverage"] == command["coverage"]
+    white_models = [m for m in noise if m.kind == "white"]
+    white = evaluate.evaluate_in_memory(read_run(run), robot, white_models, window="10s")
+    assert coverages["window ends (white only)"] == white["coverage"]
+    assert windows["window ends (white + bias)"] == windows["window ends (white only)"] == memory["windows"]
+    assert memory["outputs"]["plot"] == str(tmp_path / "api.png")
+    assert (tmp_path / "api.png").stat().st_size > 0

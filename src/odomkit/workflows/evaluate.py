@@ -17,7 +17,7 @@ Two forms (docs/reference/commands/evaluate.md):
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -222,32 +222,43 @@ def evaluate_logs(
                               min_travel=min_travel, align=align, rpe_distances=rpe_distances,
                               method=method, progress=progress, errors_only=True)
     out = _pooled(specs, by_spec, rpe_distances)
-    scored = by_spec[0]
-    window = None if specs[0] is None else str(specs[0])
     if plot is not None:
         from odomkit.evaluate import coverage
         from odomkit.io.robotfile import read_robot
 
         robot, noise = read_robot(robot_path)
-        kinds = {m.kind for m in noise}
-        both = " + ".join(sorted(kinds, reverse=True))
-        name = "window ends" if kinds == {"white"} else f"window ends ({both})"
-        covers = {name: out["coverage"]}
-        if kinds > {"white"}:  # the white models alone, for comparison
+
+        def white_alone(white: Sequence[NoiseModel]) -> dict[str, float | None]:
             from odomkit.workflows.truth import resolved_truth
 
-            white = [m for m in noise if m.kind == "white"]
             alone = white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, specs[0],
                                min_travel, method)
-            covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
-                                                          np.concatenate([a.honesty_cov for a in alone]))
-        counts = dict.fromkeys(covers, out["windows"])
-        if out.get("coverage_heading") is not None:  # the heading's intervals, where the truth has one
-            covers[f"{name}, heading"] = out["coverage_heading"]
-            counts[f"{name}, heading"] = sum(end["nees_heading"] is not None for one in out["per_log"]
-                                             for end in one.get("window_ends", ()))
-        out["outputs"] = {"plot": str(_honesty_plot(plot, scored, covers, counts, window))}
+            return coverage(np.concatenate([a.honesty_errors for a in alone]),
+                            np.concatenate([a.honesty_cov for a in alone]))
+
+        out["outputs"] = {"plot": str(_plotted(plot, out, by_spec[0], noise, specs[0], white_alone))}
     return out
+
+
+def _plotted(plot: str | Path, out: dict[str, Any], scored: Sequence[Scored], noise: Sequence[NoiseModel],
+             spec: WindowSpec | None, white_alone: Callable[[Sequence[NoiseModel]], dict[str, float | None]]
+             ) -> Path:
+    """The ``--plot`` of :func:`evaluate_logs` and :func:`evaluate_in_memory` alike: the runs,
+    the coverage of the window ends (``out``'s, of the first window length ``spec``) with the
+    ``noise`` given and, where it has bias models, with its white models alone
+    (``white_alone(white models)`` scores those), and the heading's where the truth has one."""
+    kinds = {m.kind for m in noise}
+    both = " + ".join(sorted(kinds, reverse=True))
+    name = "window ends" if kinds == {"white"} else f"window ends ({both})"
+    covers = {name: out["coverage"]}
+    if kinds > {"white"}:  # the white models alone, for comparison
+        covers["window ends (white only)"] = white_alone([m for m in noise if m.kind == "white"])
+    counts = dict.fromkeys(covers, out["windows"])
+    if out.get("coverage_heading") is not None:  # the heading's intervals, where the truth has one
+        covers[f"{name}, heading"] = out["coverage_heading"]
+        counts[f"{name}, heading"] = sum(end["nees_heading"] is not None for one in out["per_log"]
+                                         for end in one.get("window_ends", ()))
+    return _honesty_plot(plot, scored, covers, counts, None if spec is None else str(spec))
 
 
 def evaluate_in_memory(
@@ -264,6 +275,8 @@ def evaluate_in_memory(
     rpe_distances: Sequence[float] = (1.0,),
     method: str = "exact",
     progress: Progress = NO_PROGRESS,
+    plot: str | Path | None = None,
+    overwrite: bool = False,
 ) -> dict[str, Any]:
     """:func:`evaluate_logs` for logs already in memory: the honesty test, dead reckoning
     restarted from truth in each window and scored at its end, and the whole-run errors.
@@ -295,12 +308,15 @@ def evaluate_in_memory(
     min_travel : windows whose odometry travels less [m] are left out and counted
     max_gap : longest gap between the truth's fixes to interpolate across [s] (None: no limit)
     align, rpe_distances, method, progress : as :func:`evaluate_logs`
+    plot, overwrite : as :func:`evaluate_logs`: the runs against truth, the coverage diagram
+        of the window ends (with ``noise``'s white models alone beside it where it has bias
+        models) and their NEES, into this .png, .svg or .pdf file; adds ``outputs``
 
     Returns
     -------
     dict
-        As :func:`evaluate_logs` (the JSON of ``odomkit evaluate --robot``, without
-        ``outputs``); ``per_log`` names each log by its ``source``. Its ``warnings`` are also
+        As :func:`evaluate_logs` (the JSON of ``odomkit evaluate --robot``, with ``outputs``
+        only where ``plot`` is given); ``per_log`` names each log by its ``source``. Its ``warnings`` are also
         issued as UserWarnings.
 
     Examples
@@ -320,13 +336,30 @@ def evaluate_in_memory(
     from odomkit.workflows.results import logs_given, noise_models, truths_given
 
     given = logs_given(logs, "odomkit.workflows.evaluate.evaluate_logs")
+    _check_plot(plot, overwrite, [])
     truth = truths_given(truths, given, truth_noise)
     models: tuple[NoiseModel, ...] = () if noise is None else noise_models(noise)
     specs = window_specs(window)
-    by_spec = score_loaded((LoadedLog(log, found, max_gap) for log, found in zip(given, truth, strict=True)),
-                           len(given), robot, models, specs, min_travel=min_travel, align=align,
-                           rpe_distances=rpe_distances, method=method, progress=progress, errors_only=True)
-    return _pooled(specs, by_spec, rpe_distances)
+
+    def scored(with_models: Sequence[NoiseModel], lengths: Sequence[WindowSpec | None],
+               shown: Progress = NO_PROGRESS) -> list[list[Scored]]:
+        loaded = (LoadedLog(log, found, max_gap) for log, found in zip(given, truth, strict=True))
+        return score_loaded(loaded, len(given), robot, tuple(with_models), lengths, min_travel=min_travel,
+                            align=align, rpe_distances=rpe_distances, method=method, progress=shown,
+                            errors_only=True)
+
+    by_spec = scored(models, specs, progress)
+    out = _pooled(specs, by_spec, rpe_distances)
+    if plot is not None:
+        from odomkit.evaluate import coverage
+
+        def white_alone(white: Sequence[NoiseModel]) -> dict[str, float | None]:
+            alone = scored(white, specs[:1])[0]
+            return coverage(np.concatenate([a.honesty_errors for a in alone]),
+                            np.concatenate([a.honesty_cov for a in alone]))
+
+        out["outputs"] = {"plot": str(_plotted(plot, out, by_spec[0], models, specs[0], white_alone))}
+    return out
 
 
 def _pooled(specs: Sequence[WindowSpec | None], by_spec: Sequence[list[Scored]],
