@@ -215,3 +215,25 @@ def test_a_bag_whose_yaw_variance_passes_the_uniform_circles_says_from_when(run_
     yaw = np.array(back.pose_covariance)[:, 35]
     assert back.t[np.argmax(yaw > np.pi**2 / 3)] - back.t[0] == pytest.approx(first)
     assert int((yaw > np.pi**2 / 3).sum()) == int(beyond.sum())
+
+
+@pytest.mark.parametrize(("scale", "unit"), [(1e3, "ms"), (1e6, "us")])
+def test_a_log_whose_time_is_in_another_unit_is_said_without_a_truth(run_cli, tmp_path, scale, unit):
+    """A car's 20 Hz log with its time in ms (or µs), read as seconds and tracked without a
+    truth: the track ran 1000× too long, exit 0, without a word. Now one warning names the
+    flag; given it, the log reads as the one in seconds does, without the warning."""
+    t = np.arange(0.0, 60.0, 0.05)
+    rows = np.column_stack((t, np.full(t.size, 5.0), 0.05 * np.sin(t / 5.0)))
+    robot = tmp_path / "car.toml"
+    robot.write_text('[robot]\ntype = "car"\nwheel_base = 2.7\n')
+    for name, times in (("s.csv", t), ("scaled.csv", t * scale)):
+        np.savetxt(tmp_path / name, np.column_stack((times, rows[:, 1:])), delimiter=",",
+                   header="t,speed,steer", comments="", fmt="%.9g")
+    code, out, err = run_cli("track", tmp_path / "scaled.csv", "--robot", robot, "--json")
+    assert code == 0 and f"slower than any odometry logger (1 s at most): is its time in {unit}? " \
+        f"(--time-unit {unit})" in err, err
+    code, given, err = run_cli("track", tmp_path / "scaled.csv", "--robot", robot, "--time-unit", unit,
+                               "--json")
+    assert code == 0 and "slower than any" not in err, err
+    _, plain, _ = run_cli("track", tmp_path / "s.csv", "--robot", robot, "--json")
+    assert json.loads(given)["pose"] == pytest.approx(json.loads(plain)["pose"], abs=1e-6)

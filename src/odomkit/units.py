@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH", "TIME_UNITS", "time_unit_factor"]
+__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH", "period_unit", "SLOW_ROWS", "SLOWEST_PERIOD",
+           "TIME_UNITS", "time_unit_factor"]
 
 DEGREE = math.pi / 180
 """Radians per degree."""
@@ -47,3 +48,29 @@ def time_unit_factor(ratio: float) -> str | None:
         if 0.5 <= ratio * TIME_UNITS[unit] <= 2.0:
             return unit
     return None
+
+
+SLOWEST_PERIOD = 1.0
+"""No odometry logger samples slower than this [s]: a median period above it is a time
+column in another unit read as seconds (a 20 Hz log in ms reads 50 s)."""
+
+SLOW_ROWS = "slower than any odometry logger"
+"""The words every message about :data:`SLOWEST_PERIOD` holds (``odomkit check`` says it once,
+as its ``time`` finding, not again as a reading warning)."""
+
+
+def period_unit(median_period: float) -> str | None:
+    """The time unit a log's time column is likely in where its median period [s], read as
+    seconds, is slower than any odometry logger (:data:`SLOWEST_PERIOD`): the first of
+    ``"ms"``, ``"us"``, ``"ns"`` that makes it 0.1 ms to 1 s (``"ms"`` where none does);
+    None where the period is a logger's.
+
+    Examples
+    --------
+    >>> period_unit(0.05), period_unit(50.0), period_unit(5e4)
+    (None, 'ms', 'us')
+    """
+    if not median_period > SLOWEST_PERIOD:
+        return None
+    return next((u for u in ("ms", "us", "ns") if 1e-4 <= median_period * TIME_UNITS[u] <= SLOWEST_PERIOD),
+                "ms")

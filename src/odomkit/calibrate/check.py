@@ -57,6 +57,7 @@ from odomkit.calibrate.check_truth import check_truth_heading, check_truth_inter
 from odomkit.log import INCREMENT_CHANNELS, SPEED_CHANNELS, WHEEL_PAIRS, OdometryLog, clock_text
 from odomkit.robot import Robot
 from odomkit.truth import Truth, truth_at, truth_noise
+from odomkit.units import SLOW_ROWS, SLOWEST_PERIOD, period_unit
 
 if TYPE_CHECKING:
     from odomkit.kinematics import BodySteps
@@ -69,9 +70,6 @@ __all__ = [
 
 #: A step longer than this many median periods is a time jump.
 GAP_FACTOR = 5.0
-#: No odometry logger samples slower than this [s]: a median period above it is a time
-#: column in another unit read as seconds (a log in ms at 100 Hz reads 10 s).
-SLOWEST_PERIOD = 1.0
 # A wheel (distance channel) silent this long while the robot moves is stuck [s].
 _STUCK_SECONDS = 1.0
 # The truth's clock may be this far from the log's before a whole silent stretch is no
@@ -142,14 +140,9 @@ def check_time(log: OdometryLog) -> list[Finding]:
                 found.append(Finding(
                     "time", "warn", said,
                     "a dropped-out logger loses motion: record again, or split the log at the jumps"))
-        if median > SLOWEST_PERIOD:
-            from odomkit.units import TIME_UNITS
-
-            # The first unit that makes the period a logger's (0.1 ms to SLOWEST_PERIOD).
-            unit = next((u for u in ("ms", "us", "ns") if 1e-4 <= median * TIME_UNITS[u] <= SLOWEST_PERIOD),
-                        "ms")
+        if (unit := period_unit(median)) is not None:
             found.append(Finding(
-                "time", "warn", f"the median period is {median:.4g} s, slower than any odometry logger "
+                "time", "warn", f"the median period is {median:.4g} s, {SLOW_ROWS} "
                 f"({SLOWEST_PERIOD:g} s at most): a time column in {unit} read as seconds reads so",
                 f"give the log's time unit (--time-unit {unit})"))
     return found or [Finding("time", "ok", f"{len(log)} rows, steady period {np.median(dt):.4g} s, "

@@ -320,7 +320,27 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
                                cumulative=options.cumulative, wrap_bits=options.wrap_bits,
                                time_unit=options.time_unit,
                                example=COLUMN_EXAMPLES[robot_type_name(robot)], record=options.record)
+            _warn_if_slow(log, options)
         return _in_span(log, options)
+
+
+def _warn_if_slow(log: OdometryLog, options: LogOptions) -> None:
+    """Warn where a text log's rows, its time read in seconds, come slower than any odometry
+    logger's (:func:`odomkit.units.period_unit`): a log in ms read as seconds tracked a car
+    over 4016 km in 1.5 million seconds, exit 0, without a word where no truth was given."""
+    import warnings
+
+    import numpy as np
+
+    from odomkit.units import SLOW_ROWS, SLOWEST_PERIOD, period_unit
+
+    if options.time_unit != "s" or len(log) < 3:
+        return
+    median = float(np.median(np.diff(log.t)))
+    if (unit := period_unit(median)) is not None:
+        warnings.warn(f"{log.source}: its rows come every {median:.4g} s (the median), {SLOW_ROWS} "
+                      f"({SLOWEST_PERIOD:g} s at most): is its time in {unit}? (--time-unit "
+                      f"{unit})", stacklevel=3)
 
 
 def _in_span(log: OdometryLog, options: LogOptions) -> OdometryLog:
