@@ -172,3 +172,60 @@ def test_a_clock_offset_injected_into_real_motion_capture_is_found():
     assert late.time_offset - recorded.time_offset == pytest.approx(0.3, abs=0.01)
     # the same problem up to the shift: the wheel scales and base agree within their errors
     assert np.all(np.abs(late.values - recorded.values) < 2 * recorded.std_errors)
+
+
+def _lagging_car(seed: int, lag: float, gps_late: float):
+    """A car that stops and goes (speed 0–10 m/s) through bends; its yaw follows the logged
+    steering ``lag`` s late (a steering sensor ahead of the wheels' response), and its 5 Hz
+    GPS (5 cm) runs ``gps_late`` s late: the log, the GPS, the nominal car."""
+    from odomkit.log import OdometryLog
+    from odomkit.robot import Car
+    from odomkit.track import dead_reckon_log
+    from odomkit.truth import Truth
+
+    rng = np.random.default_rng(seed)
+    dt = 0.05
+    t = np.arange(0.0, 600.0, dt)
+    speed = np.clip(10.0 * np.sin(t / 15.0) ** 2 + rng.normal(0.0, 0.02, t.size), 0.0, None)
+    knots = rng.uniform(-0.25, 0.25, int(t[-1] / 6.0) + 2)
+    steer = np.interp(t, 6.0 * np.arange(knots.size), knots)
+    car = Car(2.7, 0.0, "rear")
+    moved = OdometryLog(t, {"speed": speed, "steer": np.interp(t - lag, t, steer)})
+    poses = dead_reckon_log(moved, car, pose0=(0.0, 0.0, 0.3)).poses
+    stamps = np.arange(1.013, t[-1] - 1.0, 0.2)
+    xy = np.column_stack([np.interp(stamps - gps_late, t, poses[:, k]) for k in (0, 1)])
+    gps = Truth(stamps, xy + rng.normal(0.0, 0.05, xy.shape), None, 0.05, "gps")
+    return OdometryLog(t, {"speed": speed, "steer": steer}, source="drive"), gps, car
+
+
+def test_a_lag_in_the_turning_taken_for_the_truths_clock_is_said():
+    """A car whose yaw follows its logged steering 0.8 s late, against a GPS on the log's own
+    clock: a fit of positions in 60 s windows takes the lag for a clock offset (+0.8 s), which every
+    command then applies to the truth. The speeds, which the turning does not move, put
+    the clock at 0 within their standard error, and the calibration says the two differ
+    and what to try. A GPS really 0.3 s late, on a car without the lag: both agree, nothing
+    said."""
+    import warnings
+
+    from odomkit.calibrate.check_ratios import speed_clock
+    from odomkit.calibrate.positions import calibrate_positions
+
+    log, gps, car = _lagging_car(4, lag=0.8, gps_late=0.0)
+    offset, se = speed_clock([log], car, [gps])
+    assert abs(offset) < 3 * se + 0.02 and se < 0.1
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cal = calibrate_positions([log], [gps], car, fit_time_offset=True, window="60s")
+    assert abs(cal.time_offset) > 0.3  # the lag, taken for the clock (a later truth: +0.4 s here)
+    said = [str(w.message) for w in caught if "is not the one the speeds give" in str(w.message)]
+    assert len(said) == 1 and "a lag in the turning" in said[0], said
+    assert abs(float(said[0].split("--truth-time-offset ")[1].split()[0])) < 0.05  # the speeds' clock
+
+    log, gps, car = _lagging_car(5, lag=0.0, gps_late=0.3)
+    offset, se = speed_clock([log], car, [gps])
+    assert abs(offset - 0.3) < 3 * se + 0.02
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        cal = calibrate_positions([log], [gps], car, fit_time_offset=True)
+    assert cal.time_offset == pytest.approx(0.3, abs=0.05)
+    assert not [w for w in caught if "speeds give" in str(w.message)]

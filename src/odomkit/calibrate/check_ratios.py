@@ -34,6 +34,7 @@ or a yaw rate's.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -46,7 +47,7 @@ from odomkit.robot import Car, CompassOdometry, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
 __all__ = ["check_truth_motion", "FOLLOWS", "follows_note", "judging_noise", "motion_follows",
-           "motion_problems", "MotionRatios", "motion_ratios",
+           "motion_problems", "MotionRatios", "motion_ratios", "speed_clock", "speed_clock_note",
            "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "time_unit_off", "TimeUnitOff",
            "unit_mixup"]
 
@@ -639,6 +640,87 @@ def _follows_finding(r: float, stretches: int) -> Finding | None:
                    "robot's own truth: near 1): the truth of another robot or run, or on a clock seconds off",
                    "give this log's own truth (the i-th --truth belongs to the i-th log), or its clock "
                    "offset (--truth-time-offset)")
+
+
+#: The clock offsets :func:`speed_clock` tries [s]: calibrate's range (positions.MAX_TIME_OFFSET).
+_SPEED_CLOCK_GRID = np.arange(-2.0, 2.0 + 1e-9, 0.02)
+
+
+def speed_clock(logs: Sequence[OdometryLog], robot: Robot, truths: Sequence[Truth],
+                max_gap: float | None = 0.5) -> tuple[float, float] | None:
+    """The truth's clock offset δ [s] (a fix stamped t is the pose at log time t − δ) that
+    the vehicle's speed alone gives, and its standard error: over consecutive stretches of
+    :data:`FOLLOW_SPAN` seconds (wider for a sparse truth), the truth's chord against the
+    distance the odometry rolls over the same stretch δ earlier, a scale fitted at each δ,
+    the sum of squared misfits smallest (pooled over the runs). Speed changes (starts,
+    stops, braking) pin it; what the vehicle turns does not enter, so a lag in its turning
+    (a steering sensor's, the yaw's response) cannot move it, where a fit of positions
+    takes such a lag as the clock. Its standard error comes from the misfit's curvature
+    about its minimum, σ̂²/k with σ̂² the misfit per stretch.
+
+    None where the speeds cannot tell: fewer than :data:`FOLLOW_STRETCHES` stretches in all,
+    travel per stretch that hardly varies (under a tenth of its mean), or a minimum at the
+    grid's edge (±2 s)."""
+    from odomkit.kinematics import body_steps
+
+    misfit = np.zeros(_SPEED_CLOCK_GRID.size)
+    stretches, varies = 0, False
+    for log, truth in zip(logs, truths, strict=True):
+        t = np.asarray(log.t, dtype=float)
+        inside = (truth.t >= t[0] + 2.0) & (truth.t <= t[-1] - 2.0)  # room to move the clock
+        tt, xy = truth.t[inside], truth.xy[inside]
+        if tt.size < 3:
+            continue
+        first, last = _stretch_ends(tt, tt[0], tt[-1], max(FOLLOW_SPAN, heading_span(truth)),
+                                    longest_gap(truth, max_gap))
+        if first.size == 0:
+            continue
+        rolled = np.concatenate(([0.0], np.cumsum(np.abs(body_steps(robot, log).dd))))
+        chord = np.linalg.norm(xy[last] - xy[first], axis=1)
+        # (grid, stretches): the odometry's travel over each stretch with the clock δ late
+        odo = (np.interp(tt[last][None, :] - _SPEED_CLOCK_GRID[:, None], t, rolled)
+               - np.interp(tt[first][None, :] - _SPEED_CLOCK_GRID[:, None], t, rolled))
+        scale = np.sum(odo * chord, axis=1) / np.maximum(np.sum(odo * odo, axis=1), 1e-300)
+        misfit += np.sum((chord[None, :] - scale[:, None] * odo) ** 2, axis=1)
+        stretches += first.size
+        middle = odo[_SPEED_CLOCK_GRID.size // 2]
+        varies = varies or bool(np.std(middle) > 0.1 * np.mean(middle) > 0)
+    if stretches < FOLLOW_STRETCHES or not varies:
+        return None
+    best = int(np.argmin(misfit))
+    if best in (0, misfit.size - 1):
+        return None
+    # The parabola through the minimum and its neighbours: misfit ≈ m* + k (δ − δ*)².
+    h = float(_SPEED_CLOCK_GRID[1] - _SPEED_CLOCK_GRID[0])
+    curvature = (misfit[best - 1] - 2 * misfit[best] + misfit[best + 1]) / (2 * h * h)
+    if not curvature > 0:
+        return None
+    shift = (misfit[best - 1] - misfit[best + 1]) / (4 * curvature * h)
+    sigma2 = float(misfit[best]) / max(stretches - 2, 1)
+    return float(_SPEED_CLOCK_GRID[best] + shift), float(math.sqrt(sigma2 / curvature))
+
+
+def speed_clock_note(fitted: float, std_error: float, logs: Sequence[OdometryLog], robot: Robot,
+                     truths: Sequence[Truth], max_gap: float | None = 0.5) -> str | None:
+    """The warning where a calibration's fitted clock offset [s] (``std_error`` its own)
+    and :func:`speed_clock`'s differ by more than 3 of their joint standard errors and
+    0.2 s: the fit took something else for the clock, most often a lag in the turning,
+    which moves a path's positions as a late clock does. None where they agree or the
+    speeds cannot tell."""
+    with np.errstate(all="ignore"):
+        found = speed_clock(logs, robot, truths, max_gap)
+    if found is None:
+        return None
+    offset, se = found
+    joint = math.hypot(se, std_error)
+    if abs(fitted - offset) <= max(3.0 * joint, 0.2):
+        return None
+    return (f"the fitted truth clock offset, {fitted:+.2f} s, is not the one the speeds give: the truth's "
+            f"travel over {FOLLOW_SPAN:g} s stretches matches the odometry's best at {offset:+.2f} ± "
+            f"{se:.2f} s. The fit of positions may have taken a lag in the turning (the steering's or the "
+            "yaw's response) for the truth's clock, and every command that reads the robot file's [truth] "
+            f"time_offset moves the truth by it: try --truth-time-offset {offset:.2f} (calibrate, then "
+            "fit-noise and evaluate) and compare")
 
 
 def follows_note(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5) -> str | None:

@@ -941,6 +941,13 @@ def calibrate_positions(
                          "a parameter undetermined without it")
         elif scattered := between_runs_warning(model.names, p, std, between, len(fitted_runs), clusters):
             warnings.warn(scattered, UserWarning, stacklevel=2)
+    if fit_time_offset:
+        from odomkit.calibrate.check_ratios import speed_clock_note
+
+        own_se = float(np.sqrt(max(cov_q[free.size, free.size], 0.0)))
+        se = offset_between if offset_between is not None else own_se
+        if clock := speed_clock_note(delta, se, runs, robot, truths):
+            warnings.warn(clock, UserWarning, stacklevel=2)
     travelled = [float(np.sum(np.abs(model.steps(p, i)[0]))) for i in range(len(fitted_runs))]
     spread = [_spread(r.xy) for r in fitted_runs]
     sensitivity = float(np.mean([s / d if d > 0 else 0.0 for s, d in zip(spread, travelled, strict=True)]))
