@@ -290,10 +290,11 @@ def test_a_speed_and_yaw_rate_swap_is_tried_only_where_both_are_rates():
 def test_a_truth_that_does_not_overlap_the_log_says_why_with_the_time_unit():
     """A log in ms against its truth in s: check said "the truth barely moves while it
     overlaps the log"; it does not overlap at all, and the log's span, 1000 times the truth's,
-    names the log's time unit."""
+    names the log's time unit. It fails (check exits 1), as evaluate, calibrate and
+    fit-noise refuse it: it was a warning, and check exited 0 on a truth it could not use."""
     log, rng = unicycle_log()
     truth = heading_truth(log, TRUE_UNI, 50.0, 0.01, rng)
     in_ms = OdometryLog(1000 * (log.t + 100.0), log.channels)
     f = channels_finding(in_ms, UNI, truth)
-    assert f.status == "warn" and "do not overlap in time" in f.message, f
+    assert f.status == "fail" and "do not overlap in time" in f.message, f
     assert "the log's time is likely in ms read as seconds (--time-unit ms)" in f.message
