@@ -577,3 +577,9 @@ def test_fit_noise_and_evaluate_say_when_a_log_is_given_another_drives_truth(run
     code, _, err = run_cli("evaluate", tmp_path / "log.csv", "--robot", robot, "--truth",
                            tmp_path / "other.csv", "--window", "30s")
     assert code == 0 and "log.csv: the truth does not move when the odometry does" in err, err
+    # calibrate's fit fails on it: the error says this first (it led with "ran to the edge of
+    # the plausible range ... check the channel signs", and this came 300 characters later).
+    code, _, err = run_cli("calibrate", tmp_path / "log.csv", "--robot", robot, "--truth",
+                           tmp_path / "other.csv")
+    assert code == 2 and err.startswith(f"odomkit: error: {tmp_path / 'log.csv'}: the truth does not move"), err
+    assert "(so the fit failed: " in err

@@ -237,6 +237,13 @@ def calibrate_files(
                 first, failed = None, exc
             chosen = _better_start(first, runs, truths, robot, gaps, fit_from)
             if chosen is None:
+                from odomkit.calibrate.check_ratios import follows_note
+
+                # A truth that is not the log's explains every failure after it: said first.
+                notes = [f"{log.source}: {n}" for log, found, gap in zip(runs, truths, gaps, strict=True)
+                         if (n := follows_note(log, robot, found, gap))]
+                if notes:
+                    raise ModelError("; ".join(notes) + f" (so the fit failed: {failed})") from failed
                 raise ModelError(str(failed) + _why_off(runs, truths, robot, gaps)) from failed
             cal, start, said = chosen
             # The drive's own turning, on the truth's clock as fitted (a Husky's 1.42 s moved its
