@@ -581,5 +581,6 @@ def test_fit_noise_and_evaluate_say_when_a_log_is_given_another_drives_truth(run
     # the plausible range ... check the channel signs", and this came 300 characters later).
     code, _, err = run_cli("calibrate", tmp_path / "log.csv", "--robot", robot, "--truth",
                            tmp_path / "other.csv")
-    assert code == 2 and err.startswith(f"odomkit: error: {tmp_path / 'log.csv'}: the truth does not move"), err
+    said = f"odomkit: error: {tmp_path / 'log.csv'}: the truth does not move"
+    assert code == 2 and err.startswith(said), err
     assert "(so the fit failed: " in err
