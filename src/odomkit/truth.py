@@ -259,7 +259,7 @@ def scatter_sigma(truth: Truth, block: int = 5) -> float | None:
     capture, 4 s of a 1 Hz GPS on a car: simulated cars' 0.5–2 m GPS came back within 5 %,
     where 7 fixes read a 1 m GPS at 1 Hz as 1.44 m); a path that bends more within a block
     adds its misfit, and noise correlated over a block (a GPS's slow multipath wander) is
-    missed. Blocks that span a gap (a spacing over twice the median) are left out.
+    missed.
     None where fewer than two blocks fit (too few fixes).
 
     Parameters
@@ -281,10 +281,6 @@ def scatter_sigma(truth: Truth, block: int = 5) -> float | None:
     design = np.stack((np.ones_like(tau), tau, tau**2), axis=-1)  # (B, n, 3)
     gram = np.einsum("bni,bnj->bij", design, design)
     ok = np.linalg.matrix_rank(gram) == 3  # repeated times would leave a block singular
-    # A block across a gap (a spacing over twice the median) fits one quadratic to two
-    # stretches of path: on a real car's 5 Hz GPS, its 71 such blocks of 887 had an RMS of
-    # 1.5 m, the others 0.12 m, and together they read its noise as 0.44 m.
-    ok &= np.max(np.diff(t, axis=1), axis=1) <= 2.0 * float(np.median(np.diff(truth.t)))
     if np.count_nonzero(ok) < 2:
         return None
     coef = np.linalg.solve(gram[ok], np.einsum("bni,bnk->bik", design[ok], xy[ok]))  # (B, 3, 2)
