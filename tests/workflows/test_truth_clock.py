@@ -243,3 +243,25 @@ def test_calibrate_prints_the_fitted_clock_offset_in_its_text(run_cli, tmp_path)
     # an early truth clock leads: a negative lag read oddly
     code, text, _ = run_cli(*args, "--truth-time-offset", "-0.25")
     assert code == 0 and "-0.250000 s (given)  (the truth's fixes lead the log by 0.25 s)" in text
+
+
+def test_the_report_shows_the_clock_offset_it_fitted(run_cli, tmp_path):
+    """The report calibrates against a GPS 0.3 s late and fits its clock with the robot, and
+    every later figure uses it; its calibration table showed the robot's parameters only.
+    The offset and its standard error are shown, keyed, equal to calibrate's JSON."""
+    import re
+
+    files = drive(tmp_path, 0.3, minutes=2.0)
+    robot = robot_file(tmp_path, "car.toml", TRUE_WITH_NOISE)
+    cal = ok_json(run_cli, "calibrate", files["log"], "--robot", robot, "--truth", files["gps"])
+    page = tmp_path / "report.html"
+    code, _, err = run_cli("report", files["log"], "--robot", robot, "--truth", files["gps"], "--columns",
+                           COLUMNS, "--out", page)
+    assert code == 0, err
+    shown = {m.group(1): float(m.group(2)) for m in re.finditer(
+        r'data-key="calibration\.((?:std_error\.)?truth_time_offset)" data-value="([^"]+)"',
+        page.read_text(encoding="utf-8"))}
+    offset = cal["truth_time_offset"]
+    assert shown["truth_time_offset"] == pytest.approx(offset["value"], rel=1e-9)
+    assert shown["std_error.truth_time_offset"] == pytest.approx(offset["std_error"], rel=1e-9)
+    assert abs(offset["value"] - 0.3) < 4 * offset["std_error"] + 0.01

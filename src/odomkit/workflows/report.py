@@ -439,6 +439,15 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
         if name in cal:
             rows.append((name, number(cal[name], "", 6, key=f"calibration.{name}"), Cell(""),
                          *((Cell(""),) if between else ())))
+    clock = cal.get("truth_time_offset")
+    if isinstance(clock, dict) and clock.get("fitted"):
+        # The truth's clock, fitted with the robot: every command that reads the calibrated
+        # robot file's [truth] time_offset moves the truth by it (a user study missed it here).
+        rows.append(("truth clock offset [s]",
+                     number(clock["value"], "", 4, key="calibration.truth_time_offset"),
+                     number(clock.get("std_error"), "", 2, key="calibration.std_error.truth_time_offset"),
+                     *([number(clock.get("std_error_between_runs"), "", 2,
+                               key="calibration.std_error_between.truth_time_offset")] if between else [])))
     header = (("parameter", "fitted", "standard error, the fit's own", f"standard error between {clusters}")
               if between else ("parameter", "fitted", "standard error"))
     if between:
