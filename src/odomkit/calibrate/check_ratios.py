@@ -593,6 +593,45 @@ FOLLOW_STRETCHES = 50
 FOLLOWS = 0.4
 
 
+@dataclass(frozen=True)
+class _Travel:
+    """The truth's chord over consecutive stretches of :data:`FOLLOW_SPAN` seconds (wider for a
+    sparse truth), and the distance the odometry rolls, for :func:`motion_follows` and
+    :func:`speed_clock`: stretches from ``start`` to ``end`` [s] (S,), their ``chord`` [m]
+    (S,), the log's times ``t`` [s] (N,) and the distance rolled by each row ``rolled`` [m]
+    (N,), reversing counted."""
+
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
+    chord: NDArray[np.float64]
+    t: NDArray[np.float64]
+    rolled: NDArray[np.float64]
+
+    def odometry(self, late: float | NDArray[np.float64] = 0.0) -> NDArray[np.float64]:
+        """The distance the odometry rolls over each stretch, the truth's clock ``late`` [s]
+        (a fix stamped t is the pose at log time t − late); ``late`` of shape (G, 1) gives
+        (G, S)."""
+        return (np.interp(self.end - late, self.t, self.rolled)
+                - np.interp(self.start - late, self.t, self.rolled))
+
+
+def _travel(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None, margin: float = 0.0
+            ) -> _Travel | None:
+    """The stretches of :class:`_Travel` over the truth's fixes at least ``margin`` [s] inside
+    the log's span; None where fewer than 3 fixes are."""
+    from odomkit.kinematics import body_steps
+
+    t = np.asarray(log.t, dtype=float)
+    inside = (truth.t >= t[0] + margin) & (truth.t <= t[-1] - margin)
+    tt, xy = truth.t[inside], truth.xy[inside]
+    if tt.size < 3:
+        return None
+    first, last = _stretch_ends(tt, tt[0], tt[-1], max(FOLLOW_SPAN, heading_span(truth)),
+                                longest_gap(truth, max_gap))
+    rolled = np.concatenate(([0.0], np.cumsum(np.abs(body_steps(robot, log).dd))))
+    return _Travel(tt[first], tt[last], np.linalg.norm(xy[last] - xy[first], axis=1), t, rolled)
+
+
 def motion_follows(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5,
                    noise: float | None = None) -> tuple[float, int]:
     """How closely the truth's motion follows the odometry's: the correlation, over
@@ -606,27 +645,19 @@ def motion_follows(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float 
     stretch that hardly varies (a constant speed correlates with nothing: the odometry's
     spread under a tenth of its mean, or the truth's chords' spread under 4 × their noise
     σ√2, ``noise`` as in :func:`motion_ratios`)."""
-    from odomkit.kinematics import body_steps
-
-    t = np.asarray(log.t, dtype=float)
-    inside = (truth.t >= t[0]) & (truth.t <= t[-1])
-    tt, xy = truth.t[inside], truth.xy[inside]
-    if tt.size < 3:
+    found = _travel(log, robot, truth, max_gap)
+    if found is None:
         return math.nan, 0
-    span = max(FOLLOW_SPAN, heading_span(truth))
-    first, last = _stretch_ends(tt, tt[0], tt[-1], span, longest_gap(truth, max_gap))
-    if first.size < FOLLOW_STRETCHES:
-        return math.nan, int(first.size)
-    steps = body_steps(robot, log)
-    rolled = np.interp(tt, t, np.concatenate(([0.0], np.cumsum(np.abs(steps.dd)))))
-    odometry = rolled[last] - rolled[first]
-    chord = np.linalg.norm(xy[last] - xy[first], axis=1)
+    stretches = int(found.chord.size)
+    if stretches < FOLLOW_STRETCHES:
+        return math.nan, stretches
+    odometry, chord = found.odometry(), found.chord
     sigma = judging_noise(truth, noise)[0]
     spread, chord_spread = float(np.std(odometry)), float(np.std(chord))
     if not (spread > 0 and spread >= 0.1 * float(np.mean(odometry))
             and chord_spread > 0 and chord_spread >= 4.0 * math.sqrt(2.0) * sigma):
-        return math.nan, int(first.size)
-    return float(np.corrcoef(odometry, chord)[0, 1]), int(first.size)
+        return math.nan, stretches
+    return float(np.corrcoef(odometry, chord)[0, 1]), stretches
 
 
 def _follows_finding(r: float, stretches: int) -> Finding | None:
@@ -661,28 +692,18 @@ def speed_clock(logs: Sequence[OdometryLog], robot: Robot, truths: Sequence[Trut
     None where the speeds cannot tell: fewer than :data:`FOLLOW_STRETCHES` stretches in all,
     travel per stretch that hardly varies (under a tenth of its mean), or a minimum at the
     grid's edge (±2 s)."""
-    from odomkit.kinematics import body_steps
-
     misfit = np.zeros(_SPEED_CLOCK_GRID.size)
     stretches, varies = 0, False
     for log, truth in zip(logs, truths, strict=True):
-        t = np.asarray(log.t, dtype=float)
-        inside = (truth.t >= t[0] + 2.0) & (truth.t <= t[-1] - 2.0)  # room to move the clock
-        tt, xy = truth.t[inside], truth.xy[inside]
-        if tt.size < 3:
+        found = _travel(log, robot, truth, max_gap, margin=2.0)  # room to move the clock
+        if found is None or found.chord.size == 0:
             continue
-        first, last = _stretch_ends(tt, tt[0], tt[-1], max(FOLLOW_SPAN, heading_span(truth)),
-                                    longest_gap(truth, max_gap))
-        if first.size == 0:
-            continue
-        rolled = np.concatenate(([0.0], np.cumsum(np.abs(body_steps(robot, log).dd))))
-        chord = np.linalg.norm(xy[last] - xy[first], axis=1)
+        chord = found.chord
         # (grid, stretches): the odometry's travel over each stretch with the clock δ late
-        odo = (np.interp(tt[last][None, :] - _SPEED_CLOCK_GRID[:, None], t, rolled)
-               - np.interp(tt[first][None, :] - _SPEED_CLOCK_GRID[:, None], t, rolled))
+        odo = found.odometry(_SPEED_CLOCK_GRID[:, None])
         scale = np.sum(odo * chord, axis=1) / np.maximum(np.sum(odo * odo, axis=1), 1e-300)
         misfit += np.sum((chord[None, :] - scale[:, None] * odo) ** 2, axis=1)
-        stretches += first.size
+        stretches += chord.size
         middle = odo[_SPEED_CLOCK_GRID.size // 2]
         varies = varies or bool(np.std(middle) > 0.1 * np.mean(middle) > 0)
     if stretches < FOLLOW_STRETCHES or not varies:
