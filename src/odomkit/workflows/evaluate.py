@@ -223,36 +223,38 @@ def evaluate_logs(
                               method=method, progress=progress, errors_only=True)
     out = _pooled(specs, by_spec, rpe_distances)
     if plot is not None:
-        from odomkit.evaluate import coverage
         from odomkit.io.robotfile import read_robot
 
         robot, noise = read_robot(robot_path)
 
-        def white_alone(white: Sequence[NoiseModel]) -> dict[str, float | None]:
+        def white_alone(white: Sequence[NoiseModel]) -> Sequence[Scored]:
             from odomkit.workflows.truth import resolved_truth
 
-            alone = white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, specs[0],
-                               min_travel, method)
-            return coverage(np.concatenate([a.honesty_errors for a in alone]),
-                            np.concatenate([a.honesty_cov for a in alone]))
+            return white_only(logs, robot, white, resolved_truth(robot_path, truth), log_options, specs[0],
+                              min_travel, method)
 
         out["outputs"] = {"plot": str(_plotted(plot, out, by_spec[0], noise, specs[0], white_alone))}
     return out
 
 
 def _plotted(plot: str | Path, out: dict[str, Any], scored: Sequence[Scored], noise: Sequence[NoiseModel],
-             spec: WindowSpec | None, white_alone: Callable[[Sequence[NoiseModel]], dict[str, float | None]]
+             spec: WindowSpec | None, white_alone: Callable[[Sequence[NoiseModel]], Sequence[Scored]]
              ) -> Path:
     """The ``--plot`` of :func:`evaluate_logs` and :func:`evaluate_in_memory` alike: the runs,
     the coverage of the window ends (``out``'s, of the first window length ``spec``) with the
     ``noise`` given and, where it has bias models, with its white models alone
-    (``white_alone(white models)`` scores those), and the heading's where the truth has one."""
+    (``white_alone(white models)`` scores the logs with those), and the heading's where the
+    truth has one."""
+    from odomkit.evaluate import coverage
+
     kinds = {m.kind for m in noise}
     both = " + ".join(sorted(kinds, reverse=True))
     name = "window ends" if kinds == {"white"} else f"window ends ({both})"
     covers = {name: out["coverage"]}
     if kinds > {"white"}:  # the white models alone, for comparison
-        covers["window ends (white only)"] = white_alone([m for m in noise if m.kind == "white"])
+        alone = white_alone([m for m in noise if m.kind == "white"])
+        covers["window ends (white only)"] = coverage(np.concatenate([a.honesty_errors for a in alone]),
+                                                      np.concatenate([a.honesty_cov for a in alone]))
     counts = dict.fromkeys(covers, out["windows"])
     if out.get("coverage_heading") is not None:  # the heading's intervals, where the truth has one
         covers[f"{name}, heading"] = out["coverage_heading"]
@@ -351,12 +353,8 @@ def evaluate_in_memory(
     by_spec = scored(models, specs, progress)
     out = _pooled(specs, by_spec, rpe_distances)
     if plot is not None:
-        from odomkit.evaluate import coverage
-
-        def white_alone(white: Sequence[NoiseModel]) -> dict[str, float | None]:
-            alone = scored(white, specs[:1])[0]
-            return coverage(np.concatenate([a.honesty_errors for a in alone]),
-                            np.concatenate([a.honesty_cov for a in alone]))
+        def white_alone(white: Sequence[NoiseModel]) -> Sequence[Scored]:
+            return scored(white, specs[:1])[0]
 
         out["outputs"] = {"plot": str(_plotted(plot, out, by_spec[0], models, specs[0], white_alone))}
     return out
