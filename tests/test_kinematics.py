@@ -233,3 +233,43 @@ def test_unicycle_reads_body_velocities_with_gyro_like_corrections():
     assert np.allclose(body_steps(robot, _log({"dist": 0.05, "yaw_rate": 0.0})).dd, 1.02 * 0.05, rtol=1e-14)
     with pytest.raises(InputError, match="not ticks"):
         body_steps(robot, _log({"ticks": 5, "yaw_rate": 0.0}))
+
+
+# --- a travel no wheeled vehicle drives (user study: a raw counter read as increments drove a
+# tricycle 561 km in 113 s, exit 0, without a word) -------------------------------------------
+
+def _unicycle_log(speed: float) -> OdometryLog:
+    t = 0.05 * np.arange(200)
+    return OdometryLog(t, {"speed": np.full(t.size, speed), "yaw_rate": np.full(t.size, 0.1)}, source="u")
+
+
+def test_too_fast_is_silent_on_a_fast_car_and_names_the_speeds_unit_beyond_any():
+    """The median moving speed: a car at 90 m/s (324 km/h) passes; a robot's 0.5 m/s logged in
+    mm/s reads 500 m/s and is named, with the speed's unit as the likely cause."""
+    from odomkit.kinematics import body_steps, too_fast
+    from odomkit.units import FASTEST_SPEED
+
+    robot = Unicycle()
+    fast_car = _unicycle_log(0.9 * FASTEST_SPEED)
+    assert too_fast(body_steps(robot, fast_car), fast_car) is None
+    log = _unicycle_log(500.0)
+    what, advice = too_fast(body_steps(robot, log), log)
+    assert what.startswith("the odometry moves at 500 m/s") and "mm/s" in advice
+
+
+def test_too_fast_names_the_counter_for_ticks_and_ignores_a_few_spikes():
+    """Ticks: a raw counter read as increments, or m_per_tick. A counter that wraps once, read
+    as increments where every other row is right, is a spike, not the median: silent here
+    (check's ``counters`` finding names the wrap)."""
+    from odomkit.kinematics import body_steps, too_fast
+
+    t = 0.05 * np.arange(400)
+    robot = DiffDrive(0.3, m_per_tick_left=1e-4, m_per_tick_right=1e-4)
+    raw = 3e9 + np.cumsum(np.full(t.size, 40.0))
+    log = OdometryLog(t, {"ticks_left": raw, "ticks_right": raw}, source="raw")
+    what, advice = too_fast(body_steps(robot, log), log)
+    assert "faster than any wheeled vehicle" in what and "--cumulative" in advice and "m_per_tick" in advice
+    steps = np.full(t.size, 40.0)
+    steps[200] = -(2.0**32) + 40.0
+    log = OdometryLog(t, {"ticks_left": steps, "ticks_right": steps.copy()}, source="wrap")
+    assert too_fast(body_steps(robot, log), log) is None

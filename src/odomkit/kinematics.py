@@ -36,7 +36,8 @@ __all__ = [
     "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_measured_steer",
     "car_road_wheel_angle", "car_speed_factor",
     "diff_body_jacobian", "diff_body_steps", "Method", "steering_body_jacobian", "steering_body_steps",
-    "step_displacement", "step_jacobians", "tricycle_body_jacobian", "tricycle_body_steps", "unicycle_moving"
+    "step_displacement", "step_jacobians", "too_fast", "tricycle_body_jacobian", "tricycle_body_steps",
+    "unicycle_moving"
 ]
 
 Method = Literal["euler", "midpoint", "exact"]
@@ -417,6 +418,45 @@ def _unicycle_steps(robot: Unicycle, log: OdometryLog, dt: NDArray[np.float64]) 
     rate = np.where(unicycle_moving(dd, measured),
                     robot.yaw_rate_scale * (measured - robot.yaw_rate_bias), 0.0)
     return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
+
+
+def too_fast(steps: BodySteps, log: OdometryLog) -> tuple[str, str] | None:
+    """(what, what to do) where the moving steps of ``steps`` (of ``log``) go faster, at the
+    median, than any wheeled vehicle (:data:`odomkit.units.FASTEST_SPEED`), else None.
+
+    The median of |Δd|/Δt over the steps that move and take time: a few spikes (a counter
+    that wraps, read as increments) do not move it, a whole log read wrong does (a raw
+    counter read as increments: every row's count is the distance since the start; ticks
+    read as metres; a distance in mm or a speed in mm/s read as metres). The advice names
+    the channel the travel came from.
+    """
+    from odomkit.units import FAST_TRAVEL, FASTEST_SPEED
+
+    dt = np.asarray(steps.dt, dtype=float)
+    with np.errstate(all="ignore"):
+        speed = np.abs(np.asarray(steps.dd, dtype=float)) / dt
+    moving = speed[(dt > 0) & np.isfinite(speed) & (speed > 0)]
+    if not moving.size:
+        return None
+    median = float(np.median(moving))
+    if not median > FASTEST_SPEED:
+        return None
+    travel = float(np.nansum(np.abs(steps.dd)))
+    duration = float(log.t[-1] - log.t[0]) if len(log) > 1 else 0.0
+    what = (f"the odometry moves at {median:.3g} m/s (the median of its moving steps; {travel:.4g} m in "
+            f"{duration:.4g} s), {FAST_TRAVEL} ({FASTEST_SPEED:g} m/s)")
+    channels = set(log.channels)
+    if any(c.startswith("ticks") for c in channels):
+        advice = ("a raw counter read as increments? (--cumulative, and --wrap-bits where it wraps); else "
+                  "m_per_tick in the robot file (metres per tick: the wheel's circumference over the ticks "
+                  "per revolution)")
+    elif any(c.startswith("dist") for c in channels):
+        advice = ("a distance since the start read as increments (--cumulative), or in mm or cm read as "
+                  "metres?")
+    else:
+        advice = ("a speed in mm/s or cm/s read as m/s, or a time column read in a unit finer than its own "
+                  "(--time-unit)?")
+    return what, advice
 
 
 def unicycle_moving(dd: ArrayLike, yaw_rate: ArrayLike) -> NDArray[np.bool_]:

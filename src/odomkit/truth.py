@@ -26,7 +26,7 @@ from odomkit.log import OdometryLog, clock_text
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
-           "implausible_speed", "PLAUSIBLE_SPEED",
+           "implausible_speed",
            "MAX_RESIDUAL_SIGMAS", "clock_unit_hint", "no_overlap", "scatter_sigma",
            "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
@@ -367,8 +367,10 @@ def heading_against_motion(truth: Truth, max_gap: float | None = 0.5) -> tuple[f
 HEADING_OFF_CAUSES = ("a heading in degrees read as radians (name the column theta_deg), a quaternion in "
                       "another order (TUM rows are t x y z qx qy qz qw), a TUM or KITTI file whose frame "
                       "is not z-up (--truth-up: -y for a camera's, +y for a Y-up motion capture), a "
-                      "motion-capture body whose axes are turned against the robot's, or a base that moves "
-                      "sideways, which odomkit's vehicles do not")
+                      "motion-capture body whose axes are turned against the robot's, a truth measured at a "
+                      "point far off the robot's reference point (a sensor 1.5 m ahead of a tricycle's rear "
+                      "axle swings wide in its turns: give the reference point's poses), or a base that "
+                      "moves sideways, which odomkit's vehicles do not")
 
 
 def heading_off_motion(truth: Truth, max_gap: float | None = 0.5) -> str | None:
@@ -385,25 +387,20 @@ def heading_off_motion(truth: Truth, max_gap: float | None = 0.5) -> str | None:
             "backwards counted as on it; a random heading gives 45°)")
 
 
-#: No wheeled vehicle's truth moves faster than this [m/s] (360 km/h) in a tenth of its
-#: stretches (:func:`implausible_speed`).
-PLAUSIBLE_SPEED = 100.0
-
-
 def implausible_speed(truth: Truth, max_gap: float | None = 0.5) -> str | None:
     """One clause where the truth's positions move faster than any wheeled vehicle (the 90th
     percentile of their speed over :data:`_CHORD_SPAN`-second stretches above
-    :data:`PLAUSIBLE_SPEED`), else None: millimetres read as metres (a Vicon export: 0.3 m/s
+    :data:`odomkit.units.FASTEST_SPEED`), else None: millimetres read as metres (a Vicon export: 0.3 m/s
     reads as 300 m/s), or a time column whose unit is too coarse."""
     before, after, use = _chords(truth, max_gap)
     if np.count_nonzero(use) < 3:
         return None
     chord = after.poses[use, :2] - before.poses[use, :2]
     speed = float(np.percentile(np.hypot(chord[:, 0], chord[:, 1]), 90)) / _CHORD_SPAN
-    if not speed > PLAUSIBLE_SPEED:
+    if not speed > units.FASTEST_SPEED:
         return None
     return (f"the truth's positions move at {speed:.3g} m/s (90th percentile over {_CHORD_SPAN:g} s "
-            f"stretches), faster than any wheeled vehicle ({PLAUSIBLE_SPEED:g} m/s): likely millimetres read "
+            f"stretches), {units.FAST_TRAVEL} ({units.FASTEST_SPEED:g} m/s): likely millimetres read "
             "as metres (name the columns x_mm, y_mm) or a time unit too coarse (--truth-time-unit)")
 
 

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["DEGREE", "FOOT", "KMH", "MILLIMETRE", "MPH", "period_unit", "SLOW_ROWS", "SLOWEST_PERIOD",
-           "TIME_UNITS", "time_unit_factor"]
+__all__ = ["DEGREE", "FAST_TRAVEL", "FASTEST_SPEED", "FOOT", "KMH", "MILLIMETRE", "MPH", "period_unit",
+           "SLOW_ROWS", "SLOWEST_PERIOD", "TIME_UNITS", "time_unit_factor"]
 
 DEGREE = math.pi / 180
 """Radians per degree."""
@@ -53,6 +53,15 @@ def time_unit_factor(ratio: float) -> str | None:
 SLOWEST_PERIOD = 1.0
 """No odometry logger samples slower than this [s]: a median period above it is a time
 column in another unit read as seconds (a 20 Hz log in ms reads 50 s)."""
+
+FASTEST_SPEED = 100.0
+"""No wheeled vehicle's odometry moves faster than this [m/s] (360 km/h, a race car's top
+speed): a log whose moving steps go faster, at the median, reads its travel wrong (a raw
+counter read as increments drove a tricycle 561 km in 113 s)."""
+
+FAST_TRAVEL = "faster than any wheeled vehicle"
+"""The words every message about :data:`FASTEST_SPEED` holds (``odomkit check`` says it once,
+as its ``distance`` finding, not again as a reading warning)."""
 
 SLOW_ROWS = "slower than any odometry logger"
 """The words every message about :data:`SLOWEST_PERIOD` holds (``odomkit check`` says it once,

@@ -340,3 +340,24 @@ def test_a_bad_span_is_one_line(run_cli, span, message):
     code, _, err = run_cli("track", RUNS[0], "--robot", ROBOT, "--span", span)
     assert code == 2, err
     assert message in err and err.startswith("odomkit: error: ") and len(err.strip().splitlines()) == 1
+
+
+def test_a_counter_that_falls_read_as_increments_is_faster_than_any_vehicle(run_cli, tmp_path):
+    """A raw counter read as increments where it also falls (run 1's wheels turn back in
+    every spin), so "never decreases" cannot say it: a tricycle's drove 561 km in 113 s, exit
+    0, without a word (user study). The speed it reads is no wheeled vehicle's: track warns
+    once, naming --cumulative; check fails on it first and says it once, before any finding
+    that a wrong reading would make meaningless; read with --cumulative, neither says it."""
+    raw = cumulative_csv(RUNS[0], tmp_path / "raw.csv", offset=3_000_000_000)
+    code, text, err = run_cli("track", raw, "--robot", ROBOT, "--columns", CUMULATIVE, "--no-covariance")
+    assert code == 0 and err.count("odomkit: warning:") == 1
+    assert "faster than any wheeled vehicle" in err and "--cumulative" in err and "never decreases" not in err
+    code, text, err = run_cli("check", raw, "--robot", ROBOT, "--columns", CUMULATIVE)
+    assert code == 1 and "faster than any wheeled vehicle" not in err
+    assert text.count("faster than any wheeled vehicle") == 1
+    findings = [line.split()[:2] for line in text.split("next:")[0].splitlines() if line.startswith("  ")]
+    assert findings[-1] == ["FAIL", "speed"] and ["ok", "counters"] in findings
+    assert "--cumulative" in text.split("next:")[1].splitlines()[1]
+    for command in ("track", "check"):
+        code, text, err = run_cli(command, raw, "--robot", ROBOT, "--columns", CUMULATIVE, "--cumulative")
+        assert code == 0 and "faster than any" not in text + err

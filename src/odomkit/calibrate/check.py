@@ -64,8 +64,8 @@ if TYPE_CHECKING:
     from odomkit.truth import TruthSamples
 
 __all__ = [
-    "check_counters", "check_log", "check_motion", "check_stuck", "check_time", "check_values", "GAP_FACTOR",
-    "next_steps",
+    "check_counters", "check_log", "check_motion", "check_speed", "check_stuck", "check_time", "check_values",
+    "GAP_FACTOR", "next_steps",
 ]
 
 #: A step longer than this many median periods is a time jump.
@@ -411,6 +411,25 @@ _MIMIC = {
     "compass": "a compass offset and the heading's own errors",
 }
 
+def check_speed(log: OdometryLog, robot: Robot) -> list[Finding]:
+    """The ``speed`` finding: a log whose odometry moves faster than any wheeled vehicle
+    (:func:`odomkit.kinematics.too_fast`) is read wrong (a raw counter read as increments,
+    a unit), and fails."""
+    from odomkit.kinematics import body_steps, too_fast
+
+    steps = body_steps(robot, log)
+    if (fast := too_fast(steps, log)) is not None:
+        return [Finding("speed", "fail", *fast)]
+    dt = np.asarray(steps.dt)
+    with np.errstate(all="ignore"):
+        speed = np.abs(steps.dd) / dt
+    moving = speed[(dt > 0) & np.isfinite(speed) & (speed > 0)]
+    if not moving.size:
+        return [Finding("speed", "ok", "the odometry does not move")]
+    return [Finding("speed", "ok", f"the odometry moves at {float(np.median(moving)):.3g} m/s (the median of "
+                    "its moving steps)")]
+
+
 def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
     """Distance driven and turning each way (from the odometry)."""
     from odomkit.kinematics import body_steps
@@ -451,9 +470,9 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
 
 def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spin: str | None = None,
               max_gap: float | None = 0.5) -> list[Finding]:
-    """Every check, in the order a user fixes things: values and time, counters, stuck
-    channels, the channel mapping, the truth's own heading, the odometry's travel and turning
-    against the truth's, then what the motion can identify."""
+    """Every check, in the order a user fixes things: values and time, counters, the speed
+    the odometry moves at, stuck channels, the channel mapping, the truth's own heading, the
+    odometry's travel and turning against the truth's, then what the motion can identify."""
     found = check_values(log)
     if any(f.status == "fail" for f in found):
         return found
@@ -461,6 +480,9 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
     if len(log) < 2 or any(f.status == "fail" and f.check == "time" for f in found):
         return found
     found += check_counters(log)
+    found += check_speed(log, robot)
+    if found[-1].status == "fail":
+        return found  # a log read wrong (a counter as increments): nothing after it means anything
     found += check_stuck(log, robot, truth, max_gap)
     found += check_channels(log, robot, truth, spin=spin, max_gap=max_gap)
     if any(f.status == "fail" and f.check == "channels" for f in found):

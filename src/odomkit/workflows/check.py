@@ -75,11 +75,12 @@ def check_file(
             log = None
             findings.append(Finding("reading", "fail", str(exc),
                                     "fix the rows or the --columns mapping the message names"))
-    from odomkit.units import SLOW_ROWS
+    from odomkit.units import FAST_TRAVEL, SLOW_ROWS
 
     for item in caught:
-        if issubclass(item.category, UserWarning) and SLOW_ROWS in str(item.message):
-            continue  # the time finding says it, with the flag
+        if issubclass(item.category, UserWarning) and any(
+                words in str(item.message) for words in (SLOW_ROWS, FAST_TRAVEL)):
+            continue  # the time or the distance finding says it, with what to do
         if issubclass(item.category, UserWarning):
             findings.append(Finding("reading", "warn", " ".join(str(item.message).split()),
                                     "read the log as the message says, then check again"))

@@ -304,7 +304,9 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         options.check_format(fmt, str(path))
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
                        progress=progress, imu_up=options.imu_up, truth_frame=options.truth_frame)
-        return _in_span(log, options)
+        log = _in_span(log, options)
+        _warn_if_too_fast(log, robot)
+        return log
     require_log_file(path)
     options.check_format(fmt, str(path))
     with stage(progress, None, f"reading {path.name}"):
@@ -321,7 +323,9 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
                                time_unit=options.time_unit,
                                example=COLUMN_EXAMPLES[robot_type_name(robot)], record=options.record)
             _warn_if_slow(log, options)
-        return _in_span(log, options)
+        log = _in_span(log, options)
+    _warn_if_too_fast(log, robot)
+    return log
 
 
 def _warn_if_slow(log: OdometryLog, options: LogOptions) -> None:
@@ -341,6 +345,28 @@ def _warn_if_slow(log: OdometryLog, options: LogOptions) -> None:
         warnings.warn(f"{log.source}: its rows come every {median:.4g} s (the median), {SLOW_ROWS} "
                       f"({SLOWEST_PERIOD:g} s at most): is its time in {unit}? (--time-unit "
                       f"{unit})", stacklevel=3)
+
+
+def _warn_if_too_fast(log: OdometryLog, robot: Robot) -> None:
+    """Warn where the log, read with ``robot``, moves faster than any wheeled vehicle
+    (:func:`odomkit.kinematics.too_fast`): a raw counter read as increments tracked a tricycle
+    over 561 km in 113 s, exit 0, without a word. A log the robot cannot convert (its
+    channels, a steering angle past 90°) says so where it is converted, not here."""
+    import warnings
+
+    from odomkit.errors import OdomkitError
+    from odomkit.kinematics import body_steps, too_fast
+
+    if len(log) < 2:
+        return
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # the conversion's own warnings are said where it runs
+            found = too_fast(body_steps(robot, log), log)
+    except OdomkitError:
+        return
+    if found is not None:
+        warnings.warn(f"{log.source}: {found[0]}: {found[1]}", stacklevel=3)
 
 
 def _in_span(log: OdometryLog, options: LogOptions) -> OdometryLog:
