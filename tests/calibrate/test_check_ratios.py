@@ -584,3 +584,41 @@ def test_fit_noise_and_evaluate_say_when_a_log_is_given_another_drives_truth(run
     said = f"odomkit: error: {tmp_path / 'log.csv'}: the truth does not move"
     assert code == 2 and err.startswith(said), err
     assert "(so the fit failed: " in err
+
+
+def _measured(monkeypatch, **ratios):
+    """check_truth_motion with motion_ratios measuring ``ratios`` (the rest: 60 stretches,
+    60 turns, 1 s): how a finding reads given ratios, whatever drive gave them."""
+    import odomkit.calibrate.check_ratios as ratios_module
+    from odomkit.calibrate.check_ratios import MotionRatios
+
+    found = dict(travel=1.0, travel_se=0.01, travel_stretches=60, turn=1.0, turn_se=0.01, turns=60, span=1.0,
+                 truth_turned=30.0, odometry_turned=30.0)
+    found.update(ratios)
+    monkeypatch.setattr(ratios_module, "motion_ratios", lambda *a, **k: MotionRatios(**found))
+
+
+def test_a_ratio_no_noise_gives_is_judged_by_its_size_whatever_its_standard_error(monkeypatch):
+    """A raw counter read as increments turned 539 ± 310 × as much as the truth, and check
+    said "within 2 standard errors of 1" (user study). Beyond 10× either way no truth's noise
+    explains it: it fails. A noisy GPS's 1.8 ± 1.1 stays not told apart from 1."""
+    log, poses = car_drive(1)
+    truth = _mocap(log, poses)
+    for turn, se, status in ((539.0, 310.0, "fail"), (0.05, 0.6, "fail"), (1.8, 1.1, "ok")):
+        _measured(monkeypatch, turn=turn, turn_se=se, odometry_turned=30.0 * turn)
+        found = by_check(check_truth_motion(log, CAR, truth))["turn_ratio"]
+        assert found.status == status, (turn, se, found.message)
+        assert ("within 2 standard errors of 1" in found.message) == (status == "ok")
+
+
+def test_a_ticks_log_off_by_a_speed_units_factor_is_not_told_of_speed_units(monkeypatch):
+    """A ticks log whose travel is 0.62× the truth's (m_per_tick off) was asked "a speed in mph
+    read as km/h?" though it has no speed (user study); a speed log off so still is."""
+    log, poses = car_drive(1)
+    truth = _mocap(log, poses)
+    _measured(monkeypatch, travel=KMH / MPH, travel_se=0.002)
+    said = by_check(check_truth_motion(log, CAR, truth))["travel_ratio"]
+    assert said.status == "warn" and "a speed in mph read as km/h" in said.message
+    dist = OdometryLog(log.t, {"dist": log.channels["speed"] * 0.1, "steer": log.channels["steer"]})
+    said = by_check(check_truth_motion(dist, CAR, truth))["travel_ratio"]
+    assert said.status == "warn" and "speed" not in said.message and "m_per_tick" in said.advice

@@ -102,6 +102,11 @@ RATIO_FAIL = 2.0
 #: A ratio within this many of its standard errors of 1 is not told apart from 1: no warning
 #: and no failure, whatever its size (a few noisy turns of a GPS's long chords gave 1.8 ± 1.1).
 COVERS_ONE = 2.0
+#: A ratio off by more than this factor either way is judged by its size alone, whatever its
+#: standard error: no noise of a truth makes an odometry that reads its travel right turn
+#: 10× as much, or a tenth (a raw counter read as increments turned 539 ± 310 × as much, "within 2
+#: standard errors of 1").
+NOT_NOISE = 10.0
 #: A turning gain (odometry over truth) under this in size is no scale error either: the
 #: odometry hardly turns where the truth does (an IMU on its side read about the wrong axis),
 #: or, below its negative, turns the other way (a sign flipped; a flipped sign turning g
@@ -463,7 +468,8 @@ def time_unit_off(log: OdometryLog, robot: Robot, truth: Truth, r: MotionRatios,
 
 
 def _status(ratio: float, warn: float, se: float = math.nan) -> Status:
-    if abs(ratio - 1) <= COVERS_ONE * se:  # no evidence against 1 (NaN: none either way)
+    # No evidence against 1 (NaN: none either way), unless the ratio is too far off for noise.
+    if abs(ratio - 1) <= COVERS_ONE * se and 1.0 / NOT_NOISE <= abs(ratio) <= NOT_NOISE:
         return "ok"
     if not ratio > 0:  # the other way, or not at all: no scale error (and no logarithm)
         return "fail"
@@ -489,7 +495,10 @@ def _travel_finding(r: MotionRatios, robot: Robot, speed_fed: bool, judged: str 
                        value=r.travel)
     if clock is not None:
         return Finding("travel_ratio", status, f"{said}: {clock.cause()}", clock.advice(), r.travel)
-    unit = _unit(r.travel, _TRAVEL_UNITS)
+    # A speed's unit only where the log has a speed: a ticks log 0.62x off is no mph.
+    units_here = (_TRAVEL_UNITS if speed_fed
+                  else tuple(u for u in _TRAVEL_UNITS if not u[1].startswith("a speed")))
+    unit = _unit(r.travel, units_here)
     if unit is not None:
         return Finding("travel_ratio", status, f"{said}: {unit[0]}?", unit[1], r.travel)
     if not r.travel > 0:  # Σ distance rolled is never negative: it rolled nothing
@@ -541,8 +550,12 @@ def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "", clock: TimeUn
         advice = (f"a steering-wheel angle read as the road wheels' angle? set steering_ratio to about "
                   f"{robot.steering_ratio * gain:.2g} (the file has {robot.steering_ratio:.3g}), or check "
                   "wheel_base and the steering's unit")
-    elif isinstance(robot, (Car, Tricycle)):
+    elif isinstance(robot, Car):
         advice = "check the steering's unit, steering_ratio and wheel_base in the robot file"
+    elif isinstance(robot, Tricycle):
+        # A tricycle has no steering ratio: its steer channel is the wheel's angle in radians.
+        advice = ("check the steering's unit (radians: steer_deg for degrees; an encoder's ticks "
+                  "converted to the wheel's angle) and wheel_to_axle in the robot file")
     else:
         advice = "check the yaw rate's unit and scale (yaw_rate_deg for °/s)"
     return Finding("turn_ratio", status, said, advice, gain)
@@ -588,6 +601,11 @@ def _no_turn_finding(said: str, gain: float, robot: Robot) -> Finding:
 FOLLOW_SPAN = 2.0
 #: Fewest stretches :func:`motion_follows` judges on.
 FOLLOW_STRETCHES = 50
+#: Fewest stretches :func:`speed_clock` judges on: its standard error comes from the misfit
+#: itself, so fewer do than a correlation needs (simulated 40–200 s drives against a 0.5 m
+#: GPS: 18–100 stretches, errors within 0.5–0.7 of the stated standard error); a 56 s half
+#: drive's 26 stretches went unchecked at 50 while its fitted clock was 0.9 s off.
+CLOCK_STRETCHES = 15
 #: A correlation below this between the odometry's and the truth's travel per stretch is a
 #: truth that does not follow the log (another robot's, another run's, a clock far off).
 FOLLOWS = 0.4
@@ -689,7 +707,7 @@ def speed_clock(logs: Sequence[OdometryLog], robot: Robot, truths: Sequence[Trut
     takes such a lag as the clock. Its standard error comes from the misfit's curvature
     about its minimum, σ̂²/k with σ̂² the misfit per stretch.
 
-    None where the speeds cannot tell: fewer than :data:`FOLLOW_STRETCHES` stretches in all,
+    None where the speeds cannot tell: fewer than :data:`CLOCK_STRETCHES` stretches in all,
     travel per stretch that hardly varies (under a tenth of its mean), or a minimum at the
     grid's edge (±2 s)."""
     misfit = np.zeros(_SPEED_CLOCK_GRID.size)
@@ -706,7 +724,7 @@ def speed_clock(logs: Sequence[OdometryLog], robot: Robot, truths: Sequence[Trut
         stretches += chord.size
         middle = odo[_SPEED_CLOCK_GRID.size // 2]
         varies = varies or bool(np.std(middle) > 0.1 * np.mean(middle) > 0)
-    if stretches < FOLLOW_STRETCHES or not varies:
+    if stretches < CLOCK_STRETCHES or not varies:
         return None
     best = int(np.argmin(misfit))
     if best in (0, misfit.size - 1):
