@@ -21,7 +21,7 @@ from odomkit.calibrate.virtual import (
     square_wheel_steps,
     true_robot,
 )
-from odomkit.errors import InputError, OdomkitError
+from odomkit.errors import InputError, ModelError, OdomkitError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import body_steps, diff_body_steps
 from odomkit.log import OdometryLog
@@ -249,8 +249,13 @@ def test_bad_input_is_refused():
     cw_only = square_logs(errors, NOMINAL, 4.0, 2, directions=("cw",))
     with pytest.raises(InputError, match="same way"):
         calibrate_exact(cw_only, NOMINAL, "endpoints")
-    with pytest.raises(InputError, match="at least two runs"):
+    # One run: its whole trajectory calibrates (user study: the message did not say how).
+    with pytest.raises(InputError, match=r"at least two runs, got 1: one run calibrates from its whole "
+                                         r"trajectory \(--from trajectory\)"):
         calibrate_exact(cw_only[:1], NOMINAL, "endpoints")
+    fitted = calibrate_exact(cw_only[:1], NOMINAL, "trajectory").robot
+    true_base = true_robot(errors, NOMINAL).effective_wheel_base
+    assert fitted.effective_wheel_base == pytest.approx(true_base, rel=1e-6)
     with pytest.raises(OdomkitError, match="source"):
         calibrate_exact(cw_only, NOMINAL, "middle")  # type: ignore[arg-type]
     no_truth = replace(cw_only[0], ground_truth=None)
@@ -287,3 +292,22 @@ def test_with_heading_weight_zero_the_residual_variance_counts_only_positions():
     cal = calibrate_exact([noisy], NOMINAL, "trajectory", heading_weight=0.0)
     n = 2 * (cal.n_residuals // 3)
     assert np.sqrt(cal.residual_variance) == pytest.approx(0.01, rel=4 / np.sqrt(2 * (n - 3)))
+
+
+def test_a_diverged_tricycle_fit_names_its_parameters_not_left_and_right_wheels():
+    """A tricycle whose steering is read 3× too large and flipped runs its fit to a negative
+    scale and wheel-to-axle distance. The message said "check the channel assignment
+    (left/right)", which a tricycle has none of (user study); it names the parameters."""
+    import math
+
+    from odomkit.robot import Tricycle
+    from odomkit.track import dead_reckon_log
+
+    tricycle = Tricycle(wheel_to_axle=1.4)
+    t = np.arange(0.0, 60.0, 0.05)
+    steer = 0.4 * np.sin(2 * math.pi * t / 20.0)
+    poses = dead_reckon_log(OdometryLog(t, {"speed": np.full(t.size, 0.5), "steer": steer}), tricycle).poses
+    wrong = OdometryLog(t, {"speed": np.full(t.size, 0.5), "steer": -3.0 * steer}, ground_truth=poses)
+    with pytest.raises(ModelError, match=r"diverged to non-positive parameters \{'c_scale': -") as raised:
+        calibrate_exact([wrong], tricycle, "trajectory")
+    assert "left" not in str(raised.value) and "odomkit check" in str(raised.value)

@@ -338,6 +338,21 @@ def test_angles_in_degrees_read_as_radians_and_radians_that_look_like_degrees_ar
         read_csv_log(path, ["t", "speed", "steer", "steer_deg"])
 
 
+def test_a_steering_encoders_raw_ticks_are_not_called_degrees(tmp_path):
+    """A tricycle's 8192-per-turn steering encoder read as radians reached 8156 and was asked
+    "is it in degrees?" (user study): no steering wheel turns 8156°. Beyond 1080° (three
+    turns) the warning names raw ticks; a steering-wheel angle of 540° is still degrees."""
+    t = np.arange(0.0, 20.0, 0.05)
+    for peak, said in ((8156.0, r"reaches 8156, beyond any angle in degrees.*encoder's raw ticks"),
+                       (540.0, r"reaches 540 rad.*is it in degrees")):
+        path = tmp_path / f"steer{peak:g}.csv"
+        np.savetxt(path, np.column_stack((t, 0.3 + 0 * t, peak * np.sin(0.3 * t) ** 2)), delimiter=",",
+                   header="t,speed,steer", comments="")
+        with pytest.warns(UserWarning, match=said) as caught:
+            read_csv_log(path, None)
+        assert len(caught) == 1
+
+
 def test_speeds_in_kmh_and_mph_are_read_as_metres_per_second_and_kmh_read_as_ms_is_warned_about(tmp_path):
     """A car's CAN speed is km/h or mph: ``speed_kmh`` and ``speed_mph`` read it as the m/s
     of ``speed`` (1 km/h = 1/3.6 m/s; 1 mph = 1609.344 m / 3600 s, exact by definition), so

@@ -264,7 +264,8 @@ def _check_runs(runs: Sequence[OdometryLog], source: str) -> None:
             raise InputError("run has fewer than two rows", source=log.source)
     if source == "endpoints":
         if len(runs) < 2:
-            raise InputError(f"an endpoint calibration needs at least two runs, got {len(runs)}")
+            raise InputError(f"an endpoint calibration needs at least two runs, got {len(runs)}: one run "
+                             "calibrates from its whole trajectory (--from trajectory)")
         turns = [float(log.ground_truth[-1, 2] - log.ground_truth[0, 2]) for log in runs]  # type: ignore[index]
         loops = [t for t in turns if abs(t) > np.pi]
         if len(loops) == len(turns) and (all(t > 0 for t in loops) or all(t < 0 for t in loops)):
@@ -578,8 +579,11 @@ def calibrate_exact(
     np.fill_diagonal(corr, np.where(std > 0, 1.0, 0.0))
     p = prob.full(sol.x)
     if np.any(p[scale_index] <= 0):
-        raise ModelError(f"calibration diverged to non-positive parameters {p.tolist()}; "
-                         "check the channel assignment (left/right) and the robot file")
+        channels = ("the left and right channels" if isinstance(robot, DiffDrive)
+                    else "the channels read (odomkit check compares them with the truth)")
+        raise ModelError(f"calibration diverged to non-positive parameters "
+                         f"{dict(zip(model.names, (float(x) for x in p), strict=True))}; check {channels}, "
+                         "their units and the robot file")
     between = None
     if len(runs) > 1 and determined:
         # Each run's block: 3 residuals (x, y, weighted θ) per compared row.

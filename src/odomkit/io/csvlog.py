@@ -58,6 +58,10 @@ and a car's speed in km/h or mph (the factors: :mod:`odomkit.units`)."""
 #: A bicycle or tricycle steering angle beyond ±90° (and a little more: OptiOdom's tricycle
 #: logs exactly ±π/2 when it turns in place) is no radians a vehicle steers by.
 STEER_LIMIT = np.pi / 2 + 0.01
+#: A steering column beyond this is no angle in degrees either (a truck's steering wheel
+#: turns up to about 3 turns lock to lock, ±540°): an encoder's raw ticks (a tricycle's
+#: 8192-per-turn steering encoder read 8156 and was called degrees).
+RAW_STEER = 1080.0
 #: A base turning faster than a revolution a second for 1 % of a log is rarer than a gyro
 #: logged in °/s read as rad/s (a 30 °/s turn would read as 4.8 revolutions a second).
 YAW_RATE_LIMIT = 2 * np.pi
@@ -283,6 +287,12 @@ def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -
     else:
         seen, what = float(np.percentile(finite, 99)), "has a 99th percentile of"
         limit = YAW_RATE_LIMIT if key == "yaw_rate" else SPEED_LIMIT
+    if key == "steer" and seen > RAW_STEER:
+        warnings.warn(
+            f"{source}: {label} ({key}) reaches {seen:.4g}, beyond any angle in degrees a steering wheel "
+            f"turns ({RAW_STEER:g}°): is it an encoder's raw ticks? odomkit reads rad (steer_deg reads "
+            "degrees); convert the ticks to the angle first", UserWarning, stacklevel=3)
+        return
     if seen > limit:
         unit, other = {"steer": ("rad", "degrees"), "yaw_rate": ("rad/s", "degrees")}.get(
             key, ("m/s", "km/h or mph"))
