@@ -273,3 +273,26 @@ def test_too_fast_names_the_counter_for_ticks_and_ignores_a_few_spikes():
     steps[200] = -(2.0**32) + 40.0
     log = OdometryLog(t, {"ticks_left": steps, "ticks_right": steps.copy()}, source="wrap")
     assert too_fast(body_steps(robot, log), log) is None
+
+
+def test_a_tricycle_steering_encoders_ticks_over_its_ratio_drive_the_track_of_radians(tmp_path):
+    """A tricycle whose steer channel is an absolute encoder's ticks (8192 a turn: 1303.8 per
+    radian; user study: odomkit had no way in) reads them over steering_ratio: the track of
+    the same angles in radians, to round-off; the robot file reads and writes the key."""
+    from odomkit.io.robotfile import read_robot, write_robot
+    from odomkit.track import dead_reckon_log
+
+    per_radian = 8192 / (2 * np.pi)
+    t = 0.05 * np.arange(600)
+    angle = 0.5 * np.sin(t / 4.0)
+    speed = np.full(t.size, 0.3)
+    radians = OdometryLog(t, {"speed": speed, "steer": angle})
+    ticks = OdometryLog(t, {"speed": speed, "steer": np.round(angle * per_radian) / 1.0})
+    plain = dead_reckon_log(radians, Tricycle(1.4, steering_offset=0.01)).poses
+    geared = Tricycle(1.4, steering_offset=0.01, steering_ratio=per_radian)
+    got = dead_reckon_log(ticks, geared).poses
+    np.testing.assert_allclose(got, plain, atol=0.5 / per_radian * 30.0)  # the ticks' rounding only
+    assert abs(got[-1, 2] - plain[-1, 2]) < 1e-3 and np.ptp(plain[:, 2]) > 0.5  # it turns
+    assert read_robot(write_robot(tmp_path / "tricycle.toml", geared)) == (geared, ())
+    with pytest.raises(ModelError, match="steering_ratio"):
+        Tricycle(1.4, steering_ratio=0.0)

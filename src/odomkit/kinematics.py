@@ -391,7 +391,7 @@ def _diff_steps(robot: DiffDrive, log: OdometryLog, dt: NDArray[np.float64]) -> 
 
 def _tricycle_steps(robot: Tricycle, log: OdometryLog, dt: NDArray[np.float64]) -> BodySteps:
     travel = _travel(log, robot.m_per_tick, robot.c_scale)
-    steer = _steer_per_step(log) + robot.steering_offset
+    steer = _steer_per_step(log) / robot.steering_ratio + robot.steering_offset
     dd, dtheta = tricycle_body_steps(travel, steer, robot.wheel_to_axle)
     return BodySteps(dd, dtheta, dt, {"travel": travel, "steer": steer}, robot)
 

@@ -148,10 +148,16 @@ class Tricycle:
         Traction-wheel distance per tick [m]; converts a ``ticks`` channel only
         (``dist`` [m] and ``speed`` [m/s] are metres already).
     steering_offset : float
-        Added to the measured steering angle [rad]: α = α_measured + steering_offset.
+        Added to the steering wheel's angle [rad]: α = α_measured / steering_ratio +
+        steering_offset.
     c_scale : float
         Dimensionless traction-wheel scale correction (applies to ticks, ``dist`` and
         ``speed`` alike).
+    steering_ratio : float
+        The ``steer`` channel per radian of the steered wheel's angle [1]: 1 (default) for
+        a channel in radians; an absolute steering encoder's ticks per radian (8192 ticks a
+        turn: 1303.8) or a steering gear's ratio otherwise. The offset and the steering
+        noise are the wheel's radians either way.
     """
 
     type_name: ClassVar[str] = "tricycle"
@@ -163,9 +169,10 @@ class Tricycle:
     m_per_tick: float = 1.0
     steering_offset: float = 0.0
     c_scale: float = 1.0
+    steering_ratio: float = 1.0
 
     def __post_init__(self) -> None:
-        _positive_fields(self, "wheel_to_axle", "m_per_tick", "c_scale")
+        _positive_fields(self, "wheel_to_axle", "m_per_tick", "c_scale", "steering_ratio")
         validate.finite(self.steering_offset, "Tricycle.steering_offset")
 
     @property

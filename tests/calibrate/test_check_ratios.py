@@ -622,3 +622,27 @@ def test_a_ticks_log_off_by_a_speed_units_factor_is_not_told_of_speed_units(monk
     dist = OdometryLog(log.t, {"dist": log.channels["speed"] * 0.1, "steer": log.channels["steer"]})
     said = by_check(check_truth_motion(dist, CAR, truth))["travel_ratio"]
     assert said.status == "warn" and "speed" not in said.message and "m_per_tick" in said.advice
+
+
+def test_a_tricycle_steering_logged_in_another_unit_is_told_its_steering_ratio():
+    """A tricycle's steer channel three times its wheel's angle (a steering gear; user study:
+    an encoder's ticks) turns it about 3× as much as the truth: check names steering_ratio,
+    which the tricycle now reads (it said "check steering_ratio", which a tricycle file
+    refused), with about the value it needs; given it, the turning agrees."""
+    from odomkit.robot import Tricycle
+
+    rng = np.random.default_rng(3)
+    t = 0.1 * np.arange(3000)
+    knots = rng.uniform(-0.15, 0.15, 32) * (rng.random(32) < 0.5)
+    angle = np.interp(t, 10.0 * np.arange(32), knots)
+    tricycle = Tricycle(1.4)
+    own = OdometryLog(t, {"speed": 1.0 + 0.25 * np.sin(t / 37.0), "steer": angle})
+    poses = dead_reckon_log(own, tricycle, pose0=(0.0, 0.0, 0.3)).poses
+    truth = Truth(t, poses[:, :2], poses[:, 2], source="motion capture")
+    assert by_check(check_truth_motion(own, tricycle, truth))["turn_ratio"].status == "ok"
+    geared = OdometryLog(t, {"speed": own.channels["speed"], "steer": 3.0 * angle})
+    told = by_check(check_truth_motion(geared, tricycle, truth))["turn_ratio"]
+    assert told.status == "fail" and "steering_ratio" in told.advice
+    assert 2.7 < float(told.advice.split("about ")[1].split()[0]) < 3.3
+    fixed = by_check(check_truth_motion(geared, Tricycle(1.4, steering_ratio=3.0), truth))["turn_ratio"]
+    assert fixed.status == "ok"

@@ -223,3 +223,18 @@ def test_inputs_named(tmp_path):
     with pytest.raises(ModelError, match="period"):
         twist_covariance(DiffDrive(0.4), WheelNoise(0.001, 0.001), 0.5, 0.0)
     assert InputError  # the CLI turns the ModelError into one line (see test_twist_flags_are_checked)
+
+
+def test_a_tricycles_steering_ratio_leaves_its_twist_covariance_and_is_noted_in_the_yaml():
+    """The steering noise is the wheel's radians whatever unit the steer channel is logged
+    in (steering_ratio: the channel per radian of the wheel), so a tricycle logging 3× its
+    wheel's angle has the twist covariance of one logging radians at the same (v, ω); the
+    controller, which has no such parameter, is told in a comment."""
+    noise = TricycleNoise(0.01, 0.005)
+    plain = twist_covariance(Tricycle(0.15), noise, 0.2, 0.02, window=10, yaw_rate=0.8)
+    geared = twist_covariance(Tricycle(0.15, steering_ratio=3.0), noise, 0.2, 0.02, window=10, yaw_rate=0.8)
+    assert (geared.var_speed, geared.var_yaw_rate) == pytest.approx((plain.var_speed, plain.var_yaw_rate),
+                                                                   rel=1e-12)
+    assert geared.var_yaw_rate > 0
+    assert "steering_ratio 3.0" in ros2_tricycle_yaml(Tricycle(0.15, steering_ratio=3.0), 0.03)
+    assert "steering_ratio" not in ros2_tricycle_yaml(Tricycle(0.15), 0.03)

@@ -553,9 +553,12 @@ def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "", clock: TimeUn
     elif isinstance(robot, Car):
         advice = "check the steering's unit, steering_ratio and wheel_base in the robot file"
     elif isinstance(robot, Tricycle):
-        # A tricycle has no steering ratio: its steer channel is the wheel's angle in radians.
-        advice = ("check the steering's unit (radians: steer_deg for degrees; an encoder's ticks "
-                  "converted to the wheel's angle) and wheel_to_axle in the robot file")
+        # Small angles: the turn per metre is sin(α)/L ≈ steer / (ratio · L); a steering
+        # encoder's ticks need their ticks per radian as the ratio (user study: 8192 a turn).
+        advice = (f"check the steering's unit: radians (steer_deg for degrees), or steering_ratio in the "
+                  f"robot file (the steer channel per radian of the wheel, an encoder's ticks per radian) "
+                  f"about {robot.steering_ratio * gain:.4g} (the file has {robot.steering_ratio:.4g}); or "
+                  "wheel_to_axle")
     else:
         advice = "check the yaw rate's unit and scale (yaw_rate_deg for °/s)"
     return Finding("turn_ratio", status, said, advice, gain)

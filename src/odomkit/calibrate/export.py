@@ -160,7 +160,8 @@ def _steady_log(robot: Robot, speed: float, yaw_rate: float, period: float, n: i
         # Δd = s·cos α, Δθ = s·sin α / L (kinematics.tricycle_body_steps)
         alpha = math.atan2(turn * robot.wheel_to_axle, d)
         s = math.hypot(d, turn * robot.wheel_to_axle)
-        channels = {"dist": ones * s / robot.c_scale, "steer": ones * (alpha - robot.steering_offset)}
+        channels = {"dist": ones * s / robot.c_scale,
+                    "steer": ones * (alpha - robot.steering_offset) * robot.steering_ratio}
     elif isinstance(robot, GyroOdometry):
         channels = {"speed": ones * speed, "yaw_rate": ones * (yaw_rate / robot.gyro_scale + robot.gyro_bias)}
     elif isinstance(robot, Unicycle):

@@ -291,7 +291,8 @@ def _warn_if_other_unit(values: np.ndarray, key: str, source: str, label: str) -
         warnings.warn(
             f"{source}: {label} ({key}) reaches {seen:.4g}, beyond any angle in degrees a steering wheel "
             f"turns ({RAW_STEER:g}°): is it an encoder's raw ticks? odomkit reads rad (steer_deg reads "
-            "degrees); convert the ticks to the angle first", UserWarning, stacklevel=3)
+            "degrees); give the robot file's steering_ratio (ticks per radian of the wheel), or convert "
+            "the ticks to the angle first", UserWarning, stacklevel=3)
         return
     if seen > limit:
         unit, other = {"steer": ("rad", "degrees"), "yaw_rate": ("rad/s", "degrees")}.get(

@@ -40,6 +40,11 @@ A car (rear-axle reference, speed measured at one wheel, front steering angle)::
     wheel_diameter = 0.65       # optional size of the measuring wheel (ticks only):
                                 # m_per_tick, wheel_diameter or wheel_radius
 
+A tricycle (rear-axle reference, one front wheel that steers and drives): ``wheel_to_axle``
+[m], ``steering_offset`` [rad], ``c_scale``, the front wheel's size (ticks only), and
+``steering_ratio``: the ``steer`` channel per radian of the wheel, 1 (default) for radians, an
+absolute steering encoder's ticks per radian (8192 a turn: 1303.8) otherwise.
+
 A unicycle (body velocities ``speed``, ``yaw_rate``): ``c_scale``, ``yaw_rate_bias``
 [rad/s], ``yaw_rate_scale``, all optional.
 """
@@ -204,6 +209,7 @@ def _robot_from_table(table: dict[str, Any], source: str) -> Robot:
             m_per_tick=sizes.optional_scale("front", "front"),
             steering_offset=f.number("steering_offset", 0.0),
             c_scale=f.number("c_scale", 1.0),
+            steering_ratio=f.number("steering_ratio", 1.0),
         )
     elif kind == "gyro":
         robot = GyroOdometry(m_per_tick=sizes.optional_scale(None, "odometry"),

@@ -238,6 +238,10 @@ def ros2_tricycle_yaml(
     if robot.steering_offset != 0.0:
         notes += [f"steering_offset {robot.steering_offset!r} rad (added to the measured steering angle) "
                   "has no", "tricycle_controller parameter: set it in the steering joint's calibration."]
+    if robot.steering_ratio != 1.0:
+        notes += [f"steering_ratio {robot.steering_ratio!r} (the logged steering per radian of the wheel) "
+                  "has no", "tricycle_controller parameter: the steering joint's state must be in the "
+                  "wheel's radians."]
     return _snippet(controller_name, values, notes)
 
 
