@@ -17,6 +17,7 @@ import warnings
 import numpy as np
 import pytest
 
+from odomkit.log import OdometryLog
 from odomkit.truth import Truth
 from odomkit.truth_spikes import MAX_ACCELERATION, SPIKE_SIGMAS, spike_fixes
 from odomkit.workflows.evaluate import evaluate_logs
@@ -166,3 +167,40 @@ def test_the_spikes_are_said_at_their_times_in_the_truth_file(noisy_diff_log, tm
     with pytest.warns(UserWarning, match=r"1 of 1001 truth fixes left out as spikes, .* at 50 s:"):
         evaluate_logs([log], robot, [TruthOptions(spiky, sigma=0.02, time_offset=2.0)],
                       log_options=LogOptions(columns=SIM_COLUMNS), window="10s")
+
+
+def _bursty_circle(arrival_period=0.1, rate=87.0, seconds=60.0):
+    """A robot on a circle (radius 2 m, 0.3 m/s) measured at ``rate`` Hz but stamped when the
+    fixes arrived: each ``arrival_period`` a burst, 0.2 ms apart (a bag's receive times)."""
+    measured = np.arange(0.0, seconds, 1.0 / rate)
+    burst = np.ceil(measured / arrival_period) * arrival_period
+    order = np.arange(measured.size) - np.searchsorted(burst, burst)  # place within its burst
+    stamps = burst + 2e-4 * order
+    th = 0.15 * measured
+    xy = 2.0 * np.column_stack((np.sin(th), 1 - np.cos(th)))
+    return stamps, xy, th
+
+
+def test_fixes_stamped_in_bursts_are_said_and_not_taken_for_spikes():
+    """A motion capture at 87 Hz stamped on arrival, in bursts every 0.1 s (user study: a
+    Pioneer's OptiTrack read with --bag-time): its times are off by up to the burst's period,
+    which moved a fitted start heading 11σ without a word, and the spike screening dropped
+    5.8 % of its fixes for lying off lines in time. Now one warning names the bursts and no
+    fix is dropped; a steady truth and a 5 Hz GPS with gaps are not bursts."""
+    from odomkit.truth import stamp_bursts
+
+    stamps, xy, th = _bursty_circle()
+    median, period = stamp_bursts(stamps) or (math.nan, math.nan)
+    assert median == pytest.approx(2e-4, rel=0.01) and period == pytest.approx(0.1, rel=0.05)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        log = OdometryLog(stamps, {"speed": 0 * stamps})
+        (kept,) = truths_given(Truth(stamps, xy, th, source="bursts"), [log])
+    said = [str(w.message) for w in caught]
+    assert len(kept) == stamps.size and not [m for m in said if "left out as spikes" in m]
+    assert [m for m in said if "come in bursts" in m and "header stamps" in m]
+    steady = np.arange(0.0, 60.0, 0.01)
+    gps = np.concatenate([np.arange(0.0, 100.0, 0.2), np.arange(130.0, 200.0, 0.2),
+                          np.arange(260.0, 300.0, 0.2)])
+    for t in (steady, gps):
+        assert stamp_bursts(t) is None

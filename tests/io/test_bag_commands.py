@@ -171,7 +171,7 @@ def test_bad_bags_are_one_line_exit_2(run_cli, bags, bag_writer, stamp, tmp_path
     assert "header stamps go backwards at message 2" in err
     err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--truth-topic", "/joint_states")
     assert ("odomkit reads Odometry, PoseStamped, PoseWithCovarianceStamped, NavSatFix, TransformStamped, "
-            "TFMessage (truth topics: /mocap" in err)
+            "TFMessage, Pose2D (truth topics: /mocap" in err)
     err = one_line_error(run_cli, "track", bags["mcap"], "--robot", robot, "--joints", "a,b,c")
     assert "--joints takes LEFT,RIGHT or one joint name, got 'a,b,c'" in err
     err = one_line_error(run_cli, "track", RUNS[0], "--robot", ROBOT, "--topic", "/odom")

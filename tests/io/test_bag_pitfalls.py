@@ -288,3 +288,32 @@ def test_a_replaced_wheel_channel_is_said_in_metres_not_radians(tmp_path, bag_wr
     with pytest.warns(UserWarning, match=r"speed from /cmd replaces /odom's .* by a factor 3\.0: .* /odom "
                                          r"travels 19\.9 m in all"):
         read_bag(path, ["/odom", "/cmd"])
+
+
+def test_a_bag_whose_header_stamps_run_on_the_robots_clock_is_told_of_bag_time(tmp_path, bag_writer,
+                                                                              run_cli):
+    """A Pioneer's odometry stamped by its own clock, 9.5 days behind the bag's, against a
+    motion capture written out on the bag's clock (user study): the clocks do not overlap,
+    and the line named --truth-time-unit and --truth-time-offset but not --bag-time, which
+    mends it."""
+    times = np.arange(0.0, 30.0, 0.1)
+    behind = int(9.5 * 86400) * 10**9
+
+    def robot_clock(ns, frame_id=""):
+        ns -= behind
+        return {"stamp": {"sec": ns // 10**9, "nanosec": ns % 10**9}, "frame_id": frame_id}
+
+    bag = bag_writer(tmp_path / "pioneer", "ros1", odom(robot_clock, times, 0.3, 0.1))
+    truth = tmp_path / "mocap.csv"
+    th = 0.1 * times
+    xy = np.column_stack([np.cumsum(np.r_[0.0, 0.3 * 0.1 * np.cos(th[:-1])]),
+                          np.cumsum(np.r_[0.0, 0.3 * 0.1 * np.sin(th[:-1])])])
+    np.savetxt(truth, np.column_stack([T0 / 1e9 + times, xy]), delimiter=",", header="t,x,y", comments="",
+               fmt="%.9f")
+    robot = tmp_path / "u.toml"
+    robot.write_text(UNICYCLE)
+    code, out, err = run_cli("evaluate", bag, "--robot", robot, "--topic", "/odom", "--truth", truth)
+    assert code == 2 and err.count("\n") == 1 and "do not overlap" in err and "--bag-time" in err
+    code, out, err = run_cli("evaluate", bag, "--robot", robot, "--topic", "/odom", "--bag-time",
+                             "--truth", truth)
+    assert code == 0, err

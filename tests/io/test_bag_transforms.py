@@ -120,6 +120,34 @@ def test_the_tf_transforms_of_one_frame_pair_are_the_truth(bags, fmt):
     assert log.ground_truth.tolist() == read_bag(path, ["/odom"], truth_topic="/mocap").ground_truth.tolist()
 
 
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_a_pose2d_topic_is_the_truth_its_poses_give_at_the_bags_times(tmp_path, bag_writer, stamp, fmt):
+    """mocap_optitrack's ground_pose is a geometry_msgs/Pose2D (x, y, theta, no header; user
+    study: refused, with the log's own odometry offered as a truth topic): the PoseStamped
+    truth at the bag's times, exactly. Stamped when they arrived in bursts (a motion
+    capture's buffer), the log bag's truth topic warns of it, as a truth file does."""
+    msgs = [m for m in truth_messages(stamp, fmt == "ros1") if m[0] in ("/mocap", "/odom")]
+    ns, x, y, yaw = poses()
+    msgs += [("/ground_pose", "geometry_msgs/msg/Pose2D", int(ns[k]) + 2_000_000,
+              {"x": float(x[k]), "y": float(y[k]), "theta": float(yaw[k])}) for k in range(ns.size)]
+    path = bag_writer(tmp_path / f"pose2d_{fmt}", fmt, msgs)
+    got, want = read_bag_truth(path, "/ground_pose"), read_bag_truth(path, "/mocap", receive_time=True)
+    assert got[0].t.tolist() == want[0].t.tolist() and got[0].xy.tolist() == want[0].xy.tolist()
+    np.testing.assert_allclose(got[0].theta, yaw, rtol=0, atol=0)  # as written: no quaternion between
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # steady stamps: no bursts
+        log = read_bag(path, ["/odom"], truth_topic="/ground_pose", receive_time=True)
+    np.testing.assert_allclose(log.ground_truth, read_bag(path, ["/odom"], truth_topic="/mocap",
+                                                          receive_time=True).ground_truth, rtol=0, atol=1e-12)
+    arrived = 50_000_000 * (np.arange(ns.size) // 5) + 200_000 * (np.arange(ns.size) % 5)  # 5 a burst
+    bursty = [m for m in msgs if m[0] == "/odom"] + [
+        ("/ground_pose", "geometry_msgs/msg/Pose2D", T0 + int(a), m[3])
+        for a, m in zip(arrived, [m for m in msgs if m[0] == "/ground_pose"], strict=True)]
+    path = bag_writer(tmp_path / f"bursts_{fmt}", fmt, bursty)
+    with pytest.warns(UserWarning, match=r"/ground_pose: its fixes come in bursts: .* within 0\.2 ms"):
+        read_bag(path, ["/odom"], truth_topic="/ground_pose", receive_time=True)
+
+
 def test_a_tf_topic_of_one_frame_pair_needs_no_truth_frame(tmp_path, bag_writer, stamp):
     msgs = [m for m in truth_messages(stamp, False, extra_pairs=False, odom=False) if m[0] == "/tf"]
     # /tf_static does not move: never taken for the truth, so /tf is the bag's only truth topic.

@@ -214,7 +214,8 @@ def _channels_against_truth(log: OdometryLog, robot: Robot, truth: Truth,
     if truth.t[0] > log.t[-1] or truth.t[-1] < log.t[0]:
         # A log in ms against a truth in s: the message names the flag that reads the one off.
         # A failure: nothing of the truth can be checked, as every other command refuses it.
-        return [Finding("channels", "fail", f"{no_overlap(truth, log.t)}: channels not checked",
+        said = no_overlap(truth, log.t, log.meta.get("time"))
+        return [Finding("channels", "fail", f"{said}: channels not checked",
                         "read both clocks in seconds (the time unit named), or shift the truth's "
                         "(--truth-time-offset)")]
     if not truth.has_heading:

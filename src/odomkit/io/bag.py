@@ -60,8 +60,10 @@ Imu topic whose mean linear acceleration puts gravity off its z axis (mounted on
 warns that its ``angular_velocity.z`` is not the robot's yaw rate.
 
 **Ground truth** (``--truth-topic /mocap``): a pose topic (Odometry, PoseStamped,
-PoseWithCovarianceStamped, or TransformStamped, as vicon_bridge publishes
-``/vicon/NAME/NAME``: its translation x, y and its rotation's yaw) becomes the log's ground
+PoseWithCovarianceStamped, TransformStamped, as vicon_bridge publishes
+``/vicon/NAME/NAME``: its translation x, y and its rotation's yaw, or Pose2D, as
+mocap_optitrack publishes ``ground_pose``: x, y, theta at the bag's times, for it has no
+header) becomes the log's ground
 truth, as a text log's ``gt_*`` columns do (never one of the log's own topics: the odometry
 scored against itself is refused): ``track``, ``calibrate``, ``fit-noise`` and ``evaluate``
 use it where a truth file is not given. A ``tf2_msgs/TFMessage`` topic (``/tf``) gives the
@@ -119,7 +121,7 @@ from odomkit.errors import InputError, OdomkitError
 from odomkit.kinematics import unicycle_moving
 from odomkit.log import INCREMENT_CHANNELS, OdometryLog
 from odomkit.progress import NO_PROGRESS, Progress, stage
-from odomkit.truth import Truth
+from odomkit.truth import Truth, bursts_note
 
 __all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_root", "bag_topics", "is_bag", "parse_truth_frame",
            "read_bag", "read_bag_odometry", "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
@@ -152,6 +154,7 @@ TRUTH_TYPES = {
     "sensor_msgs/msg/NavSatFix": "NavSatFix",
     "geometry_msgs/msg/TransformStamped": "TransformStamped",
     "tf2_msgs/msg/TFMessage": "TFMessage",
+    "geometry_msgs/msg/Pose2D": "Pose2D",
 }
 _TF = "tf2_msgs/msg/TFMessage"
 _BAG_SUFFIXES = (".bag", ".db3", ".mcap")
@@ -685,6 +688,8 @@ def _pose_truth(reader: Any, topic: str, msgtype: str, receive_time: bool, sourc
 def _planar(msg: Any, kind: str) -> tuple[float, float, float]:
     """A pose message's x, y [m] and yaw [rad]; a transform's translation and rotation are a
     pose of the child frame in the parent's."""
+    if kind == "Pose2D":  # mocap_optitrack's ground_pose: the planar pose itself, no header
+        return float(msg.x), float(msg.y), float(msg.theta)
     if kind == "TransformStamped":
         position, rotation = msg.transform.translation, msg.transform.rotation
     else:
@@ -735,8 +740,13 @@ def _tf_poses(reader: Any, topic: str, frame: _Pair | None, receive_time: bool, 
 
 def _truth_stream(reader: Any, topic: str, msgtype: str, receive_time: bool, source: str,
                   progress: Progress = NO_PROGRESS, frame: _Pair | None = None) -> _Stream:
-    """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated."""
+    """Ground truth as three signals ``gt_x``, ``gt_y``, ``gt_theta`` (unwrapped), interpolated;
+    fixes stamped in bursts (a Pose2D's or ``--bag-time``'s arrival times) are warned of here,
+    where the log's rows hide them (a truth bag of its own is, as any truth file, by
+    :func:`odomkit.workflows.truth.load_truth`)."""
     ns, xyt = _pose_truth(reader, topic, msgtype, receive_time, source, progress, frame)
+    if note := bursts_note(_seconds(ns)):
+        warnings.warn(f"{source}: {topic}: {note}", stacklevel=4)
     return _Stream(topic, ns, [("gt_x", "absolute", xyt[:, 0]), ("gt_y", "absolute", xyt[:, 1]),
                                ("gt_theta", "absolute", xyt[:, 2])])
 

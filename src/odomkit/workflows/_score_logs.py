@@ -207,7 +207,7 @@ def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Tr
     samples = truth_at(truth, log.t, max_gap)
     rows = np.flatnonzero(samples.valid)
     if rows.size < 2:
-        raise InputError(no_overlap(truth, log.t), source=log.source)
+        raise InputError(no_overlap(truth, log.t, log.meta.get("time")), source=log.source)
     steps = body_steps(robot, log)
     travel = cumulative_travel(steps)  # odometry travel at each row [m], reversing counted
     # Without truth heading the start heading aligns the odometry's own path to the fixes.

@@ -164,7 +164,7 @@ def prepare_loaded(task: LoadedTask) -> PreparedLog:
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.max_gap)
     if int(samples.valid.sum()) < 2:
-        return PreparedLog(name, None, len(log), skipped, no_overlap(truth, log.t))
+        return PreparedLog(name, None, len(log), skipped, no_overlap(truth, log.t, log.meta.get("time")))
     travel = cumulative_travel(body_steps(task.robot, log))
     reason = why_no_windows(log.t, travel, samples.valid, task.specs[0], task.min_travel, skipped)
     return PreparedLog(name, None, len(log), skipped, reason)

@@ -156,7 +156,7 @@ def run_track(
     if found is not None:
         samples = truth_at(found, log.t, options.max_gap)
         if not samples.valid.any():
-            raise InputError(no_overlap(found, log.t), source=found.source)
+            raise InputError(no_overlap(found, log.t, log.meta.get("time")), source=found.source)
         truth_rows = samples.poses
         if pose0 is None:
             from odomkit.windows import late_start_note, run_start

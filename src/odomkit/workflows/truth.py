@@ -160,12 +160,17 @@ def without_spikes(truth: Truth) -> Truth:
     command reads (:func:`load_truth`) and every one handed to a workflow in memory
     (:func:`odomkit.workflows.results.truths_given`) is screened: a spike is the truth's
     error, and scored as a window's end, or in a start heading fitted around it, it reads as
-    the odometry's."""
+    the odometry's. A truth whose stamps come in bursts (:func:`odomkit.truth.stamp_bursts`)
+    is not screened: its times are not when its fixes were measured (a user study's motion
+    capture lost 5.8 % of its fixes as "spikes")."""
     import numpy as np
 
     from odomkit.log import clock_text
+    from odomkit.truth import stamp_bursts
     from odomkit.truth_spikes import MAX_ACCELERATION, SPIKE_SIGMAS, spike_fixes
 
+    if stamp_bursts(truth.t) is not None:
+        return truth  # its times are not the fixes': no line in time tells a spike (warn_of_truth says so)
     found = spike_fixes(truth.t, truth.xy)
     if not len(found):
         return truth
@@ -192,6 +197,17 @@ def warn_of_truth(truth: Truth, log: OdometryLog | None = None, *, heading: bool
     if heading and truth.theta is not None:
         _warn_if_heading_off_motion(truth)
     _warn_if_units_off(truth, log)
+    _warn_if_bursty(truth)
+
+
+def _warn_if_bursty(truth: Truth) -> None:
+    """Warn where the truth's fixes come in bursts (:func:`odomkit.truth.bursts_note`):
+    stamped when they arrived, every comparison in time is off by up to the bursts' period,
+    and nothing else says so."""
+    from odomkit.truth import bursts_note
+
+    if note := bursts_note(truth.t):
+        warnings.warn(f"{truth.source}: {note}", stacklevel=3)
 
 
 def _warn_if_heading_off_motion(truth: Truth) -> None:
