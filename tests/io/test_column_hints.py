@@ -91,3 +91,20 @@ def test_the_cli_says_it_in_one_line(run_cli, logger_csv, tmp_path):
     code, out, err = run_cli("track", logger_csv, "--robot", robot, "--columns",
                              "t=Time,speed_mph=Speed (MPH),steer_deg=Steering Angle")
     assert code == 2 and err.count("\n") == 1 and "t=Seconds" in err
+
+
+def test_a_first_line_of_labelled_values_is_told_as_data_with_its_fields(tmp_path):
+    """A course's tricycle log writes each value after its label (``time: T ticks: S D
+    model_pose: x y θ``): its first line was taken for a header and the hint said "map it as
+    t=time:", which then failed on the next line (user study). The line is data; the labels
+    and the fields after each are named, and the columns given in order read it."""
+    path = tmp_path / "dataset.txt"
+    rows = [f"time: {100.0 + 0.05 * k:.3f} ticks: {290 + k} {1000 + 7 * k} model_pose: 0 0 0"
+            for k in range(40)]
+    path.write_text("#kinematic_model: traction_drive_wheel\n" + "\n".join(rows) + "\n")
+    said = _error(lambda: read_csv_log(path, None))
+    assert "its first line is data, each value after a label, not a header" in said
+    assert "'time:' (field 2), 'ticks:' (fields 4-5), 'model_pose:' (fields 7-9) of 9" in said
+    assert "map it as t=" not in said
+    log = read_csv_log(path, ["_", "t", "_", "steer", "ticks"], cumulative=True)
+    assert log.t[1] - log.t[0] == pytest.approx(0.05) and log.channels["ticks"][1] == 7

@@ -153,9 +153,39 @@ def _columns_from_header(header: Sequence[str] | None, source: str,
              if name in KNOWN_CHANNELS or name in UNIT_COLUMNS or name in GROUND_TRUTH_FIELDS
              or name.lower() in HEADER_ALIASES]
     unknown = [name for name in header if name not in times and name not in known]
+    if (labelled := _labelled_fields(header)) is not None:
+        raise InputError(f"{hint}; {labelled}", source=source)
     if len(times) != 1 or not known or unknown:
         raise InputError(f"{hint}; {_why_not_read(times, known, unknown)}", source=source)
     return {"t": times[0], **{HEADER_ALIASES.get(name.lower(), name): name for name in known}}
+
+
+def _labelled_fields(header: Sequence[str]) -> str | None:
+    """What a first line of numbers after labels says (``time: 1668091584.8 ticks: 290
+    4294859756 ...``: a line of data, each value after its label), else None: such a line is
+    no header, and mapping its labels as header names fails on the next line (a user study
+    was told "map it as t=time:"). The labels and the fields after each are listed, for
+    ``--columns`` in order."""
+    def number(text: str) -> bool:
+        try:
+            float(text)
+        except ValueError:
+            return False
+        return True
+
+    labels = [k for k, name in enumerate(header) if name.endswith(":") and not number(name[:-1])]
+    if not labels or not any(number(name) for name in header):
+        return None
+    parts = []
+    for at, label in enumerate(labels):
+        end = labels[at + 1] if at + 1 < len(labels) else len(header)
+        first, last = label + 2, end  # fields count from 1; the values follow the label
+        where = ("no field" if first > last else f"field {first}" if first == last
+                 else f"fields {first}-{last}")
+        parts.append(f"{header[label]!r} ({where})")
+    return (f"its first line is data, each value after a label, not a header: {', '.join(parts)} of "
+            f"{len(header)}; give the columns in order, _ for each label and each value not read "
+            "(e.g. --columns _,t,_,... for a time in field 2)")
 
 
 def _why_not_read(times: Sequence[str], known: Sequence[str], unknown: Sequence[str]) -> str:
