@@ -166,15 +166,8 @@ def _labelled_fields(header: Sequence[str]) -> str | None:
     no header, and mapping its labels as header names fails on the next line (a user study
     was told "map it as t=time:"). The labels and the fields after each are listed, for
     ``--columns`` in order."""
-    def number(text: str) -> bool:
-        try:
-            float(text)
-        except ValueError:
-            return False
-        return True
-
-    labels = [k for k, name in enumerate(header) if name.endswith(":") and not number(name[:-1])]
-    if not labels or not any(number(name) for name in header):
+    labels = [k for k, name in enumerate(header) if name.endswith(":") and not is_number(name[:-1])]
+    if not labels or not any(is_number(name) for name in header):
         return None
     parts = []
     for at, label in enumerate(labels):
