@@ -36,8 +36,8 @@ __all__ = [
     "METHODS", "body_steps", "BodySteps", "car_body_jacobian", "car_body_steps", "car_measured_steer",
     "car_road_wheel_angle", "car_speed_factor",
     "diff_body_jacobian", "diff_body_steps", "Method", "steering_body_jacobian", "steering_body_steps",
-    "step_displacement", "step_jacobians", "too_fast", "tricycle_body_jacobian", "tricycle_body_steps",
-    "unicycle_moving"
+    "moving_speed", "step_displacement", "step_jacobians", "too_fast", "tricycle_body_jacobian",
+    "tricycle_body_steps", "unicycle_moving"
 ]
 
 Method = Literal["euler", "midpoint", "exact"]
@@ -420,26 +420,29 @@ def _unicycle_steps(robot: Unicycle, log: OdometryLog, dt: NDArray[np.float64]) 
     return BodySteps(dd, rate * dt, dt, {"yaw_rate": rate}, robot)
 
 
-def too_fast(steps: BodySteps, log: OdometryLog) -> tuple[str, str] | None:
-    """(what, what to do) where the moving steps of ``steps`` (of ``log``) go faster, at the
-    median, than any wheeled vehicle (:data:`odomkit.units.FASTEST_SPEED`), else None.
-
-    The median of |Δd|/Δt over the steps that move and take time: a few spikes (a counter
-    that wraps, read as increments) do not move it, a whole log read wrong does (a raw
-    counter read as increments: every row's count is the distance since the start; ticks
-    read as metres; a distance in mm or a speed in mm/s read as metres). The advice names
-    the channel the travel came from.
-    """
-    from odomkit.units import FAST_TRAVEL, FASTEST_SPEED
-
+def moving_speed(steps: BodySteps) -> float | None:
+    """The median speed [m/s] of the steps that move and take time, |Δd|/Δt (None where
+    none does): a few spikes (a counter that wraps, read as increments) do not move it."""
     dt = np.asarray(steps.dt, dtype=float)
     with np.errstate(all="ignore"):
         speed = np.abs(np.asarray(steps.dd, dtype=float)) / dt
     moving = speed[(dt > 0) & np.isfinite(speed) & (speed > 0)]
-    if not moving.size:
-        return None
-    median = float(np.median(moving))
-    if not median > FASTEST_SPEED:
+    return float(np.median(moving)) if moving.size else None
+
+
+def too_fast(steps: BodySteps, log: OdometryLog) -> tuple[str, str] | None:
+    """(what, what to do) where the moving steps of ``steps`` (of ``log``) go faster, at the
+    median, than any wheeled vehicle (:data:`odomkit.units.FASTEST_SPEED`), else None.
+
+    The speed is :func:`moving_speed`'s: a few spikes do not move it, a whole log read wrong
+    does (a raw counter read as increments: every row's count is the distance since the
+    start; ticks read as metres; a distance in mm or a speed in mm/s read as metres). The
+    advice names the channel the travel came from.
+    """
+    from odomkit.units import FAST_TRAVEL, FASTEST_SPEED
+
+    median = moving_speed(steps)
+    if median is None or not median > FASTEST_SPEED:
         return None
     travel = float(np.nansum(np.abs(steps.dd)))
     duration = float(log.t[-1] - log.t[0]) if len(log) > 1 else 0.0

@@ -415,19 +415,14 @@ def check_speed(log: OdometryLog, robot: Robot) -> list[Finding]:
     """The ``speed`` finding: a log whose odometry moves faster than any wheeled vehicle
     (:func:`odomkit.kinematics.too_fast`) is read wrong (a raw counter read as increments,
     a unit), and fails."""
-    from odomkit.kinematics import body_steps, too_fast
+    from odomkit.kinematics import body_steps, moving_speed, too_fast
 
     steps = body_steps(robot, log)
     if (fast := too_fast(steps, log)) is not None:
         return [Finding("speed", "fail", *fast)]
-    dt = np.asarray(steps.dt)
-    with np.errstate(all="ignore"):
-        speed = np.abs(steps.dd) / dt
-    moving = speed[(dt > 0) & np.isfinite(speed) & (speed > 0)]
-    if not moving.size:
+    if (speed := moving_speed(steps)) is None:
         return [Finding("speed", "ok", "the odometry does not move")]
-    return [Finding("speed", "ok", f"the odometry moves at {float(np.median(moving)):.3g} m/s (the median of "
-                    "its moving steps)")]
+    return [Finding("speed", "ok", f"the odometry moves at {speed:.3g} m/s (the median of its moving steps)")]
 
 
 def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
