@@ -234,6 +234,12 @@ def test_heading_numbers_and_verdicts_are_odomkit_evaluates(with_truth, run_cli)
         assert (expected[key] is None) or expected[key][:60] in text, key
     assert ("NEES and coverage disagree" in text) == (expected["verdict_note"] is not None
                                                       or expected["verdict_heading_note"] is not None)
+    # A verdict from few window ends carries evaluate's caution (a page called a covariance
+    # "honest here" from 4 ends: user study).
+    from odomkit.workflows._scoring import FEW_WINDOW_ENDS
+
+    assert 0 < expected["windows"] < FEW_WINDOW_ENDS
+    assert f"But only {expected['windows']} window end(s): coverage moves in steps" in text
 
 
 def test_a_position_only_truth_gets_no_heading_figures(run_cli, tmp_path):

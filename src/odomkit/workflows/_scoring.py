@@ -24,7 +24,7 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["FEW_WINDOW_ENDS", "issue_notes", "pooled_report", "require_truth",
+__all__ = ["FEW_WINDOW_ENDS", "few_ends_note", "issue_notes", "pooled_report", "require_truth",
            "score_rows", "Scored", "summarise", "TrackRows", "verdicts"]
 
 
@@ -255,7 +255,7 @@ def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: 
                        **verdicts(one, [s], windowed=window is not None), **_start(s), **_window_ends(s),
                        "warnings": list(s.warnings)} for s in scored]
     out["warnings"] = _pooled_notes(scored, noun)
-    few = _few_ends_note(out["windows"])
+    few = few_ends_note(out["windows"])
     if few:
         out["warnings"].append(few)
     return out
@@ -425,7 +425,7 @@ def issue_notes(notes: Sequence[str], stacklevel: int = 3) -> None:
 FEW_WINDOW_ENDS = 20
 
 
-def _few_ends_note(ends: int) -> str | None:
+def few_ends_note(ends: int) -> str | None:
     """The warning for a windowed test of fewer than :data:`FEW_WINDOW_ENDS` ends: how far
     an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points)."""
     if not 0 < ends < FEW_WINDOW_ENDS:

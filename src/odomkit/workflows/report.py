@@ -296,7 +296,10 @@ def _verdicts(ev: dict[str, Any], who: str = "") -> list[Paragraph]:
     NEES mean against its bounds and the coverage, each as evaluate's keys say (None for no
     verdict: one window, no independent samples), and ``verdict_note`` (``verdict_heading_note``)
     where they differ.
-    ``who`` starts each sentence (e.g. "With the fitted noise (in-sample), ")."""
+    ``who`` starts each sentence (e.g. "With the fitted noise (in-sample), "). Fewer window
+    ends than :data:`odomkit.workflows._scoring.FEW_WINDOW_ENDS` add evaluate's caution."""
+    from odomkit.workflows._scoring import few_ends_note
+
     out = []
     for name, what, mean_key, nees_key, cover_key, note_key in (
             ("position", "covariance", "nees_position_mean", "nees_verdict", "coverage_overall",
@@ -312,6 +315,9 @@ def _verdicts(ev: dict[str, Any], who: str = "") -> list[Paragraph]:
                         f"{_COVERAGE_SAYS[ev[cover_key]].format(what=what)}.")
         if ev.get(note_key):
             said.append(f"NEES and coverage disagree (odomkit evaluate's note): {ev[note_key]}.")
+        if said and (few := few_ends_note(int(ev.get("windows") or 0))):
+            # "honest here" from 4 window ends said nothing of the kind (user study).
+            said.append(f"But {few}.")
         if said:
             text = " ".join(said)
             out.append(Paragraph(text[:1].upper() + text[1:], "note"))
