@@ -143,6 +143,24 @@ def test_unicycle_against_motion_capture_positions():
     assert f.status == "warn" and "the distance sign flipped" in f.advice, f
 
 
+def test_a_truth_with_x_and_y_swapped_is_named_beside_the_flipped_turn_it_mimics():
+    """A truth's x and y swapped (a GPS's lat and lon given the wrong way round: user study)
+    mirrors its path, which the odometry matches with its turn sign flipped: the failure
+    names that mapping and the mirrored truth; a flipped distance sign names no mirror."""
+    log, rng = unicycle_log()
+    truth = position_truth(log, TRUE_UNI, 50.0, 0.01, rng)
+    swapped = Truth(truth.t, truth.xy[:, ::-1].copy(), None, truth.sigma)
+    f = channels_finding(log, UNI, swapped)
+    assert f.status == "fail" and "with the yaw-rate sign flipped" in f.message, f
+    assert "the truth is mirrored: its x and y (lat and lon) swapped" in f.advice
+    f = channels_finding(spoilt(log, yaw_rate=lambda c: -c["yaw_rate"]), UNI, truth)
+    assert "mirrored" in f.advice  # the two read alike: both are named
+    log, rng = car_log()
+    truth = position_truth(log, TRUE_CAR, 1.0, 1.0, rng, gap=(100.0, 125.0))
+    f = channels_finding(spoilt(log, speed=lambda c: -c["speed"]), CAR, truth)
+    assert f.status == "fail" and "mirrored" not in f.advice
+
+
 @pytest.mark.parametrize(("spoil", "words"), [
     (lambda c: {"ticks_left": c["ticks_right"], "ticks_right": c["ticks_left"]}, "left and right swapped"),
     (lambda c: {"ticks_left": -c["ticks_left"]}, "the left channel's sign flipped"),

@@ -29,6 +29,9 @@ __all__ = ["check_channels"]
 
 # --- channels: swapped or sign-flipped -------------------------------------------------
 
+#: The mappings that flip the turn channel alone, which a truth with x and y swapped mimics.
+_TURN_FLIPS = frozenset(f"the {what} sign flipped" for what in ("steering", "yaw-rate", "heading", "turn"))
+
 def _hypotheses(robot: Robot, log: OdometryLog) -> list[tuple[str, dict[str, Any]]]:
     """(description, channel changes) for each wrong mapping a robot's log can have."""
     if isinstance(robot, DiffDrive):
@@ -264,9 +267,15 @@ def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float
                        f"given (misfit {given:.3g}){detail}", close_advice, given)
     best, words, note = min(others)
     if best < 0.5 * given:
+        advice = f"fix the channel mapping ({words}) and check again"
+        if words in _TURN_FLIPS:
+            # A mirrored truth turns the other way, as a flipped turn channel does (a KITTI
+            # drive's lat and lon given swapped was told "the yaw-rate sign flipped": user study).
+            advice += ("; if that channel's sign is right, the truth is mirrored: its x and y (lat and lon) "
+                       "swapped")
         return Finding("channels", "fail", f"the channels look mapped wrong: with {words} the odometry "
                        f"matches {what} (misfit {best:.3g}) far better than as given ({given:.3g}){detail}"
-                       f"{note}", f"fix the channel mapping ({words}) and check again", given)
+                       f"{note}", advice, given)
     if given > 0.5:
         return Finding("channels", "warn", f"the odometry matches {what} poorly (misfit {given:.3g}; 0 "
                        f"is a perfect match) and no other channel mapping does better{detail}", poor_advice,
