@@ -26,7 +26,7 @@ from odomkit.log import OdometryLog, clock_text
 __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "heading_spans",
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
-           "implausible_speed", "BURST_RATIO", "stamp_bursts", "bursts_note",
+           "implausible_speed", "latlon_as_metres", "BURST_RATIO", "stamp_bursts", "bursts_note",
            "MAX_RESIDUAL_SIGMAS", "clock_unit_hint", "no_overlap", "scatter_sigma",
            "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
@@ -426,6 +426,26 @@ def implausible_speed(truth: Truth, max_gap: float | None = 0.5) -> str | None:
     return (f"the truth's positions move at {speed:.3g} m/s (90th percentile over {_CHORD_SPAN:g} s "
             f"stretches), {units.FAST_TRAVEL} ({units.FASTEST_SPEED:g} m/s): likely millimetres read "
             "as metres (name the columns x_mm, y_mm) or a time unit too coarse (--truth-time-unit)")
+
+
+def latlon_as_metres(truth: Truth) -> str | None:
+    """One clause where the truth's x, y look like latitude and longitude in degrees read as
+    metres, else None: every fix within ±90 and ±180, away from (0, 0) by more than a degree,
+    and moving less than 0.1 in either over at least 10 s (a car's 1.7 km is 0.015° of
+    latitude). Read so, a KITTI drive scored ATE 365 m and drift 54 969 %, and check blamed
+    the speed and yaw rate swapped (user study)."""
+    if len(truth) < 2 or float(truth.t[-1] - truth.t[0]) < 10.0:
+        return None
+    x, y = truth.xy[:, 0], truth.xy[:, 1]
+    if not (np.all(np.abs(x) <= 90.0) and np.all(np.abs(y) <= 180.0)):
+        return None
+    moves = max(float(np.ptp(x)), float(np.ptp(y)))
+    if moves >= 0.1 or max(abs(float(x.mean())), abs(float(y.mean()))) <= 1.0:
+        return None
+    return (f"the truth's x, y stay within {float(x.min()):.6g}..{float(x.max()):.6g} and "
+            f"{float(y.min()):.6g}..{float(y.max()):.6g} over {float(truth.t[-1] - truth.t[0]):.4g} s: "
+            "latitude and longitude in degrees read as metres? name them lat, lon (--truth-columns "
+            "t=TIME,lat=LAT,lon=LON)")
 
 
 #: A truth whose median spacing is under this fraction of its 90th-percentile spacing comes

@@ -249,3 +249,25 @@ def test_fixes_far_from_the_first_warn_with_the_scale_error(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")  # 19 km: no warning
         read_truth(_write(tmp_path / "near.csv", "t,lat,lon", [(0, 45.0, 7.0), (1, 45.17, 7.0)]))
+
+
+def test_a_heading_in_radians_read_as_degrees_is_warned_about(tmp_path):
+    """KITTI's yaw is radians counter-clockwise from east; a user study read it as
+    heading_deg_north, as a refusal's hint suggested for "degrees clockwise from north", and
+    was told the yaw rate's sign was flipped. A heading column read in degrees that spreads
+    over more than 2 yet stays within ±π is radians: said, with what to do (a GPS file takes
+    no radians: convert it or leave it out; a planar file: theta). Degrees that turn are not."""
+    t = np.arange(200) * 0.1
+    yaw = np.angle(np.exp(1j * 0.3 * t))  # radians, turning through ±π
+    lat, lon = 49.0 + 1e-5 * t, 8.4 + 1e-5 * t
+    gps = _write(tmp_path / "g.csv", "t,lat,lon,heading_deg_north", np.column_stack([t, lat, lon, yaw]))
+    with pytest.warns(UserWarning, match=r"read as heading_deg_north in degrees, lies within ±3\.14 .* "
+                                         r"radians\? .* convert the column to that, or leave it out"):
+        read_truth(gps)
+    planar = _write(tmp_path / "p.csv", "t,x,y,theta_deg", np.column_stack([t, t, 0 * t, yaw]))
+    with pytest.warns(UserWarning, match=r"read as theta_deg in degrees, .* read it as theta \(radians"):
+        read_truth(planar)
+    turning = _write(tmp_path / "d.csv", "t,x,y,theta_deg", np.column_stack([t, t, 0 * t, np.degrees(yaw)]))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        read_truth(turning)

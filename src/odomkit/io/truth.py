@@ -465,6 +465,34 @@ def _onto_plane(
     return xy, unwrap_angle(np.arctan2(n, e))
 
 
+#: A heading column read in degrees whose every value lies within ±(π + this) and that
+#: spreads over more than :data:`_RADIAN_SPREAD` holds radians: a drive that turns spreads a
+#: heading in degrees far wider, and one that keeps within ±3.15° hardly turns at all.
+_RADIAN_LIMIT = math.pi + 0.01
+_RADIAN_SPREAD = 2.0
+
+
+def _warn_if_radians(path: Path, values: NDArray[np.float64], header: Sequence[str] | None, column: int,
+                     key: str) -> None:
+    """Warn where a heading column read in degrees (``theta_deg``, ``heading_deg_north``)
+    holds radians (:data:`_RADIAN_LIMIT`, :data:`_RADIAN_SPREAD`): read as degrees, a heading
+    that turns through 2π turns through 6°, and every window starts off the robot's heading.
+    A user study copied the hint ``heading_deg_north=yaw`` for KITTI's yaw (radians,
+    counter-clockwise from east) and was told the yaw rate's sign was flipped. A GPS file
+    takes no heading in radians: the advice there is to convert it, or to leave it out."""
+    finite = values[np.isfinite(values)]
+    if finite.size < 2 or not (np.all(np.abs(finite) <= _RADIAN_LIMIT)
+                               and float(np.ptp(finite)) > _RADIAN_SPREAD):
+        return
+    name = (f"column {header[column]!r}" if header is not None and column < len(header)
+            else f"column {column + 1}")
+    fix = ("read it as theta (radians, counter-clockwise from x)" if key == "theta_deg" else
+           "heading_deg_north reads degrees clockwise from true north: convert the column to that, or leave "
+           "it out (position-only truth)")
+    warnings.warn(f"{path}: {name}, read as {key} in degrees, lies within ±{math.pi:.2f} over the whole file "
+                  f"({float(finite.min()):.3g}..{float(finite.max()):.3g}): radians? {fix}", stacklevel=3)
+
+
 def project_latlon(
     lat: ArrayLike,
     lon: ArrayLike,
@@ -733,9 +761,13 @@ def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[
             keys = (*(_ECEF if ecef else ("lat", "lon", "alt")), "heading_deg_north")
             geo = np.column_stack([data[:, index[k]] if k in index else np.zeros(len(t)) for k in keys])
             xy, theta = geo[:, :2], None
+            if north:
+                _warn_if_radians(path, geo[:, 3], header, index["heading_deg_north"], "heading_deg_north")
         else:
             theta = (data[:, index["theta"]] if "theta" in index
                      else np.radians(data[:, index["theta_deg"]]) if "theta_deg" in index else None)
+            if "theta_deg" in index:
+                _warn_if_radians(path, data[:, index["theta_deg"]], header, index["theta_deg"], "theta_deg")
             if "x_mm" in index:
                 xy = data[:, [index["x_mm"], index["y_mm"]]] * units.MILLIMETRE
             else:

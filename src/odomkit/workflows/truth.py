@@ -230,10 +230,11 @@ def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
     while both start together: a truth stamped in ms read as s spans 1000 times the log's
     seconds and overlaps it only in its first thousandth, which evaluate reported as "no
     window travels --min-travel", not as a unit."""
-    from odomkit.truth import clock_unit_hint, implausible_speed
+    from odomkit.truth import clock_unit_hint, implausible_speed, latlon_as_metres
 
-    if note := implausible_speed(truth):
-        warnings.warn(f"{truth.source}: {note}", stacklevel=3)
+    for note in (implausible_speed(truth), latlon_as_metres(truth)):
+        if note:
+            warnings.warn(f"{truth.source}: {note}", stacklevel=3)
     if log is None or len(log.t) < 2 or len(truth) < 2:
         return
     uncut = log.meta.get("uncut_clock")  # the log's clock before --span cut it
