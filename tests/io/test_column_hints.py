@@ -81,6 +81,18 @@ def test_a_clock_time_without_a_numeric_time_column_asks_for_seconds(tmp_path):
     assert "seconds" in said
 
 
+def test_a_headerless_file_whose_time_is_clock_text_says_so_too(tmp_path):
+    """The same time-of-day text in a file without a header (KITTI's OXTS timestamps beside
+    their values: a date, then a clock): its first line was told "mixes names and numbers ...
+    delete it if it is a header" (user study); it is told, as with a header, that the time
+    column holds clock text."""
+    path = tmp_path / "oxts.txt"
+    path.write_text("2011-09-30 13:12:10.525 48.97 8.47 3.1\n2011-09-30 13:12:10.635 48.97 8.47 3.2\n")
+    said = _error(lambda: read_csv_log(path, ["_", "t", "_", "_", "speed"]))
+    assert "line 1" in said and "'13:12:10.525' is time-of-day text, not a number" in said
+    assert "mixes names and numbers" not in said
+
+
 def test_the_cli_says_it_in_one_line(run_cli, logger_csv, tmp_path):
     robot = tmp_path / "car.toml"
     robot.write_text('[robot]\ntype = "car"\nwheel_base = 2.69\nsteering_ratio = 15\n')

@@ -248,6 +248,13 @@ def _in_order(columns: Sequence[str], layout: TextLayout, text: str,
         if all(map(is_number, read)):
             layout = sniff_layout(text, source, header=False)
         elif any(map(is_number, read)):
+            t, first = index.get("t"), layout.header
+            assert first is not None  # the branch above reads it
+            # A first row whose time is date or clock text is data, not a header: say that (with a
+            # header the same file is told so; without, it was "mixes names and numbers": user study).
+            if t is not None and (said := time_text_error(first[t], first, None, t, "--columns",
+                                                          "--time-unit")):
+                raise InputError(said, source=source, line=layout.header_line)
             raise InputError("this line mixes names and numbers: a header holds names only, a data row "
                              "numbers in the columns --columns reads; fix the row, or delete it if it "
                              "is a header", source=source, line=layout.header_line)
