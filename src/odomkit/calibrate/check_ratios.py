@@ -58,6 +58,11 @@ CHORD_SIGMAS = 10.0
 #: ... and this many metres (a motion capture's fixes are nearly exact; an encoder's
 #: quantisation is not).
 MIN_CHORD = 0.05
+#: A position-only truth's turn is compared only across stretches that roll at least this
+#: share of the drive's median stretch (:func:`motion_ratios`): a car crawling at 0.1 m/s
+#: for 6.5 s, its INS wandering 20 cm, showed 7.6 rad of "turning" where the odometry turned
+#: 0.93 rad, a false failure naming the yaw rate's unit (user study).
+CRAWL_SHARE = 0.2
 #: A stretch is straight where the odometry turns less than this [rad] over it (its chord
 #: is then its path within 0.1 %) and the truth's middle fix lies within this share of the
 #: chord from it (a turn of about 0.4 rad) plus its noise.
@@ -335,7 +340,13 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
         # consecutive stretches still counts every turn).
         way = np.sign(travelled[last] - travelled[first])
         chain = np.cumsum(np.concatenate(([True], last[:-1] != first[1:])))
-        chorded = np.flatnonzero(long_enough)
+        # A stretch crawled through (a car at a walking pace while its GPS or INS wanders
+        # decimetres) gives a chord whose direction is the truth's wander, not the path's:
+        # only stretches that roll at least a fifth of the drive's typical stretch are compared.
+        rolled_over = rolled[last] - rolled[first]
+        moving = rolled_over[rolled_over > 0]
+        typical = float(np.median(moving)) if moving.size else 0.0
+        chorded = np.flatnonzero(long_enough & (rolled_over >= CRAWL_SHARE * typical))
         a, b = chorded[:-1], chorded[1:]
         same = (chain[a] == chain[b]) & (way[a] == way[b])
         a, b = a[same], b[same]
