@@ -21,6 +21,7 @@ from odomkit.angles import wrap_angle
 from odomkit.calibrate.positions import MAX_TIME_OFFSET, _Problem, _runs_with_truth, calibrate_positions
 from odomkit.calibrate.residuals import calibration_model
 from odomkit.errors import InputError
+from odomkit.integrate import dead_reckon
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, Unicycle
 from odomkit.track import dead_reckon_log
@@ -44,17 +45,8 @@ def drive(seed: int = 0, duration: float = 600.0, slow: float = 1.2, heading: bo
     v_cmd = 0.2 + 0.05 * np.sin(t / 17.0)
     w = YAW_RATE_SCALE * (w_cmd - YAW_RATE_BIAS)
     v = C_SCALE * v_cmd * (1.0 - slow * np.abs(w))
-    poses = np.empty((t.size, 3))
-    x = y = th = 0.0
-    for k in range(t.size):
-        poses[k] = x, y, th
-        d, a = v[k] * DT, w[k] * DT
-        if abs(a) > 1e-12:
-            x += d / a * (np.sin(th + a) - np.sin(th))
-            y -= d / a * (np.cos(th + a) - np.cos(th))
-        else:
-            x, y = x + d * np.cos(th), y + d * np.sin(th)
-        th += a
+    # Each row's (v, w) held over the step after it, integrated as constant-curvature arcs.
+    poses = dead_reckon(v[:-1] * DT, w[:-1] * DT, (0.0, 0.0, 0.0), "exact")
     fix_t = np.arange(0.037, t[-1], 0.1)
     xy = np.column_stack([np.interp(fix_t, t, poses[:, k]) for k in (0, 1)]) + rng.normal(0.0, 0.001,
                                                                                            (fix_t.size, 2))
