@@ -61,7 +61,7 @@ counter read as increments drove a tricycle 561 km in 113 s)."""
 
 FAST_TRAVEL = "faster than any wheeled vehicle"
 """The words every message about :data:`FASTEST_SPEED` holds (``odomkit check`` says it once,
-as its ``distance`` finding, not again as a reading warning)."""
+as its ``speed`` finding, not again as a reading warning)."""
 
 SLOW_ROWS = "slower than any odometry logger"
 """The words every message about :data:`SLOWEST_PERIOD` holds (``odomkit check`` says it once,

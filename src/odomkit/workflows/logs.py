@@ -304,26 +304,24 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
         options.check_format(fmt, str(path))
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
                        progress=progress, imu_up=options.imu_up, truth_frame=options.truth_frame)
-        log = _in_span(log, options)
-        _warn_if_too_fast(log, robot)
-        return log
-    require_log_file(path)
-    options.check_format(fmt, str(path))
-    with stage(progress, None, f"reading {path.name}"):
-        if fmt == "khepera":
-            log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
-        elif fmt == "snowhite":
-            log = read_snowhite(path, **({"period": options.period} if options.period else {}))
-        elif fmt == "optiodom":
-            log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
-        else:
-            # Without --columns, a header in odomkit's own names (t,speed,yaw_rate) is enough.
-            log = read_csv_log(path, parse_columns(options.columns) if options.columns else None,
-                               cumulative=options.cumulative, wrap_bits=options.wrap_bits,
-                               time_unit=options.time_unit,
-                               example=COLUMN_EXAMPLES[robot_type_name(robot)], record=options.record)
-            _warn_if_slow(log, options)
-        log = _in_span(log, options)
+    else:
+        require_log_file(path)
+        options.check_format(fmt, str(path))
+        with stage(progress, None, f"reading {path.name}"):
+            if fmt == "khepera":
+                log = read_khepera(path, period=options.period or 1.0, wrap_bits=options.wrap_bits)
+            elif fmt == "snowhite":
+                log = read_snowhite(path, **({"period": options.period} if options.period else {}))
+            elif fmt == "optiodom":
+                log = read_run(path, "diff" if isinstance(robot, DiffDrive) else "tricyc")
+            else:
+                # Without --columns, a header in odomkit's own names (t,speed,yaw_rate) is enough.
+                log = read_csv_log(path, parse_columns(options.columns) if options.columns else None,
+                                   cumulative=options.cumulative, wrap_bits=options.wrap_bits,
+                                   time_unit=options.time_unit,
+                                   example=COLUMN_EXAMPLES[robot_type_name(robot)], record=options.record)
+                _warn_if_slow(log, options)
+    log = _in_span(log, options)
     _warn_if_too_fast(log, robot)
     return log
 
