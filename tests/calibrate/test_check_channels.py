@@ -316,3 +316,29 @@ def test_a_truth_that_does_not_overlap_the_log_says_why_with_the_time_unit():
     f = channels_finding(in_ms, UNI, truth)
     assert f.status == "fail" and "do not overlap in time" in f.message, f
     assert "the log's time is likely in ms read as seconds (--time-unit ms)" in f.message
+
+
+def test_a_log_read_wrong_is_not_told_a_channel_to_flip():
+    """A cumulative counter read as increments misfits every mapping; the least absurd of
+    them is no fix. A user study's LEGO robot (ticks read without --cumulative) was told "fix
+    the channel mapping (the right channel's sign flipped)" at a best misfit of 0.975, as
+    poor as no odometry at all; the advice that mattered (--cumulative) came second."""
+    from odomkit.calibrate.check import next_steps
+
+    log, rng = diff_log()
+    truth = position_truth(log, TRUE_DIFF, 10.0, 0.01, rng)
+    counted = spoilt(log, ticks_left=lambda c: np.cumsum(c["ticks_left"]),
+                     ticks_right=lambda c: np.cumsum(c["ticks_right"]))
+    f = channels_finding(counted, DIFF, truth)
+    assert f.status == "warn" and "poorly" in f.message, f
+    # Every other mapping was tried and misfits too (the best is named, as no match).
+    assert "no other channel mapping matches it either" in f.message or "does better" in f.message, f
+    # A mapping that does match is still named: the spoilt channel of a log read right.
+    flipped = spoilt(log, ticks_right=lambda c: -c["ticks_right"])
+    assert channels_finding(flipped, DIFF, truth).status == "fail"
+    # How the log was read comes first in the advice, before any failure.
+    from odomkit.calibrate.check import Finding
+
+    found = [Finding("channels", "fail", "a mapping", "fix the channel mapping"),
+             Finding("reading", "warn", "a counter read as increments", "read the log as the message says")]
+    assert next_steps(found) == ["read the log as the message says", "fix the channel mapping"]

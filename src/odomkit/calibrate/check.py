@@ -500,7 +500,9 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
 
 
 def next_steps(findings: list[Finding]) -> list[str]:
-    """The advice of every finding that is not ok, failures first, without repeats."""
+    """The advice of every finding that is not ok, without repeats: how the log was read
+    first (a counter read as increments misfits every check after it: a user study's LEGO
+    robot was first told to flip a channel's sign), then the failures, then the warnings."""
     ordered = sorted((f for f in findings if f.status != "ok" and f.advice),
-                     key=lambda f: 0 if f.status == "fail" else 1)
+                     key=lambda f: 0 if f.check == "reading" else 1 if f.status == "fail" else 2)
     return list(dict.fromkeys(f.advice for f in ordered if f.advice))

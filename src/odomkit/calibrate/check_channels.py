@@ -266,7 +266,11 @@ def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float
         return Finding("channels", "warn", f"{what} cannot tell any other channel mapping from the one "
                        f"given (misfit {given:.3g}){detail}", close_advice, given)
     best, words, note = min(others)
-    if best < 0.5 * given:
+    # Named only where that mapping itself matches: a log read wrong (a cumulative counter
+    # read as increments, a robot 250x too fast) misfits every mapping, and the least absurd
+    # of them is no fix (a user study's LEGO robot was told "the right channel's sign
+    # flipped" at a best misfit of 0.975, against 9.15e+03 as given).
+    if best < 0.5 * given and best <= 0.5:
         advice = f"fix the channel mapping ({words}) and check again"
         if words in _TURN_FLIPS:
             # A mirrored truth turns the other way, as a flipped turn channel does (a KITTI
@@ -277,9 +281,10 @@ def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float
                        f"matches {what} (misfit {best:.3g}) far better than as given ({given:.3g}){detail}"
                        f"{note}", advice, given)
     if given > 0.5:
+        others_said = ("no other channel mapping does better" if best >= given else
+                       f"no other channel mapping matches it either (the best, {words}, misfits {best:.3g})")
         return Finding("channels", "warn", f"the odometry matches {what} poorly (misfit {given:.3g}; 0 "
-                       f"is a perfect match) and no other channel mapping does better{detail}", poor_advice,
-                       given)
+                       f"is a perfect match) and {others_said}{detail}", poor_advice, given)
     if best < 4 * max(given, floor):
         return Finding("channels", "warn", f"the channels as given match {what} (misfit {given:.3g}), but "
                        f"the best other mapping, {words}, misfits {best:.3g}, "
