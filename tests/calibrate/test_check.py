@@ -358,3 +358,20 @@ def test_times_on_an_epoch_clock_are_said_to_the_millisecond():
     assert "e+09" not in found[0].message and all(len(x.split(".")[1]) == 3 for x in said)
     assert start == pytest.approx(epoch + 5 * PERIOD, abs=PERIOD)
     assert end == pytest.approx(epoch + 45 * PERIOD, abs=PERIOD)
+
+
+def test_a_slalom_under_a_quarter_turn_each_way_is_not_called_hardly_turning():
+    """A slalom that turns about 1.4 rad each way (a user study's F1TENTH car: 1.47 and
+    1.32 rad) was told "hardly any turning"; it turns, only under the quarter turn each way
+    that the warning's threshold (π/2) asks for."""
+    from odomkit.kinematics import body_steps
+
+    steps = np.arange(1, 4001)
+    wave = 1.65 * np.sin(2 * np.pi * steps / 1000.0)  # the wheels' tick difference: a slalom
+    log = make_log(np.r_[0.0, 250.0 - wave], np.r_[0.0, 250.0 + wave])
+    dtheta = body_steps(ROBOT, log).dtheta
+    ccw, cw = float(np.sum(dtheta[dtheta > 0])), float(-np.sum(dtheta[dtheta < 0]))
+    assert 1.0 < min(ccw, cw) and max(ccw, cw) < 0.5 * math.pi  # turning, but under a quarter each way
+    (f,) = [f for f in check_motion(log, ROBOT) if f.check == "turning"]
+    assert f.status == "warn" and "hardly" not in f.message
+    assert "under a quarter turn either way" in f.message

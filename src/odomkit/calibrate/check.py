@@ -448,7 +448,9 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
         found.append(Finding("distance", "ok", f"the robot travels {travel:.4g} m"))
     turns = f"it turns {ccw:.3g} rad counter-clockwise and {cw:.3g} rad clockwise"
     if max(ccw, cw) < 0.5 * math.pi:
-        found.append(Finding("turning", "warn", f"{turns}: hardly any turning",
+        # Not "hardly any turning": a slalom's 1.47 and 1.32 rad are turning, only not far
+        # enough either way (a user study's F1TENTH car).
+        found.append(Finding("turning", "warn", f"{turns}: under a quarter turn either way",
                              "drive turns both ways, at least a half turn each (e.g. a square each way)"))
     elif min(ccw, cw) < 0.5 * math.pi:
         way = "clockwise" if cw < ccw else "counter-clockwise"
