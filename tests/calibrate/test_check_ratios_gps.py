@@ -189,3 +189,42 @@ def test_calibrates_residual_warning_holds_them_against_the_sigma_the_fixes_stat
     assert "1.93x the truth's σ its fixes state (0.8 m)" in line
     [line] = said(Truth(tg, xy, None, 0.0, "gps"), 0.7)  # nothing stated: the scatter, as before
     assert "scatter about a smooth path" in line
+
+
+# --- a drive too straight for a turning ratio ----------------------------------------------
+
+def highway(seed, seconds=60.0):
+    """A car at 17 m/s keeping its lane for ``seconds``: its steering wheel (ratio 14.5)
+    wobbles by about 2° over a few seconds and holds a 0.2° offset, the road wheels' angle
+    1/14.5 of it. Returns the log of the steering-wheel angle, and the true poses."""
+    rng = np.random.default_rng(seed)
+    t = 0.01 * np.arange(int(seconds / 0.01) + 1)
+    knots = np.deg2rad(rng.normal(0.2, 2.0, int(seconds / 3) + 2))
+    wheel = np.interp(t, 3.0 * np.arange(knots.size), knots)
+    log = OdometryLog(t, {"speed": np.full(t.size, 17.0), "steer": wheel})
+    poses = dead_reckon_log(log, Car(2.65, steering_ratio=14.5), pose0=np.zeros(3)).poses
+    return log, poses
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_a_car_on_a_highway_read_without_its_steering_ratio_fails_its_turning(seed):
+    """A RAV4's 60 s on a highway against its 10 Hz GPS, the robot file without its
+    steering_ratio (a user study): the GPS turns within its noise between stretches, so no
+    pair gave a ratio, and check said "not compared" while the track ended 521 m off. The
+    odometry's turns between stretches, about their steady turn, vary 14.5× the true ones,
+    far beyond the truth's; with the ratio they are the truth's and nothing fails."""
+    log, poses = highway(seed)
+    rng = np.random.default_rng(seed + 100)
+    tg = np.arange(0.05, log.t[-1], 0.1)
+    xy = np.column_stack([np.interp(tg, log.t, poses[:, k]) for k in (0, 1)])
+    gps = Truth(tg, xy + rng.normal(0.0, 0.09, xy.shape))
+    without = by_check(check_truth_motion(log, Car(2.65), gps))["turn_ratio"]
+    assert without.status == "fail" and "steering_ratio" in (without.advice or ""), without
+    assert without.value >= 10.0
+    right = by_check(check_truth_motion(log, Car(2.65, steering_ratio=14.5), gps))["turn_ratio"]
+    assert right.status != "fail", right
+    # A GPS whose error wanders (0.8 m over 12 s) does not make a right file fail either.
+    tw, xw = wandering_gps(log, poses, seed, rate=10.0)
+    wander = Truth(tw, xw)
+    right = by_check(check_truth_motion(log, Car(2.65, steering_ratio=14.5), wander))["turn_ratio"]
+    assert right.status != "fail", right

@@ -47,7 +47,8 @@ from odomkit.robot import Car, CompassOdometry, DiffDrive, Robot, Tricycle
 from odomkit.truth import Truth, heading_span, longest_gap, truth_noise
 
 __all__ = ["check_truth_motion", "FOLLOWS", "follows_note", "judging_noise", "motion_follows",
-           "motion_problems", "MotionRatios", "motion_ratios", "speed_clock", "speed_clock_note",
+           "motion_problems", "MotionRatios", "motion_ratios",
+           "UNSEEN_TURN", "UnseenTurning", "unseen_turning", "speed_clock", "speed_clock_note",
            "COVERS_ONE", "NO_TURN", "RATIO_FAIL", "TRAVEL_WARN", "TURN_WARN", "time_unit_off", "TimeUnitOff",
            "unit_mixup"]
 
@@ -167,6 +168,9 @@ class MotionRatios:
         The stretches' length [s].
     truth_turned, odometry_turned : float
         Σ |turn| of the truth and of the odometry over the turns compared [rad].
+    unseen : UnseenTurning or None
+        Where a position-only truth gives too few turns for a ratio: how much the odometry's
+        turns between stretches vary against the truth's (:func:`unseen_turning`), else None.
     """
 
     travel: float
@@ -178,6 +182,7 @@ class MotionRatios:
     span: float
     truth_turned: float
     odometry_turned: float
+    unseen: UnseenTurning | None = None
 
 
 def judging_noise(truth: Truth, noise: float | None = None) -> tuple[float, float | None]:
@@ -230,6 +235,103 @@ def _stretch_ends(truth_t: NDArray[np.float64], start: float, stop: float, span:
     widest = np.maximum.reduceat(np.diff(truth_t)[: last[-1]], first)
     keep = (widest <= max_gap) & (truth_t[last] - truth_t[first] <= 1.5 * span)
     return first[keep], last[keep]
+
+
+@dataclass(frozen=True)
+class UnseenTurning:
+    """The odometry's turning between consecutive stretches where a position-only truth
+    barely turns (:func:`unseen_turning`): over ``pairs`` pairs of stretches of ``span`` [s],
+    the RMS [rad] of the odometry's turns about its steady turn per metre (``odometry``; a
+    steering offset or a gyro's bias turns it steadily, which ``calibrate`` fits), the
+    truth's likewise (``truth``) and the RMS of the truth's turn noise (``noise``)."""
+
+    span: float
+    pairs: int
+    odometry: float
+    truth: float
+    noise: float
+
+    @property
+    def times(self) -> float:
+        """How many times the truth's turning (or its noise, the larger) the odometry's varies."""
+        floor = max(self.truth, self.noise)
+        return self.odometry / floor if floor > 0 else math.inf
+
+
+#: The odometry's turns between stretches vary by at least this RMS [rad] (3°) before
+#: :func:`unseen_turning`'s finding judges them: an encoder's or a gyro's own wobble along a
+#: straight drive is smaller.
+UNSEEN_TURN = 0.05
+
+
+def _steady_removed(turn: NDArray[np.float64], distance: NDArray[np.float64]) -> float:
+    """The RMS of ``turn`` about its least-squares steady turn per metre of ``distance``."""
+    k = float(turn @ distance / (distance @ distance)) if np.any(distance) else 0.0
+    return float(np.sqrt(np.mean((turn - k * distance) ** 2)))
+
+
+@dataclass(frozen=True)
+class _Along:
+    """What :func:`motion_ratios` compares a position-only truth's turning with, at the
+    truth's fixes (K,): the fixes ``xy`` [m] (K, 2), the distance the odometry rolled up to
+    each, either way (``rolled``, m) and signed (``travelled``, m), ∫ θ over the distance
+    rolled (``heading_sum``, rad·m), the truth's noise σ [m per axis] and the shortest chord
+    [m] with a direction."""
+
+    xy: NDArray[np.float64]
+    rolled: NDArray[np.float64]
+    travelled: NDArray[np.float64]
+    heading_sum: NDArray[np.float64]
+    noise: float
+    least_chord: float
+
+    def chord_turns(self, first: NDArray[np.intp], last: NDArray[np.intp]
+                    ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float64], NDArray[np.float64],
+                               NDArray[np.float64]]:
+        """The pairs (a, b) of stretches (fixes ``first`` to ``last``, (S,)) compared, the
+        truth's turn between their chords, the odometry's, and the truth turn's noise [rad].
+
+        Each stretch with a chord beyond the noise and the next such one, driven the same
+        way, with no gap in the truth between them (consecutive stretches, or stretches
+        without a chord between: a robot that turns on the spot between two drives, as a
+        corridor robot turns round, shows its turn only across them): the truth's turn
+        between their chords' directions (a chord's direction is the heading at its middle
+        on a steady turn, turned by π when reversing), with its noise from each direction's
+        σ√2/chord, against the change of the odometry's own mean heading over each stretch
+        (unwrapped: an odometry that spins more than a turn between two consecutive
+        stretches still counts every turn)."""
+        xy, rolled, noise = self.xy, self.rolled, self.noise
+        truth_step = xy[last] - xy[first]
+        truth_chord = np.linalg.norm(truth_step, axis=1)
+        long_enough = truth_chord >= self.least_chord
+        way = np.sign(self.travelled[last] - self.travelled[first])
+        chain = np.cumsum(np.concatenate(([True], last[:-1] != first[1:])))
+        # A stretch crawled through (a car at a walking pace while its GPS or INS wanders
+        # decimetres) gives a chord whose direction is the truth's wander, not the path's:
+        # only stretches that roll at least a fifth of the drive's typical stretch are compared.
+        rolled_over = rolled[last] - rolled[first]
+        moving = rolled_over[rolled_over > 0]
+        typical = float(np.median(moving)) if moving.size else 0.0
+        chorded = np.flatnonzero(long_enough & (rolled_over >= CRAWL_SHARE * typical))
+        a, b = chorded[:-1], chorded[1:]
+        same = (chain[a] == chain[b]) & (way[a] == way[b])
+        a, b = a[same], b[same]
+        ang = np.arctan2(truth_step[:, 1], truth_step[:, 0])
+        truth_turn = np.angle(np.exp(1j * (ang[b] - ang[a])))
+        mean_heading = (self.heading_sum[last] - self.heading_sum[first]) / np.maximum(
+            rolled[last] - rolled[first], 1e-300)
+        odo_turn = mean_heading[b] - mean_heading[a]
+        # A turn round lies at ±π between the chords, either sign alike: the odometry's.
+        round_ = (np.abs(truth_turn) > math.pi - HALF_TURN_MARGIN) & (truth_turn * odo_turn < 0)
+        truth_turn = np.where(round_, truth_turn + 2 * math.pi * np.sign(odo_turn), truth_turn)
+        # Across standing stretches the chords cannot count whole turns: more than a turn and
+        # a half on the odometry is left out there.
+        countable = (b == a + 1) | (np.abs(odo_turn) <= 1.5 * math.pi)
+        a, b = a[countable], b[countable]
+        truth_turn, odo_turn = truth_turn[countable], odo_turn[countable]
+        with np.errstate(divide="ignore"):
+            turn_noise = math.sqrt(2.0) * noise * np.hypot(1 / truth_chord[a], 1 / truth_chord[b])
+        return a, b, truth_turn, odo_turn, turn_noise
 
 
 def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5,
@@ -321,50 +423,15 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
     # On a straight stretch the truth's chord is its path; the odometry's path is the
     # distance its wheels (or its speed) say it rolled, whatever it thinks it turned.
     is_straight = straight(first, last)
+    along = _Along(xy, rolled, travelled, heading_sum, noise, least_chord)
     travel, travel_se = _ratio((rolled[last] - rolled[first])[is_straight], truth_chord[is_straight])
-    long_enough = truth_chord >= least_chord
 
     if heading is not None:
         truth_turn = heading[last] - heading[first]
         odo_turn = heading_at[last] - heading_at[first]
         turn_noise = np.full(truth_turn.shape, math.sqrt(2.0) * truth.heading_sigma)
     else:
-        # Each stretch with a chord beyond the noise and the next such one, driven the same
-        # way, with no gap in the truth between them (consecutive stretches, or stretches
-        # without a chord between: a robot that turns on the spot between two drives, as a
-        # corridor robot turns round, shows its turn only across them): the truth's turn
-        # between their chords' directions (a chord's direction is the heading at its
-        # middle on a steady turn, turned by π when reversing), with its noise from each
-        # direction's σ√2/chord, against the change of the odometry's own mean heading over
-        # each stretch (unwrapped: an odometry that spins more than a turn between two
-        # consecutive stretches still counts every turn).
-        way = np.sign(travelled[last] - travelled[first])
-        chain = np.cumsum(np.concatenate(([True], last[:-1] != first[1:])))
-        # A stretch crawled through (a car at a walking pace while its GPS or INS wanders
-        # decimetres) gives a chord whose direction is the truth's wander, not the path's:
-        # only stretches that roll at least a fifth of the drive's typical stretch are compared.
-        rolled_over = rolled[last] - rolled[first]
-        moving = rolled_over[rolled_over > 0]
-        typical = float(np.median(moving)) if moving.size else 0.0
-        chorded = np.flatnonzero(long_enough & (rolled_over >= CRAWL_SHARE * typical))
-        a, b = chorded[:-1], chorded[1:]
-        same = (chain[a] == chain[b]) & (way[a] == way[b])
-        a, b = a[same], b[same]
-        ang = np.arctan2(truth_step[:, 1], truth_step[:, 0])
-        truth_turn = np.angle(np.exp(1j * (ang[b] - ang[a])))
-        mean_heading = (heading_sum[last] - heading_sum[first]) / np.maximum(
-            rolled[last] - rolled[first], 1e-300)
-        odo_turn = mean_heading[b] - mean_heading[a]
-        # A turn round lies at ±π between the chords, either sign alike: the odometry's.
-        round_ = (np.abs(truth_turn) > math.pi - HALF_TURN_MARGIN) & (truth_turn * odo_turn < 0)
-        truth_turn = np.where(round_, truth_turn + 2 * math.pi * np.sign(odo_turn), truth_turn)
-        # Across standing stretches the chords cannot count whole turns: more than a turn and
-        # a half on the odometry is left out there.
-        countable = (b == a + 1) | (np.abs(odo_turn) <= 1.5 * math.pi)
-        a, b = a[countable], b[countable]
-        truth_turn, odo_turn = truth_turn[countable], odo_turn[countable]
-        with np.errstate(divide="ignore"):
-            turn_noise = math.sqrt(2.0) * noise * np.hypot(1 / truth_chord[a], 1 / truth_chord[b])
+        _, _, truth_turn, odo_turn, turn_noise = along.chord_turns(first, last)
     beyond_noise = np.maximum(np.abs(truth_turn), np.abs(odo_turn)) >= TURN_SIGMAS * turn_noise
     if heading is not None:
         # Chosen on the larger of the two turns over the same stretch, so that neither
@@ -391,9 +458,41 @@ def motion_ratios(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float |
     if np.sum(way_turned * truth_turn[turning]) < 0:  # every sign turned round: the same ratio
         way_turned = -way_turned
     turn, turn_se = _ratio(way_turned * odo_turn[turning], way_turned * truth_turn[turning])
+    unseen = None
+    if heading is None and not math.isfinite(turn):
+        unseen = unseen_turning(along, tt, span, gap)
     return MotionRatios(travel, travel_se, int(np.count_nonzero(is_straight)), turn, turn_se,
                         int(np.count_nonzero(turning)), span, float(np.sum(np.abs(truth_turn[turning]))),
-                        float(np.sum(np.abs(odo_turn[turning]))))
+                        float(np.sum(np.abs(odo_turn[turning]))), unseen)
+
+
+def unseen_turning(along: _Along, tt: NDArray[np.float64], span: float, gap: float) -> UnseenTurning | None:
+    """How much the odometry turns between stretches where a position-only truth gives too
+    few turns for a ratio (:func:`motion_ratios`), at the stretch span from ``span`` doubling
+    to :data:`LONGEST_STRETCH` that tells them apart best; None with fewer than
+    :data:`MIN_STRETCHES` pairs at every span.
+
+    A car read without its ``steering_ratio`` on a highway (a user study's RAV4, 60 s at
+    17 m/s): its GPS turned within its noise between 2 s chords, no pair passed
+    :data:`MIN_TURN` or :data:`ODOMETRY_TURN`, and ``check`` said "not compared" while the
+    track ended 521 m off. Its odometry's turns varied 15× the truth's noise there. Each
+    side's steady turn per metre is taken out first (an offset turns the odometry steadily
+    one way; calibrate fits it), then the RMS of what is left compared. Every pair is used,
+    none chosen by either side's turn, so neither side's wobble biases the comparison."""
+    best: UnseenTurning | None = None
+    while span <= LONGEST_STRETCH:
+        first, last = _stretch_ends(tt, tt[0], tt[-1], span, gap)
+        a, b, truth_turn, odo_turn, noise = along.chord_turns(first, last)
+        if a.size >= MIN_STRETCHES and np.all(np.isfinite(noise)):
+            # The distance between the two stretches' middles, which a steady turn turns through.
+            middle = 0.5 * (along.rolled[first] + along.rolled[last])
+            distance = middle[b] - middle[a]
+            found = UnseenTurning(span, int(a.size), _steady_removed(odo_turn, distance),
+                                  _steady_removed(truth_turn, distance), float(np.sqrt(np.mean(noise**2))))
+            if best is None or found.times > best.times:
+                best = found
+        span *= 2
+    return best
 
 
 def _unit(ratio: float, units: tuple[tuple[float, str, str], ...]) -> tuple[str, str] | None:
@@ -573,6 +672,31 @@ def _turn_finding(r: MotionRatios, robot: Robot, judged: str = "", clock: TimeUn
     else:
         advice = "check the yaw rate's unit and scale (yaw_rate_deg for °/s)"
     return Finding("turn_ratio", status, said, advice, gain)
+
+
+def _unseen_finding(u: UnseenTurning, robot: Robot, judged: str = "") -> Finding:
+    """The ``turn_ratio`` failure where the odometry turns between stretches far more than
+    a truth that barely turns (:func:`unseen_turning`): its turning is scaled up, by at least
+    :attr:`UnseenTurning.times`."""
+    said = (f"the odometry's turns between consecutive {u.span:.3g} s stretches vary by {u.odometry:.3g} rad "
+            f"RMS about their steady turn, where the truth's vary by {u.truth:.2g} rad (its noise "
+            f"{u.noise:.2g} rad; {u.pairs} pairs){judged}: it turns at least {u.times:.3g}x as much as the "
+            "truth, whose turns are too small for a ratio")
+    if isinstance(robot, Car):
+        advice = (f"a steering-wheel angle read as the road wheels' angle? set steering_ratio in the robot "
+                  f"file (the file has {robot.steering_ratio:.3g}; a car's is about 12-20), or check the "
+                  "steering's unit (steer_deg for degrees)")
+    elif isinstance(robot, Tricycle):
+        advice = ("check the steering's unit (steer_deg for degrees) or steering_ratio in the robot file "
+                  f"(the steer channel per radian of the wheel; the file has {robot.steering_ratio:.4g})")
+    elif isinstance(robot, DiffDrive):
+        advice = (f"check wheel_base in the robot file (the file has {robot.wheel_base:.3g} m) and that the "
+                  "left and right channels are two wheels read in one unit")
+    elif isinstance(robot, CompassOdometry):
+        advice = "check the heading's unit (heading_deg for degrees)"
+    else:
+        advice = "check the yaw rate's unit (yaw_rate_deg for deg/s) and scale"
+    return Finding("turn_ratio", "fail", said, advice, u.times)
 
 
 def _no_turn_finding(said: str, gain: float, robot: Robot) -> Finding:
@@ -812,9 +936,16 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
                              "truth's"))
     if math.isfinite(r.turn):
         found.append(_turn_finding(r, robot, judged, clock))
+    elif (r.unseen is not None and r.unseen.odometry >= UNSEEN_TURN and r.unseen.times >= NOT_NOISE
+          and clock is None):
+        found.append(_unseen_finding(r.unseen, robot, judged))
     else:
+        varies = ("" if r.unseen is None else
+                  f" (between {r.unseen.pairs} pairs of {r.unseen.span:.3g} s stretches its turns vary "
+                  f"{r.unseen.times:.2g}x the truth's, or its noise: under the {NOT_NOISE:g}x that says a "
+                  "unit or a robot-file entry)")
         found.append(Finding("turn_ratio", "ok", f"only {r.turns} turn(s) beyond the truth's noise: the "
-                             "odometry's turning not compared with the truth's"))
+                             f"odometry's turning not compared with the truth's{varies}"))
     with np.errstate(all="ignore"):
         follows = _follows_finding(*motion_follows(log, robot, truth, max_gap, noise))
     if follows is not None:
