@@ -127,6 +127,13 @@ def test_diff_drive_snippet_with_twist_covariance_loads():
     assert params["twist_covariance_diagonal"] == [1.5e-6, 1.5e-6, UNOBSERVED_VARIANCE, UNOBSERVED_VARIANCE,
                                                    UNOBSERVED_VARIANCE, 7.5e-5]
     assert "0.3 m/s" in text  # the speed it holds at is said
+    # Whose noise it is, not "fitted": a user study published a hand-set k = 0.01 under a
+    # comment that called it fitted. And why no pose covariance diagonal is given.
+    lines = [line.strip() for line in text.splitlines()]
+    comments = " ".join(line.lstrip("# ") for line in lines if line.startswith("#"))
+    assert "fitted white noise" not in comments and "robot file's white noise" in comments
+    assert "pose_covariance_diagonal is left out" in comments
+    assert "pose_covariance_diagonal" not in params
 
 
 def _write_tricycle(tmp_path):
