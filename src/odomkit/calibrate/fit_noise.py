@@ -58,6 +58,7 @@ __all__ = [
     "first_order_note",
     "first_order_track_note",
     "FIRST_ORDER_SIGMA_THETA",
+    "GIVEN_ABOVE_SCATTER",
     "TRIM_SHARE",
     "NoiseFit",
     "NoiseParameter",
@@ -551,6 +552,7 @@ def fit_noise(
     trim: float | None = None,
     truth_held: Mapping[str, float] | None = None,
     window_labels: Sequence[Sequence[str]] | None = None,
+    truth_scatter: float | None = None,
 ) -> NoiseFit:
     """Maximum-likelihood variances of ``models`` from the window bases of several logs.
 
@@ -599,6 +601,11 @@ def fit_noise(
     window_labels : one sequence per basis of one label per window, optional
         How warnings name a window (``"a.csv 1266.7-1276.8 s"``); default the log's name and
         the window's number.
+    truth_scatter : float, optional
+        How the truth's fixes scatter about a smooth path [m per axis]
+        (:func:`odomkit.truth.scatter_sigma`), for the warning where every noise parameter of
+        the robot's own models is fitted to zero: a held ``truth_sigma`` more than
+        :data:`GIVEN_ABOVE_SCATTER` times it may be too large.
 
     Returns
     -------
@@ -701,9 +708,16 @@ def fit_noise(
             + ", ".join(f"{names[i]} ({n})" for i, n in worst)
             + "): expect coverage at 99 % below 0.99 on new runs"
             + _trim_share_note(n_trimmed, everything.n_windows, trim or 1.0, end_nees, labels))
-    misfit = _in_sample_note(in_sample, end_nees, labels, models, trimmed=n_trimmed)
+    # Every robot parameter at zero: the truth's noise explains every window end, and the
+    # file written predicts no growth of the odometry's error (a user study's RAV4, GPS truth).
+    at_zero = _robot_at_zero(params, free, v_hat, everything)
+    truth_now = _truth_text(params, v_hat, held)
+    given = _truth_text(params, v_hat, held, given_only=True) if at_zero else ""
+    misfit = _in_sample_note(in_sample, end_nees, labels, models, trimmed=n_trimmed, given_truth=given)
     if misfit:
         warnings.append(misfit)
+    if at_zero:
+        warnings.append(_no_growth_note(params, v_hat, held, everything, every_cov, truth_now, truth_scatter))
     informed = np.array([j for j in free if j not in flat], dtype=np.intp)
     corr = _correlation(prob, v_hat, informed) if informed.size > 1 else np.eye(informed.size)
     keys = [p.key for p in params]
@@ -776,12 +790,16 @@ def _trim_share_note(n_trimmed: int, n: int, trim: float, end_nees: NDArray[np.f
 
 
 def _in_sample_note(in_sample: dict[str, float | None], end_nees: NDArray[np.float64], labels: Sequence[str],
-                    models: Sequence[NoiseModel], trimmed: int) -> str | None:
+                    models: Sequence[NoiseModel], trimmed: int, given_truth: str = "") -> str | None:
     """The warning where the fit's own in-sample coverage lies outside the range an honest
     model's falls in over this many window ends (:func:`odomkit.evaluate.coverage_range`):
     a fit that misses on the very windows it was fitted to has a model family that does not
     describe these logs. Names the window ends of largest eᵀΣ⁻¹e. (The range assumes
-    independent ends; windows of several lengths overlap, so it is a little narrow there.)"""
+    independent ends; windows of several lengths overlap, so it is a little narrow there.)
+
+    ``given_truth`` (:func:`_truth_text` of the truth noise held), where every robot
+    parameter is fitted to zero: a pessimistic fit is then the truth's noise as given, too
+    large for these ends, and the warning names that instead of the model family."""
     n = int(np.count_nonzero(np.isfinite(end_nees)))
     verdicts = coverage_verdicts(in_sample, n)
     overall = overall_verdict(verdicts)
@@ -794,11 +812,95 @@ def _in_sample_note(in_sample: dict[str, float | None], end_nees: NDArray[np.flo
     what = {"optimistic": "too small", "pessimistic": "too large",
             "mixed": "too large in the core and too small in the tails"}[overall]
     kept = " (trimmed ends included)" if trimmed else ""
+    if overall == "pessimistic" and given_truth:
+        return (f"in-sample coverage misses the range an honest model's falls in over {n} window ends"
+                f"{kept}: {ranges}; the fitted covariance is too large (pessimistic) on the very windows it "
+                "was fitted to, with every noise parameter of the robot's own models at zero: what is left "
+                f"is the truth's noise as given ({given_truth}), too large for these window ends' errors, so "
+                "the σ given is likely too large (give a smaller one, or leave it out and fit-noise fits it)")
     return (f"in-sample coverage misses the range an honest model's falls in over {n} window ends{kept}: "
             f"{ranges}; the fitted covariance is {what} ({overall}) on the very windows it was fitted to, so "
             f"the model family ({family}) does not describe these logs; the largest eᵀΣ⁻¹e (2 on average "
             f"for an honest model): {_largest(end_nees, labels)}: look at those windows (a turn the odometry "
             "misses, a wheel slipping, a jump in the truth)")
+
+
+#: A held ``truth_sigma`` more than this many times the fixes' own scatter about a smooth path
+#: (:func:`odomkit.truth.scatter_sigma`) is called possibly too large where the robot's noise is
+#: fitted to zero: that scatter comes back within 5 % of white noise's σ and a bending path only
+#: adds to it, so twice it is no estimate's error (a RAV4's u-blox fixes scatter 0.088 m: its
+#: --truth-sigma 0.09 is not called too large, 0.5 is).
+GIVEN_ABOVE_SCATTER = 2.0
+#: The robot's noise is "at zero" where its share of the predicted position variance at the
+#: window ends is below this: no growth a track's covariance would show.
+_AT_ZERO = 1e-9
+#: What each truth-noise parameter is given by, and its unit.
+_TRUTH_FLAGS = {"truth_sigma": ("--truth-sigma", "m"),
+                "truth_heading_sigma": ("--truth-heading-sigma", "rad"),
+                "truth_time_sigma": ("--truth-time-sigma", "s")}
+
+
+def _robot_at_zero(params: Sequence[NoiseParameter], free: NDArray[np.intp], v_hat: NDArray[np.float64],
+                   lik: WindowLikelihood) -> bool:
+    """Whether every variance of the robot's own models (white and bias; the truth's aside,
+    held ones included) is zero at the fit, some of them fitted: their share of the predicted
+    position variance at ``lik``'s window ends is under :data:`_AT_ZERO`."""
+    robot = np.array([k for k, p in enumerate(params) if p.kind != "truth"], dtype=np.intp)
+    if not robot.size or not any(params[int(j)].kind != "truth" for j in free):
+        return False
+    without = v_hat.copy()
+    without[robot] = 0.0
+    total = float(np.trace(lik.window_covariance(v_hat)[:, :2, :2], axis1=1, axis2=2).sum())
+    truth = float(np.trace(lik.window_covariance(without)[:, :2, :2], axis1=1, axis2=2).sum())
+    return not total - truth > _AT_ZERO * total
+
+
+def _truth_text(params: Sequence[NoiseParameter], v_hat: NDArray[np.float64], held: Mapping[str, float],
+                given_only: bool = False) -> str:
+    """The truth's noise at the fit, each nonzero term with its unit and whether it was given
+    or fitted (``"truth_sigma 0.5 m, given"``); ``given_only``: the given ones alone. Empty
+    where there is none."""
+    said = []
+    for k, p in enumerate(params):
+        if p.kind != "truth" or not v_hat[k] > 0 or (given_only and p.name not in held):
+            continue
+        unit = _TRUTH_FLAGS.get(p.name, ("", ""))[1]
+        how = "given" if p.name in held else "fitted"
+        said.append(f"{p.key} {p.to_value(float(v_hat[k])):.3g} {unit}, {how}")
+    return "; ".join(said)
+
+
+def _no_growth_note(params: Sequence[NoiseParameter], v_hat: NDArray[np.float64], held: Mapping[str, float],
+                    lik: WindowLikelihood, cov: NDArray[np.float64], truth: str,
+                    scatter: float | None) -> str:
+    """The warning where every noise parameter of the robot's own models is fitted to zero
+    (:func:`_robot_at_zero`): the window ends' errors (``lik``'s, RMS per axis) lie within
+    the truth's own noise (``truth``: :func:`_truth_text`), which alone predicts the position
+    covariances ``cov`` (W, 2, 2) [m²] there, so the file written predicts no growth of the
+    odometry's error; what to do, and, where a held ``truth_sigma`` is more than
+    :data:`GIVEN_ABOVE_SCATTER` times the fixes' ``scatter`` [m], that it may be too large."""
+    keys = ", ".join(p.key for p in params if p.kind != "truth" and p.free)
+    rms = float(np.sqrt(np.mean(np.square(lik.error[:, :2]))))
+    predicted = float(np.sqrt(np.mean(np.trace(cov, axis1=1, axis2=2)) / 2.0))
+    # Position-only truth: each window's start heading is fitted to the fixes, and their noise
+    # reaches the end through it too (a car's 10 s on a highway: 0.09 m fixes predict 1.5 m).
+    through = ("" if lik.observed[:, 2].any() else
+               " (at each window's two ends, and through its start heading, fitted to the fixes)")
+    flags = [_TRUTH_FLAGS[name][0] for name, value in held.items() if value > 0 and name in _TRUTH_FLAGS]
+    smaller = (f", or give a smaller {' / '.join(flags)} (or none: fit-noise then fits the truth's noise)"
+               if flags else "")
+    note = (f"every noise parameter of the robot's own models is fitted to zero ({keys}): the window ends' "
+            f"errors (RMS {rms:.3g} m per axis over {lik.n_windows} ends) lie within the truth's own noise "
+            f"({truth or 'the fixed part of each window end'}), which alone predicts {predicted:.3g} m "
+            f"per axis there{through}, so the file written predicts no growth of the odometry's error: a "
+            "track's covariance is then its start pose's alone, however far it drives; fit longer windows "
+            f"(--window 30s) or more logs, so that the odometry's error outgrows the truth's noise{smaller}")
+    sigma = held.get("truth_sigma")
+    if sigma is not None and scatter is not None and scatter > 0 and sigma > GIVEN_ABOVE_SCATTER * scatter:
+        note += (f"; the truth_sigma given ({sigma:.3g} m) is {sigma / scatter:.2g} times the scatter of "
+                 f"the truth's fixes about a smooth path ({scatter:.3g} m per axis, "
+                 "odomkit.truth.scatter_sigma): the stated σ may be too large")
+    return note
 
 
 def _solve(lik: WindowLikelihood, v0: NDArray[np.float64], free: NDArray[np.intp],

@@ -481,10 +481,11 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
         # Merged as the bases are (WindowBasis.merge: the group's logs in order).
         labels = [tuple(x for lab, g in zip(labels, of_used, strict=True) if g == name for x in lab)
                   for name in names]
+    scatter = _pooled_scatter(used)
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                         level=level, log_names=names, cross_validate=cross_validate,
-                        trim=trim, truth_held=held, window_labels=labels)
+                        trim=trim, truth_held=held, window_labels=labels, truth_scatter=scatter)
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
                                    "variances": list(fit.variances.values()),
@@ -493,7 +494,6 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
     truth_noise = fit.truth_noise or {}
     truth_table = {key: truth_noise.get(f"truth_{key}", 0.0) for key in TRUTH_SIGMAS}
     result = fit.to_dict()
-    scatter = _pooled_scatter(used)
     below = _floor_below_scatter(fit.parameters.get("truth_sigma"), scatter,
                                  np.concatenate([b.error[:, :2] for b in bases]))
     clock = None if "truth_time_sigma" in held else _clock_beyond_spacing(fit, used)

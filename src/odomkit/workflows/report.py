@@ -176,14 +176,31 @@ def _attempt(what: str, step: Callable[[], Any], problems: list[str]) -> Any:
 
 
 # ---------------------------------------------------------------------------------- the sections
-def _track_section(run: TrackRun, figures: ReportFigures, summary: dict[str, Any]) -> Section:
+def _robot_file(name: str) -> str:
+    """How the page names the robot file's own parameters: ``"the robot file (rav4.toml)"``
+    (``"the robot file"`` where ``name`` is empty)."""
+    return f"the robot file ({name})" if name else "the robot file"
+
+
+def _robot_used(name: str, calibrated: bool) -> str:
+    """Which robot the steps after the calibration use (the noise fit, nav2 AMCL's α's, the ROS
+    snippets): the calibrated one, or, where the calibration failed, the robot file's as it is
+    (a user study's RAV4: "No calibration" above a noise "fitted with the calibrated robot")."""
+    if calibrated:
+        return "the calibrated robot (the parameters fitted under 'Calibration before and after')"
+    return (f"{_robot_file(name)} uncalibrated, its parameters as they are: the calibration failed (see "
+            "'Calibration before and after')")
+
+
+def _track_section(run: TrackRun, figures: ReportFigures, summary: dict[str, Any],
+                   robot_name: str) -> Section:
     from odomkit.windows import cumulative_travel
 
     track = run.track
     cov = track.cov
     blocks: list[Any] = [Paragraph(
         "Dead reckoning integrates the wheel (or speed and yaw-rate) increments of the log with the "
-        "robot file's geometry. The covariance grows with the robot file's [noise]: the "
+        f"geometry of {_robot_file(robot_name)}. The covariance grows with its [noise]: the "
         "ellipses hold the true position with 95 % probability if that noise model is right.")]
     s = cumulative_travel(track.steps)
     fig = figures.draw(("draw_track",), lambda plot, ax: plot.draw_track(
@@ -248,14 +265,15 @@ def _metric_rows(ev: dict[str, Any], prefix: str = "") -> list[tuple[str | Cell,
     return rows
 
 
-def _errors_section(ev: dict[str, Any]) -> Section:
+def _errors_section(ev: dict[str, Any], robot_name: str) -> Section:
     rows = _metric_rows(ev) + [("rows scored / left out (no truth there)",
                                 Cell(f"{ev['rows_evaluated']} / {ev['rows_skipped']}"))]
     return Section("errors", "How wrong: error metrics", (
-        Paragraph("The track dead-reckoned from the truth at its first usable row, compared with the truth "
-                  "row by row (no alignment). ATE is the RMS position error over the run; RPE the error of "
-                  "the motion over each stretch of 1 m of true travel, which does not grow with the run; "
-                  "drift the final error as a share of the distance travelled."),
+        Paragraph(f"The track dead-reckoned with {_robot_file(robot_name)} from the truth at its first "
+                  "usable row, compared with the truth row by row (no alignment). ATE is the RMS position "
+                  "error over the run; RPE the error of the motion over each stretch of 1 m of true travel, "
+                  "which does not grow with the run; drift the final error as a share of the distance "
+                  "travelled."),
         Table(("metric", "value"), tuple(rows), "Against ground truth (odomkit evaluate)"),
     ))
 
@@ -340,16 +358,17 @@ _INSIDE_BOTH = f"{_INSIDE_POSITION} (heading columns: the predicted heading inte
 
 
 def _honesty_section(scored: list[Scored], ev: dict[str, Any], window: str | None,
-                     figures: ReportFigures) -> Section:
+                     figures: ReportFigures, robot_name: str) -> Section:
     from odomkit.evaluate import nees
 
     n = ev["windows"]
     heading = _has_heading(ev)
     blocks: list[Any] = [Paragraph(
-        f"The log is cut into {_window_text(window)}; each is dead-reckoned "
-        "again from the truth at its start and scored at its end, so the window ends are independent "
-        "samples. An honest covariance puts about 50 / 90 / 95 / 99 % of them inside its 50 / 90 / 95 / "
-        "99 % ellipses, and its mean NEES (normalised error squared, 2 for a position) inside the bounds."
+        f"The log is cut into {_window_text(window)}; each is dead-reckoned with {_robot_file(robot_name)} "
+        "(its geometry and its [noise]) again from the truth at its start and scored at its end, so the "
+        "window ends are independent samples. An honest covariance puts about 50 / 90 / 95 / 99 % of them "
+        "inside its 50 / 90 / 95 / 99 % ellipses, and its mean NEES (normalised error squared, 2 for a "
+        "position) inside the bounds."
         + (" The truth has a heading, so the heading is scored alike: its error against the predicted "
            "heading variance, an interval instead of an ellipse and a mean NEES of 1 (one degree of "
            "freedom)." if heading else ""))]
@@ -419,16 +438,20 @@ def _calibrated_in_windows(cal: dict[str, Any] | None, problems: list[str],
 
 def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before: dict[str, Any],
                          after: dict[str, Any] | None, run: TrackRun, run_after: TrackRun | None,
-                         figures: ReportFigures, windowed: str | None = None) -> Section:
+                         figures: ReportFigures, windowed: str | None = None,
+                         robot_name: str = "") -> Section:
     names = ", ".join((cal or {}).get("parameters", {})) or "its calibration parameters"
     blocks: list[Any] = [Paragraph(
         f"The robot's systematic errors ({names}) are fitted to this log's truth (odomkit "
-        "calibrate); the metrics are then computed again with the corrected robot. On the log it was "
-        "fitted to, 'after' is optimistic: check it on another log.")]
+        f"calibrate), starting from {_robot_file(robot_name)}; the metrics are then computed again with the "
+        "corrected robot. On the log it was fitted to, 'after' is optimistic: check it on another log.")]
     if windowed is not None:
         blocks.append(Paragraph(windowed))
     if cal is None or after is None:
-        blocks.append(Paragraph(f"No calibration: {problem}", "warning"))
+        # _attempt leads the problem with "the calibration: ", which the paragraph says already.
+        said = (problem or "").removeprefix("the calibration: ")
+        blocks.append(Paragraph(f"No calibration: {said}. The sections below use {_robot_file(robot_name)} "
+                                "uncalibrated, its parameters as they are.", "warning"))
         return Section("calibration", "Calibration before and after", tuple(blocks))
     params = cal.get("parameters", {})
     errors = cal.get("std_errors", {})
@@ -497,10 +520,11 @@ def _which_to_quote(own: dict[str, float], between: dict[str, float], clusters: 
 
 def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dict[str, float],
                    ev: dict[str, Any], ev_fit: dict[str, Any] | None, figures: ReportFigures,
-                   unscored: str | None = None) -> Section:
+                   unscored: str | None = None, used: str = "the calibrated robot") -> Section:
+    """``used`` names the robot the noise was fitted with (:func:`_robot_used`)."""
     blocks: list[Any] = [Paragraph(
         "The noise variances that make the window ends most likely (maximum likelihood, odomkit "
-        "fit-noise), with their 95 % profile-likelihood intervals, fitted with the calibrated robot. "
+        f"fit-noise), with their 95 % profile-likelihood intervals, fitted with {used}. "
         "The honesty test with the fitted noise is in-sample here (fitted and scored on the same windows): "
         "score it on another log (odomkit evaluate) before trusting it.")]
     if fit is None:
@@ -522,8 +546,10 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
         blocks.append(Paragraph(f"The fitted noise could not be scored: {unscored}", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
     n = ev_fit["windows"]
-    # The robot file's noise beside the fitted, where it has one (ev's coverage null: none).
-    guess = [] if ev.get("coverage") is None else _coverage_rows(ev, "robot file's noise")
+    # The robot file's noise beside the fitted, where it has one (ev's coverage null, or no window
+    # end scored: a robot file without [noise], scored for its errors alone).
+    guess = ([] if ev.get("coverage") is None or not ev.get("windows") else
+             _coverage_rows(ev, "robot file's noise"))
     fitted = _coverage_rows(ev_fit, "fitted noise (in-sample)", "fitted.")
     # The two noises may score different ends: a position-only truth's fitted noise can leave
     # out starts whose heading its fixes no longer support (odomkit.truth.MAX_HEADING_SIGMA).
@@ -540,18 +566,20 @@ def _noise_section(fit: dict[str, Any] | None, problem: str | None, guessed: dic
                                 "test it.", "warning"))
         return Section("noise", "The fitted noise", tuple(blocks))
     blocks += _verdicts(ev_fit, "with the fitted noise (in-sample), ")
+    which = "the robot file's and the fitted noise" if guess else "the fitted noise"
     fig = figures.draw(("draw_reliability",), lambda plot, ax: plot.draw_reliability(
         ax[0], {label: cover for label, cover, _ in columns},
-        n_scored=n), "Reliability diagram of the robot file's and the fitted noise: predicted probability "
-        "against the observed fraction of window ends inside.",
+        n_scored=n), f"Reliability diagram of {which}: predicted probability against the observed fraction "
+        "of window ends inside.",
         "Reliability diagram, guessed and fitted noise", size=(5.6, 4.6))
     blocks += [f for f in (fig,) if f is not None]
     return Section("noise", "The fitted noise", tuple(blocks))
 
 
-def _ros_section(snippets: list[Code], notes: list[str]) -> Section:
+def _ros_section(snippets: list[Code], notes: list[str], what: str) -> Section:
+    """``what`` names the robot and the noise the snippets come from."""
     blocks: list[Any] = [Paragraph(
-        "Parameter snippets for ROS 2, from the calibrated robot and the fitted noise where there are some. "
+        f"Parameter snippets for ROS 2, from {what}. "
         "Paste them into the node's parameter file; the comments say where each number holds.")]
     blocks += snippets
     blocks += [Paragraph(n, "note") for n in notes]
@@ -579,12 +607,13 @@ def _without_truth_section(robot_type: str = "diff", bag: bool = False) -> Secti
 
 
 def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: str,
-              amcl_yaml: str | None, notes: list[str], said: bool = False) -> list[Code]:
+              amcl_yaml: str | None, notes: list[str], said: bool = False, geometry: str = "") -> list[Code]:
     """The controller YAML (with the twist covariance of the noise), nav2 AMCL's α's and the
     final pose covariance in ROS's 6×6 layout (robot_localization reads it from odometry).
 
     ``robot_file`` (default ``robot_path``) gives the geometry and the noise, which ``what``
     names ("the calibrated robot and the fitted noise"); the wheel radius is ``robot_path``'s.
+    ``geometry`` names the robot nav2 AMCL's α's were fitted with.
     A pose covariance past the first-order limit gets a note (:func:`_ros_covariance_note`;
     ``said``: the track's own warning has said what that means)."""
     from odomkit.calibrate.export import twist_covariance
@@ -615,7 +644,8 @@ def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: st
                         "speed)")
         out.append(Code(ros2_controller_yaml(robot, radius, twist=twist), caption))
     if amcl_yaml is not None:
-        out.append(Code(amcl_yaml, "nav2 AMCL: the motion-model α's fitted to this log (odomkit fit-amcl)"))
+        out.append(Code(amcl_yaml, "nav2 AMCL: the motion-model α's fitted to this log"
+                        + (f" with {geometry}" if geometry else "") + " (odomkit fit-amcl)"))
     if run.track.cov is not None:
         cov = ros_pose_covariance(run.track.cov[-1])
         rows = "\n".join("  " + ", ".join(f"{v:11.4g}" for v in cov[i:i + 6]) + ("," if i < 30 else "")
@@ -734,14 +764,15 @@ def run_report(
         # (odomkit.evaluate.evaluate_track), which the page does not show: its honesty
         # section scores window ends.
         summary = run.summary(note_nees=False)
-        sections = [_track_section(run, figures, summary)]
+        sections = [_track_section(run, figures, summary, robot_path.name)]
         if run.truth is None:
             ros_notes: list[str] = []
-            snippets = _snippets(run, robot_path, None, "the robot file", None, ros_notes,
+            what = f"{_robot_file(robot_path.name)} and its noise"
+            snippets = _snippets(run, robot_path, None, what, None, ros_notes,
                                  said=_first_order_from(run) is not None)
             kind, bag = run.track.steps.robot.type_name, run.log.meta.get("format") == "bag"
-            sections += [_without_truth_section(kind, bag), _ros_section(snippets, ros_notes)]
-            sections.insert(0, _summary_section(run, None, None, None, None, None))
+            sections += [_without_truth_section(kind, bag), _ros_section(snippets, ros_notes, what)]
+            sections.insert(0, _summary_section(run, None, None, None, None, None, robot_path.name))
         else:
             with stage(progress, _TRUTH_STEPS, "report: scoring, calibration, noise fit, AMCL") as step:
                 summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options,
@@ -799,10 +830,13 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
     file_noise = bool(file_models)
     scored, ev = _scored(log, robot, options, log_options, window if file_noise else None, method,
                          start_said=start_said)
-    sections = [_errors_section(ev), _honesty_section(scored, ev, window, figures) if file_noise else
+    name = robot.name
+    sections = [_errors_section(ev, name), _honesty_section(scored, ev, window, figures, name)
+                if file_noise else
                 Section("honesty", "How honest: the windowed test of the covariance", (Paragraph(
-                    "The robot file has no [noise] table, so it predicts no covariance to test; the noise "
-                    "fitted to this log is tested under 'The fitted noise' (in-sample).", "warning"),))]
+                    f"The robot file ({name}) has no [noise] table, so it predicts no covariance to test; "
+                    "the noise fitted to this log is tested under 'The fitted noise' (in-sample).",
+                    "warning"),))]
     step.advance()
     problems: list[str] = []
     with tempfile.TemporaryDirectory(prefix="odomkit-report-") as tmp:
@@ -838,7 +872,8 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                                   truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])),
                                   note_first_order=False)
         sections.append(_calibration_section(cal, problems[-1] if problems else None, ev, after, run,
-                                             run_after, figures, windowed))
+                                             run_after, figures, windowed, name))
+        used = _robot_used(name, cal is not None)
         step.advance()
         base = cal_path if cal is not None else robot
         before = len(problems)
@@ -867,7 +902,7 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         # heading_sigma, time_sigma), which fit-noise fits as truth_sigma, ... and writes back there.
         guessed.update({f"truth_{k}": v for k, v in read_truth_table(robot).items() if k in TRUTH_SIGMAS})
         unscored = problems[-1] if fit is not None and scored_fit is None and problems else None
-        sections.append(_noise_section(fit, fit_problem, guessed, ev, ev_fit, figures, unscored))
+        sections.append(_noise_section(fit, fit_problem, guessed, ev, ev_fit, figures, unscored, used))
         step.advance()
         amcl = _attempt("nav2 AMCL's α's", lambda: fit_amcl_files(
             [log], [options], robot_path=base, log_options=log_options, method=method,
@@ -875,18 +910,18 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         amcl_yaml = None if amcl is None else (folder / "amcl.yaml").read_text(encoding="utf-8")
         step.advance()
         notes: list[str] = []
-        geometry = "the calibrated robot" if cal is not None else "the robot file"
         source, noise = (fit_path, "the fitted noise") if fit else (base, "the robot file's noise")
-        snippets = _snippets(run_after or run, robot, source, f"{geometry} and {noise}", amcl_yaml, notes,
-                             said=_first_order_from(run) is not None)
-    sections.append(_ros_section(snippets, notes))
-    sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit))
+        what = f"{used}, and {noise}"
+        snippets = _snippets(run_after or run, robot, source, what, amcl_yaml, notes,
+                             said=_first_order_from(run) is not None, geometry=used)
+    sections.append(_ros_section(snippets, notes, what))
+    sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit, name))
     return sections
 
 
 def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, Any] | None,
                      after: dict[str, Any] | None, fit: dict[str, Any] | None,
-                     ev_fit: dict[str, Any] | None) -> Section:
+                     ev_fit: dict[str, Any] | None, robot_name: str) -> Section:
     cov = run.track.cov
     rows: list[tuple[str | Cell, ...]] = [("distance travelled", number(run.track.path_length, "m"))]
     if cov is not None:
@@ -917,8 +952,11 @@ def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, An
             rows.append(("heading inside its 95 % interval, fitted noise (in-sample)",
                          number(ev_fit["coverage_heading"]["0.95"], key="fitted.coverage_heading.0.95",
                                 decimals=2)))
+    which = (f"Everything here uses {_robot_file(robot_name)}." if ev is None else
+             f"The track, the error metrics and the honesty test use {_robot_file(robot_name)}; the fitted "
+             f"noise, nav2 AMCL's α's and the ROS parameters use {_robot_used(robot_name, cal is not None)}.")
     return Section("summary", "At a glance", (
         Paragraph("The headline numbers; each section below explains one of them and shows where it comes "
-                  "from."),
+                  f"from. {which}"),
         Table(("", "value"), tuple(rows)),
     ))
