@@ -27,7 +27,7 @@ __all__ = ["heading_by_alignment", "heading_from_positions", "heading_span", "he
            "HEADING_SIGMA_SOUGHT", "longest_gap", "MAX_HEADING_SIGMA", "WIDEST_HEADING_SPAN",
            "GROSS_HEADING_OFF", "heading_against_motion", "heading_off_motion", "HEADING_OFF_CAUSES",
            "implausible_speed", "latlon_as_metres", "BURST_RATIO", "stamp_bursts", "bursts_note",
-           "MAX_RESIDUAL_SIGMAS", "clock_unit_hint", "no_overlap", "scatter_sigma",
+           "MAX_RESIDUAL_SIGMAS", "BAG_TIME_HINT", "clock_unit_hint", "no_overlap", "scatter_sigma",
            "start_heading", "start_pose", "Truth",
            "truth_at", "truth_from_log", "truth_noise", "TruthSamples"]
 
@@ -231,6 +231,12 @@ def clock_unit_hint(log_span: float, truth_span: float) -> str | None:
     return None
 
 
+#: What mends a bag timed by its messages' header stamps that misses its truth's clock
+#: (:func:`no_overlap`; a bag's truth topic on another clock: :func:`odomkit.io.bag.read_bag`).
+BAG_TIME_HINT = ("--bag-time, which times the bag by when it received its messages: their header stamps "
+                 "may run on the robot's own clock")
+
+
 def no_overlap(truth: Truth, times: ArrayLike, log_clock: object = None) -> str:
     """One line on a truth that covers fewer than two of ``times`` (the log's rows): both
     spans, and the options that move or widen the truth's; where one span is a time unit's
@@ -246,8 +252,7 @@ def no_overlap(truth: Truth, times: ArrayLike, log_clock: object = None) -> str:
         hint = clock_unit_hint(float(t[-1] - t[0]), float(truth.t[-1] - truth.t[0]))
         if hint is not None:
             return f"{spans} do not overlap in time; {hint}"
-        bag = ("; or --bag-time, which times the bag by when it received its messages: their header stamps "
-               "may run on the robot's own clock" if log_clock == "header" else "")
+        bag = f"; or {BAG_TIME_HINT}" if log_clock == "header" else ""
         return f"{spans} do not overlap in time; check --truth-time-unit and --truth-time-offset{bag}"
     return (f"{spans} overlap, but the log's rows there fall in gaps between fixes longer than "
             "--max-gap; check --max-gap, --truth-time-unit and --truth-time-offset")

@@ -44,7 +44,11 @@ both figures: a holonomic (mecanum, omni) base's track would be wrong without a 
 **Time.** Each message's header stamp (``--bag-time``: the time the bag received it).
 Stamps that go backwards are an error naming the message, and so are stamps that never
 change (a publisher that does not fill them in). Times are seconds as in the bag (epoch
-seconds for a real robot), as a truth file (TUM) has them.
+seconds for a real robot), as a truth file (TUM) has them. Each publisher stamps on its own
+clock: topics that share fewer than two of the first one's messages are an error naming each
+one's span, how far apart they start and what mends it (:func:`_apart`: ``--bag-time``, or
+for the truth topic ``--truth-time-offset``, which moves its stamps before they are
+interpolated at the rows).
 
 **Several topics** (``--topic /odom --topic /imu``): the first topic's messages are the
 log's rows; every other topic is resampled at those times, and a channel given by two
@@ -109,7 +113,7 @@ import warnings
 import zlib
 from collections.abc import Iterator, Sequence
 from contextlib import ExitStack, contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -119,9 +123,9 @@ from numpy.typing import NDArray
 from odomkit.angles import unwrap_angle
 from odomkit.errors import InputError, OdomkitError
 from odomkit.kinematics import unicycle_moving
-from odomkit.log import INCREMENT_CHANNELS, OdometryLog
+from odomkit.log import INCREMENT_CHANNELS, OdometryLog, clock_text
 from odomkit.progress import NO_PROGRESS, Progress, stage
-from odomkit.truth import Truth, bursts_note
+from odomkit.truth import BAG_TIME_HINT, Truth, bursts_note
 
 __all__ = ["BagOdometry", "MESSAGE_TYPES", "bag_root", "bag_topics", "is_bag", "parse_truth_frame",
            "read_bag", "read_bag_odometry", "read_bag_truth", "require_rosbags", "TRUTH_TYPES"]
@@ -941,11 +945,20 @@ _LOST_SHARE = 0.01
 _LOST_SECONDS = 1.0
 
 
-def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
+def _merge(streams: list[_Stream], source: str, truth: str | None = None, receive_time: bool = False,
+           offset: float = 0.0) -> tuple[NDArray[np.float64], dict[str, NDArray[np.float64]]]:
+    """The log's times and channels: the first stream's rows that every other one spans, the
+    others resampled there (module docstring); ``truth``, ``receive_time`` and ``offset`` (the
+    truth topic, ``--bag-time``, ``--truth-time-offset``) for the error where they share fewer
+    than two rows (:func:`_apart`)."""
     primary = streams[0]
+    spans = [(other, (primary.ns >= other.ns[0]) & (primary.ns <= other.ns[-1])) for other in streams[1:]]
     keep = np.ones(primary.ns.size, dtype=bool)
-    for other in streams[1:]:
-        inside = (primary.ns >= other.ns[0]) & (primary.ns <= other.ns[-1])
+    for _, inside in spans:
+        keep &= inside
+    if keep.sum() < 2:
+        raise _apart(streams, source, truth, receive_time, offset)
+    for other, inside in spans:
         lost = int((~inside).sum())
         # Topics seldom start and stop in the same instant: a message or so at either end is
         # no news (a Husky bag's 1 of 3952, 0.1 s); more than 1 % of them, or of a second, is.
@@ -956,10 +969,6 @@ def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], di
             warnings.warn(f"{source}: {lost} of {inside.size} {primary.topic} messages fall "
                           f"outside {other.topic}'s time span ({span[0]:.9f}..{span[1]:.9f} s) and "
                           "are left out", stacklevel=3)
-        keep &= inside
-    if keep.sum() < 2:
-        raise InputError(f"topics {', '.join(s.topic for s in streams)} overlap in fewer than two "
-                         f"{primary.topic} messages", source=source)
     first, last = np.flatnonzero(keep)[[0, -1]]
     origin = primary.ns[first]
     # Resampled on times from one origin: epoch seconds as floats are only good to 0.24 µs.
@@ -977,6 +986,39 @@ def _merge(streams: list[_Stream], source: str) -> tuple[NDArray[np.float64], di
                                 (stream.topic, channel), source)
             channels[name], given_by[name] = channel, stream.topic
     return _seconds(primary.ns[first:last + 1]), channels
+
+
+def _apart(streams: list[_Stream], source: str, truth: str | None, receive_time: bool,
+           offset: float) -> InputError:
+    """The error of topics that share fewer than two of the first one's messages: each one's
+    span (clock text, as :func:`odomkit.truth.no_overlap` says a truth file's) and, where one
+    misses the first's span altogether, how far apart the two start and what mends it:
+    ``--bag-time`` (header stamps on two clocks: a user study's F1TENTH car stamped its
+    odometry on its own clock and its motion capture 8328 s earlier, in one bag), and for
+    the truth topic (``truth``) the ``--truth-time-offset`` their first stamps suggest, on
+    top of the ``offset`` it was moved by already."""
+    primary = streams[0]
+
+    def span(stream: _Stream) -> str:
+        start, end = _seconds(stream.ns[[0, -1]])
+        return f"{stream.topic} ({clock_text(start)}..{clock_text(end)} s)"
+
+    moved = f"; {truth} moved by --truth-time-offset {offset:g}" if offset and truth else ""
+    spans = f"topics {', '.join(span(s) for s in streams)}{moved}"
+    missed = [s for s in streams[1:] if s.ns[0] > primary.ns[-1] or s.ns[-1] < primary.ns[0]]
+    if not missed:
+        return InputError(f"{spans} overlap in fewer than two {primary.topic} messages", source=source)
+    far = max(missed, key=lambda s: abs(int(s.ns[0]) - int(primary.ns[0])))
+    apart = (int(far.ns[0]) - int(primary.ns[0])) / 1e9
+    said = (f"{spans} do not overlap in time: {far.topic} starts {abs(apart):.3f} s "
+            f"{'after' if apart > 0 else 'before'} {primary.topic}, its stamps on another clock")
+    hints = [] if receive_time else [BAG_TIME_HINT]
+    if far.topic == truth:
+        hints.append(f"--truth-time-offset {offset + apart:.3f}, which puts {truth}'s fixes on "
+                     f"{primary.topic}'s clock (a fix stamped t is the pose at t − offset; this is their "
+                     "first stamps' difference, the clocks' offset give or take how far apart the topics "
+                     "began)")
+    return InputError(said + (f"; try {', or '.join(hints)}" if hints else ""), source=source)
 
 
 #: The windows [s] over which a replaced channel and its replacement are summed before the
@@ -1048,7 +1090,7 @@ def _check_replaced(name: str, kind: str, rows: NDArray[np.float64], old: tuple[
 def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str] = (),
              receive_time: bool = False, truth_topic: str | None = None, *,
              progress: Progress = NO_PROGRESS, imu_up: str = "+z",
-             truth_frame: str | None = None) -> OdometryLog:
+             truth_frame: str | None = None, truth_time_offset: float = 0.0) -> OdometryLog:
     """Read a ROS bag's odometry topics as a log (module docstring: messages, time, topics).
 
     Parameters
@@ -1073,6 +1115,13 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     truth_frame : ``"PARENT:CHILD"`` (``--truth-frame``): the ``/tf`` transforms that are the
         truth, where ``truth_topic`` is a TFMessage topic (:func:`parse_truth_frame`); None:
         the topic's only frame pair
+    truth_time_offset : how late ``truth_topic``'s clock runs against the log's [s]
+        (``--truth-time-offset``): a fix stamped t is the pose at log time t − offset. A pose
+        topic's stamps are moved so before they are interpolated at the rows (a motion capture
+        stamped on another clock than the odometry, in one bag: a user study's was 8328 s
+        ahead), GPS fixes (kept at their own times) likewise; ``meta["truth_time_offset"]``
+        then records it, and :func:`odomkit.workflows.truth.load_truth` does not move the
+        log's own truth again
 
     Returns
     -------
@@ -1087,7 +1136,10 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
         are), a truth topic that is one of the log's topics, stamps that go backwards or are
         zero, values that are not finite, rosbags not installed; a ``truth_frame`` without a
         TFMessage truth topic, or not on it, or a TFMessage truth topic of several frame pairs
-        without one; a ``tf_static`` truth topic.
+        without one; a ``tf_static`` truth topic; a ``truth_time_offset`` that is not a finite
+        number or comes without a truth topic; topics that share fewer than two of the first
+        one's messages (each one's span, and where they miss each other altogether, how far
+        apart they start and the ``--bag-time`` or ``--truth-time-offset`` that mends it).
 
     Warns
     -----
@@ -1100,6 +1152,11 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
     path = Path(path)
     source = str(path)
     frame = None if truth_frame is None else parse_truth_frame(truth_frame)
+    if not isinstance(truth_time_offset, int | float) or not math.isfinite(truth_time_offset):
+        raise InputError(f"--truth-time-offset must be a finite number of seconds, got {truth_time_offset!r}")
+    if truth_time_offset and not truth_topic:
+        raise InputError("--truth-time-offset moves a bag's truth topic here: give it with --truth-topic")
+    shift = round(truth_time_offset * 1e9)  # [ns]: a fix stamped t is the pose at log time t − offset
     with _open(path) as reader:
         available = _topics(reader, source)
         truth = None if not truth_topic else _find_topic(available, truth_topic, source, TRUTH_TYPES)
@@ -1117,14 +1174,18 @@ def read_bag(path: str | Path, topics: Sequence[str] = (), joints: Sequence[str]
                        for c in chosen]
             if truth is not None and fixes:
                 gps, stated = _fix_truth(reader, truth, receive_time, source, progress)
+                if shift:
+                    gps = replace(gps, t=gps.t - truth_time_offset)
             elif truth is not None:
-                streams.append(_truth_stream(reader, truth, available[truth], receive_time, source,
-                                             progress, frame))
-    t, channels = _merge(streams, source)
+                stream = _truth_stream(reader, truth, available[truth], receive_time, source, progress, frame)
+                streams.append(replace(stream, ns=stream.ns - shift) if shift else stream)
+    t, channels = _merge(streams, source, truth, receive_time, truth_time_offset)
     poses = None
     if truth is not None and not fixes:
         poses = np.column_stack([channels.pop(c) for c in ("gt_x", "gt_y", "gt_theta")])
     meta: dict[str, object] = {"format": "bag", "topics": chosen, "time": "bag" if receive_time else "header"}
+    if shift:
+        meta["truth_time_offset"] = float(truth_time_offset)
     if gps is not None:
         meta["truth"] = gps
         if stated is not None:

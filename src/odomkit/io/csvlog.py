@@ -407,18 +407,20 @@ def read_csv_log(
     text = read_text(path)
     try:
         return _log_of_text(path, select_record(text, source, record), columns, seconds, cumulative,
-                            wrap_bits, example, record)
+                            wrap_bits, example, record, text)
     except InputError as exc:
         raise record_error(exc, text, record) from None
 
 
 def _log_of_text(path: Path, text: str, columns: Mapping[str, str] | Sequence[str] | None, seconds: float,
-                 cumulative: bool, wrap_bits: int | None, example: str, record: str | None) -> OdometryLog:
-    """The log in ``text``, the lines of the file that :func:`read_csv_log` reads."""
+                 cumulative: bool, wrap_bits: int | None, example: str, record: str | None,
+                 whole: str) -> OdometryLog:
+    """The log in ``text``, the lines of the file (``whole``) that :func:`read_csv_log` reads."""
     source = str(path)
     layout = sniff_layout(text, source)
     if record is not None:
-        check_record_columns(columns, layout.ncols, record, source)
+        check_record_columns(columns, layout.ncols, record, source, whole=whole, selected=text,
+                             delimiter=layout.delimiter)
     given = columns
     if columns is None:
         commented = _commented_names(text, layout.ncols) if layout.header is None else None

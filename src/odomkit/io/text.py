@@ -468,10 +468,18 @@ def select_record(text: str, source: str, record: str | None, kind: str = "log")
     return "\n".join(lines)
 
 
-def check_record_columns(columns: object, ncols: int, record: str, source: str, kind: str = "log") -> None:
+def check_record_columns(columns: object, ncols: int, record: str, source: str, kind: str = "log", *,
+                         whole: str | None = None, selected: str | None = None,
+                         delimiter: str | None = None) -> None:
     """Refuse, saying why, columns for a read of one record type (:func:`select_record`)
-    that cannot be meant: a map of header names (the record's lines have no header), or one
-    more than the fields after the tag, led by ``_`` (the tag counted, which is dropped).
+    that cannot be meant: a map of header names (the record's lines have no header), or a
+    leading ``_`` that counts the tag, which is dropped: one more column than the fields
+    after the tag; given the texts, a ``record`` that leads every line of the file (the flag
+    then changes nothing but the count; without it the ``_`` skips the tag), or a skipped
+    field 1 that advances at every row over :data:`_STANDING` steps in a row where the named
+    time (``t``) stands still (a wheel's tick counter read as the clock: a user study's LEGO
+    robot log, ``M t left ... right``, tracked 278 poses "over 22.094 s" of left ticks), unless
+    field 1 is a message counter (whole steps of 1 as a rule).
 
     Parameters
     ----------
@@ -481,18 +489,67 @@ def check_record_columns(columns: object, ncols: int, record: str, source: str, 
     record : the record type read
     source : the file, for messages
     kind : "log" (``--record``, ``--columns``) or "truth" (``--truth-record``, ``--truth-columns``)
+    whole : the file's whole text as read (:func:`read_text`); None: not checked against it
+    selected : the text :func:`select_record` made of it, and ``delimiter`` its field separator
+        (:class:`TextLayout`); None: the fields are not looked at
     """
     flag, columns_flag = RECORD_FLAGS[kind], {"log": "--columns", "truth": "--truth-columns"}[kind]
     if isinstance(columns, Mapping):
         raise InputError(f"{flag} keeps lines without a header: name the columns in order in {columns_flag}, "
                          "counted from the field after the tag (e.g. t,speed,_,yaw_rate)", source=source)
-    if isinstance(columns, Sequence) and not isinstance(columns, str) and len(columns) > ncols and (
-            columns[0] == "_"):
-        shown = list(columns[1:])
-        while shown and shown[-1] == "_":
-            shown.pop()
-        raise InputError(f"{flag} {record.strip()} drops the tag: {columns_flag} counts from the field after "
-                         f"it; leave out the leading _ ({','.join(shown)})", source=source)
+    if not isinstance(columns, Sequence) or isinstance(columns, str) or not columns or columns[0] != "_":
+        return
+    shown = list(columns[1:])
+    while shown and shown[-1] == "_":
+        shown.pop()
+    word = record.strip()
+    said = f"{flag} {word} drops the tag: {columns_flag} counts from the field after it"
+    if len(columns) > ncols:
+        raise InputError(f"{said}; leave out the leading _ ({','.join(shown)})", source=source)
+    rows = [] if selected is None else [(n, split_fields(c, delimiter)) for n, c in content_lines(selected)]
+    if whole is not None and list(record_counts(whole)) == [word]:
+        first = ", ".join(fields[0] for _, fields in rows[:3] if fields)
+        raise InputError(f"{said}; its leading _ skips field 1 ({first}, ...), not the tag; give "
+                         f"{columns_flag} {','.join(shown)}, or leave out {flag} (every line is led by "
+                         f"{word}) and keep the _ for the tag", source=source)
+    time = list(columns).index("t") if "t" in columns else None
+    if time is not None and (standing := _standing_time(rows, time)) is not None:
+        a, b = standing
+        advance = ", ".join(fields[0] for _, fields in rows[a:a + 4])
+        raise InputError(f"{said}; its leading _ skips field 1, which advances ({advance}, ...) over lines "
+                         f"{rows[a][0]}-{rows[b][0]}, where t (field {time + 1}) stands still at "
+                         f"{rows[a][1][time]}: a counter, not the time. If the _ was meant for the tag, "
+                         f"leave out the leading _ ({','.join(shown)})", source=source)
+
+
+#: Steps in a row over which a named time stands still while the field before it advances
+#: (:func:`check_record_columns`): a logger writes a line twice now and then (a LEGO robot's
+#: log: 61 of 277 steps, never two in a row), a counter at rest stands for as long as the robot.
+_STANDING = 3
+
+
+def _standing_time(rows: list[tuple[int, list[str]]], time: int) -> tuple[int, int] | None:
+    """The first and last row of the first stretch of more than :data:`_STANDING` steps where
+    field ``time`` stands still and field 0 advances at every step, in rows whose field 0
+    never decreases and is no message counter (every step a whole number, most of them 1);
+    None where there is none, or a field is missing or not a number."""
+    try:
+        pairs = [(float(fields[0]), float(fields[time])) for _, fields in rows
+                 if is_number(fields[0]) and is_number(fields[time])]
+    except IndexError:
+        return None
+    if len(pairs) < len(rows) or len(pairs) < _STANDING + 1:
+        return None
+    steps = [(b[0] - a[0], b[1] - a[1]) for a, b in itertools.pairwise(pairs)]
+    ones = sum(s == 1 for s, _ in steps)
+    if any(s < 0 for s, _ in steps) or (all(s == int(s) for s, _ in steps) and 2 * ones > len(steps)):
+        return None
+    run = 0
+    for i, (ahead, still) in enumerate(steps):
+        run = run + 1 if ahead > 0 and still == 0 else 0
+        if run >= _STANDING and (i + 1 == len(steps) or not (steps[i + 1][0] > 0 and steps[i + 1][1] == 0)):
+            return i + 1 - run, i + 1
+    return None
 
 
 def mixed_records_at(text: str, source: str, line: int | None, kind: str = "log") -> InputError | None:

@@ -680,17 +680,18 @@ def read_truth(
     text = read_text(path, kind="truth file")
     try:
         return _truth_of_text(path, select_record(text, str(path), record, "truth"), fmt, spec, seconds,
-                              sigma, record, up)
+                              sigma, record, up, text)
     except InputError as exc:
         raise record_error(exc, text, record, "truth") from None
 
 
 def _truth_of_text(path: Path, text: str, fmt: str, spec: dict[str, str] | list[str] | None, seconds: float,
-                   sigma: float, record: str | None, up: str = "+z") -> Truth:
-    """The truth in ``text``, the lines of the file that :func:`read_truth` reads."""
+                   sigma: float, record: str | None, up: str = "+z", whole: str | None = None) -> Truth:
+    """The truth in ``text``, the lines of the file (``whole``) that :func:`read_truth` reads."""
     layout = sniff_layout(text, str(path))
     if record is not None:
-        check_record_columns(spec, layout.ncols, record, str(path), "truth")
+        check_record_columns(spec, layout.ncols, record, str(path), "truth", whole=whole, selected=text,
+                             delimiter=layout.delimiter)
     if isinstance(spec, list) and layout.header is not None and fmt in ("auto", "csv"):
         read = [layout.header[i] for i, key in enumerate(spec) if key != "_" and i < layout.ncols]
         if read and all(map(is_number, read)):

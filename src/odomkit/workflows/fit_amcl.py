@@ -63,7 +63,7 @@ def _track_poses(path: Path) -> OdometryPoses:
 
 
 # The log options a bag's Odometry topic uses without a robot file.
-_BAG_FLAGS = {"--topic", "--bag-time", "--truth-topic", "--truth-frame"}
+_BAG_FLAGS = {"--topic", "--bag-time", "--truth-topic", "--truth-frame", "--truth-time-offset"}
 
 
 def _bag_poses(path: Path, options: LogOptions) -> OdometryPoses:
@@ -81,7 +81,8 @@ def _bag_poses(path: Path, options: LogOptions) -> OdometryPoses:
         if topic is None:
             topic = next(n for n, t in bag_topics(path).items() if t == "nav_msgs/msg/Odometry")
         own = truth_from_log(read_bag(path, (topic,), (), options.bag_time, options.truth_topic,
-                                      truth_frame=options.truth_frame))
+                                      truth_frame=options.truth_frame,
+                                      truth_time_offset=options.truth_time_offset))
     return OdometryPoses(odom.t, odom.poses, own, str(path))
 
 

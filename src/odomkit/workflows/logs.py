@@ -138,6 +138,9 @@ class LogOptions:
     truth_frame : ``"PARENT:CHILD"``, the transforms of a ``tf2_msgs/TFMessage`` truth topic
         (``/tf``) that are the truth, e.g. ``"world:base_link"`` (bag only; a leading '/' of
         either frame ignored; :func:`odomkit.io.bag.parse_truth_frame`)
+    truth_time_offset : how late ``truth_topic``'s clock runs against the log's [s]: its stamps
+        are moved by it before they are interpolated at the rows (bag only, with ``truth_topic``;
+        :func:`odomkit.workflows.truth.with_truth_topic` moves ``--truth-time-offset`` here)
     """
 
     format: str = "auto"
@@ -155,6 +158,7 @@ class LogOptions:
     record: str | None = None
     imu_up: str = "+z"
     truth_frame: str | None = None
+    truth_time_offset: float = 0.0
 
     def __post_init__(self) -> None:
         if self.span is not None:
@@ -172,6 +176,12 @@ class LogOptions:
             seconds_per_unit(self.time_unit, "--time-unit")
         if isinstance(self.decimate, bool) or not isinstance(self.decimate, int) or self.decimate < 1:
             raise InputError(f"--decimate must be a positive integer, got {self.decimate!r}")
+        offset = self.truth_time_offset
+        if isinstance(offset, bool) or not isinstance(offset, int | float) or not math.isfinite(offset):
+            raise InputError(f"--truth-time-offset must be a finite number of seconds, got {offset!r}")
+        if offset and self.truth_topic is None:
+            raise InputError("truth_time_offset moves a bag's truth topic (truth_topic); a truth file's "
+                             "clock or a log's gt_* columns are moved by TruthOptions.time_offset")
         if self.truth_frame is not None:
             from odomkit.io.bag import parse_truth_frame  # here: no numpy for --help
 
@@ -303,7 +313,8 @@ def load_log(path: str | Path, robot: Robot, options: LogOptions | None = None, 
 
         options.check_format(fmt, str(path))
         log = read_bag(path, options.topic, options.joints, options.bag_time, options.truth_topic,
-                       progress=progress, imu_up=options.imu_up, truth_frame=options.truth_frame)
+                       progress=progress, imu_up=options.imu_up, truth_frame=options.truth_frame,
+                       truth_time_offset=options.truth_time_offset)
     else:
         require_log_file(path)
         options.check_format(fmt, str(path))

@@ -252,10 +252,20 @@ def applied_clock(options: TruthOptions, log: OdometryLog | None) -> float:
     """The clock offset [s] :func:`load_truth` moves the truth by: ``time_offset``, and for the
     log's own truth on its own clock (a bag's GPS topic, ``meta["truth"]``) the robot file's
     offset too where none was given (``file_clock``; calibrate fitted it against those fixes,
-    and a user study's calibrated Husky scored 20.7 m ATE without it, 19.2 m with it)."""
+    and a user study's calibrated Husky scored 20.7 m ATE without it, 19.2 m with it). Zero
+    for a bag's own truth topic that :func:`odomkit.io.bag.read_bag` moved when it read it
+    (``meta["truth_time_offset"]``, :func:`with_truth_topic`); another ``time_offset`` beside
+    that one is an :class:`InputError`."""
     from odomkit.truth import Truth
 
     offset = options.time_offset or 0.0
+    moved = None if options.path is not None or log is None else log.meta.get("truth_time_offset")
+    if isinstance(moved, float) and log is not None:  # the bag's truth topic, moved when read
+        if options.time_offset not in (None, moved):
+            raise InputError(f"the log's truth topic was moved by {moved:g} s when it was read "
+                             f"(LogOptions.truth_time_offset); a time_offset of {options.time_offset:g} s "
+                             "would move it again: give the offset once", source=log.source)
+        return 0.0
     if options.path is None and log is not None and isinstance(log.meta.get("truth"), Truth):
         offset += options.file_clock
     return offset
@@ -299,9 +309,16 @@ def with_truth_topic(log: LogOptions, truth: TruthOptions,
     ``--bag-time`` times both.
 
     Returns the log and truth options with ``truth_topic`` and ``truth_frame`` moved to
-    ``TruthOptions.topic`` and ``TruthOptions.frame`` in the first case, unchanged in the second.
+    ``TruthOptions.topic`` and ``TruthOptions.frame`` in the first case; in the second,
+    ``--truth-time-offset`` (``truth.time_offset``) given with a truth topic is copied to
+    ``LogOptions.truth_time_offset`` as well, which moves the topic's stamps before they are
+    interpolated at the log's rows (:func:`odomkit.io.bag.read_bag`: a motion capture on
+    another clock than the odometry in the same bag overlaps it only so). ``truth.time_offset``
+    stays, for what reports it (calibrate); :func:`applied_clock` does not move that truth again.
     """
     if not truth_given:
+        if log.truth_topic is not None and truth.time_offset:
+            return replace(log, truth_time_offset=truth.time_offset), truth
         return log, truth
     return (replace(log, truth_topic=None, truth_frame=None),
             replace(truth, topic=log.truth_topic, frame=log.truth_frame, bag_time=log.bag_time))
