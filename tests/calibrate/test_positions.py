@@ -193,8 +193,8 @@ def test_a_robot_file_far_off_is_refused_at_the_edge_of_the_plausible_range():
     robot, _ = read_robot(builtin_data_path("optiodom_diff.toml"))
     wrong = DiffDrive(robot.wheel_base * 4, robot.m_per_tick_left, robot.m_per_tick_right)
     log, truth = _builtin_square(2)
-    with pytest.raises(ModelError, match="edge of the plausible range for c_wheel_base "
-                       r"\(a scale or length: half to twice the robot file's value\)"):
+    with pytest.raises(ModelError, match="edge of the plausible range for c_wheel_base \\(c_wheel_base 0.5 "
+                       r"reached against the robot file's 1, the range half to twice it\)"):
         calibrate_positions([log], [truth], wrong)
 
 

@@ -79,7 +79,7 @@ def test_an_offset_beyond_the_fitted_range_is_refused_at_its_edge():
     assert MAX_TIME_OFFSET == 2.0
     log, truth = drive(1, 2.5, n=3000)
     with pytest.raises(ModelError, match=r"edge of the plausible range for .*truth time offset \(.*clock "
-                       r"offset ±2 s\)"):
+                       r"offset \+2 s reached, the range ±2 s\)"):
         calibrate_positions([log], [truth], NOMINAL_CAR, fit_time_offset=True)
 
 

@@ -497,7 +497,12 @@ def check_log(log: OdometryLog, robot: Robot, truth: Truth | None = None, *, spi
                              "the truth's (above), so what this log would pin cannot be told",
                              "mend the failures above, then check again"))
         return found
-    found += check_identifiable(log, robot, identifiability_sigma(truth, log, robot, max_gap))
+    # A parameter beyond its range is said with the calibrate --fix that pins the rest: the
+    # windows refitted with it held (only then, for such a parameter).
+    held = (None if truth is None else
+            lambda name: identifiability_sigma(truth, log, robot, max_gap, fixed=(name,)))
+    found += check_identifiable(log, robot, identifiability_sigma(truth, log, robot, max_gap),
+                                held_sigma=held)
     return found
 
 

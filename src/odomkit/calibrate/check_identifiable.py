@@ -15,7 +15,7 @@ thresholds and advice are kept here with it.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -43,12 +43,15 @@ class _Parameter:
 
     ``kind``: ``ratio`` a dimensionless correction near 1 (its standard error, shown in %),
     ``relative`` a length (its standard error over its value, in %), ``angle`` [rad],
-    ``rate`` [rad/s]; ``_LIMITS`` gives each kind's thresholds.
+    ``rate`` [rad/s]; ``_LIMITS`` gives each kind's thresholds. ``name``: the calibration
+    parameter it is, as ``calibrate --fix`` names it (None for a differential drive's E_s
+    and E_d, each a combination of both wheels' scales).
     """
 
     label: str
     kind: Literal["ratio", "relative", "angle", "rate"]
     advice: str
+    name: str | None = None
 
 
 # (unit shown, weak above, not identifiable above) of each kind of parameter. Scales and
@@ -76,21 +79,51 @@ _YAW_SCALE_ADVICE = ("turn more, both ways: spins in place or a square each way 
 _PARAMETERS: dict[str, tuple[_Parameter, _Parameter, _Parameter]] = {
     "diff": (_Parameter("wheel scale E_s", "ratio", _SCALE_ADVICE),
              _Parameter("wheel-diameter ratio E_d", "ratio", "drive straight runs, and turns both ways"),
-             _Parameter("wheel base E_b", "ratio", "turn more: spins in place or a square driven both ways")),
+             _Parameter("wheel base E_b", "ratio", "turn more: spins in place or a square driven both ways",
+                        "c_wheel_base")),
     "tricycle": (_Parameter("traction scale c_scale", "ratio",
-                            "drive longer straight runs away from the start"),
-                 _Parameter("steering offset", "angle", "drive straight and gentle curves both ways"),
-                 _Parameter("wheel-to-axle distance", "relative", "drive tight curves both ways")),
-    "car": (_Parameter("wheel scale c_scale", "ratio", _SCALE_ADVICE),
-            _Parameter("steering offset", "angle", "drive straight and gentle curves both ways"),
-            _Parameter("wheel base L", "relative", "drive tight curves both ways")),
-    "unicycle": (_Parameter("speed scale c_scale", "ratio", _SCALE_ADVICE),
-                 _Parameter("yaw-rate bias", "rate", _BIAS_ADVICE),
-                 _Parameter("yaw-rate scale", "ratio", _YAW_SCALE_ADVICE)),
-    "gyro": (_Parameter("metres per tick m_per_tick", "relative", _SCALE_ADVICE),
-             _Parameter("gyro bias", "rate", _BIAS_ADVICE),
-             _Parameter("gyro scale", "ratio", _YAW_SCALE_ADVICE)),
+                            "drive longer straight runs away from the start", "c_scale"),
+                 _Parameter("steering offset", "angle", "drive straight and gentle curves both ways",
+                            "steering_offset"),
+                 _Parameter("wheel-to-axle distance", "relative", "drive tight curves both ways",
+                            "wheel_to_axle")),
+    "car": (_Parameter("wheel scale c_scale", "ratio", _SCALE_ADVICE, "c_scale"),
+            _Parameter("steering offset", "angle", "drive straight and gentle curves both ways",
+                       "steering_offset"),
+            _Parameter("wheel base L", "relative", "drive tight curves both ways", "wheel_base")),
+    "unicycle": (_Parameter("speed scale c_scale", "ratio", _SCALE_ADVICE, "c_scale"),
+                 _Parameter("yaw-rate bias", "rate", _BIAS_ADVICE, "yaw_rate_bias"),
+                 _Parameter("yaw-rate scale", "ratio", _YAW_SCALE_ADVICE, "yaw_rate_scale")),
+    "gyro": (_Parameter("metres per tick m_per_tick", "relative", _SCALE_ADVICE, "m_per_tick"),
+             _Parameter("gyro bias", "rate", _BIAS_ADVICE, "gyro_bias"),
+             _Parameter("gyro scale", "ratio", _YAW_SCALE_ADVICE, "gyro_scale")),
 }
+
+
+def _plausible_reach(kind: str) -> float:
+    """How large a parameter's standard error may be, in the units its figure is shown in,
+    before ±1 standard error covers the whole range calibrate fits it in
+    (:func:`odomkit.calibrate.positions.scale_range` and
+    :data:`~odomkit.calibrate.positions.MAX_STEERING_OFFSET`, the fit's bounds): a scale or a
+    length may lie from half to twice the robot file's value, so its figure (relative to that
+    value) reaches 100 %; a steering offset ±0.5 rad about it. A bias has no range (inf)."""
+    from odomkit.calibrate.positions import MAX_STEERING_OFFSET, scale_range
+
+    if kind in ("ratio", "relative"):
+        low, high = scale_range(1.0)
+        return max(1.0 - low, high - 1.0)
+    if kind == "angle":
+        return MAX_STEERING_OFFSET
+    return math.inf
+
+
+def _range_text(kind: str) -> str:
+    """The range :func:`_plausible_reach` covers, as a message says it."""
+    from odomkit.calibrate.positions import MAX_STEERING_OFFSET
+
+    if kind == "angle":
+        return f"the robot file's value ±{MAX_STEERING_OFFSET:g} rad"
+    return "half to twice the robot file's value"
 
 
 def _design(log: OdometryLog, robot: CalibratedRobot
@@ -207,7 +240,7 @@ class AssumedSigma:
 
 
 def identifiability_sigma(truth: Truth | None, log: OdometryLog | None = None, robot: Robot | None = None,
-                          max_gap: float | None = 0.5) -> AssumedSigma:
+                          max_gap: float | None = 0.5, fixed: Collection[str] = ()) -> AssumedSigma:
     """The position noise the identifiability figures assume: the truth's stated σ, else the
     larger of the default and the fixes' own scatter (a 1 m GPS must not be taken for 5 mm),
     else (no truth) the default.
@@ -217,6 +250,9 @@ def identifiability_sigma(truth: Truth | None, log: OdometryLog | None = None, r
     truth's own noise treat every second's position error as independent, while the
     odometry's drift is correlated along the run, and came out 1000–10000 times below the
     spread of calibrations of a drive's two halves (TUC SLAM and smartLoc studies).
+    ``fixed`` names the calibration parameters held at the robot's values (as ``calibrate
+    --fix`` holds them; :func:`drift_sigma`): the windows' spread is then that of the
+    others' fits, in their order.
     """
     if truth is None:
         return AssumedSigma(_DEFAULT_SIGMA, "default")
@@ -228,14 +264,14 @@ def identifiability_sigma(truth: Truth | None, log: OdometryLog | None = None, r
             _DEFAULT_SIGMA, "default")
     if log is None or robot is None:
         return base
-    drift = drift_sigma(log, robot, truth, max_gap)
+    drift = drift_sigma(log, robot, truth, max_gap, fixed)
     if drift is not None and drift.value > _DRIFT_OVER_NOISE * base.value:
         return drift
     return base
 
 
-def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5
-                ) -> AssumedSigma | None:
+def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | None = 0.5,
+                fixed: Collection[str] = ()) -> AssumedSigma | None:
     """The position noise, correlated drift included, of the odometry against the truth.
 
     A quick trajectory fit of the kind the identifiability figures describe: the nominal
@@ -247,7 +283,9 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
     time of each axis' residual series, its positive lags summed, averaged over the axes), so
     the σ returned is σ·√(τ / 1 s): a least-squares fit's standard error to first order for
     errors correlated over τ (n/τ independent ones). None for a robot ``calibrate`` does not
-    calibrate, or fewer than 10 positions with truth.
+    calibrate, or fewer than 10 positions with truth. The parameters ``fixed`` names
+    (``calibrate --fix``) are held at the robot's values in every fit: the windows' σ is
+    then one per other parameter, in their order.
     """
     from odomkit.calibrate.positions import truth_spreads
     from odomkit.calibrate.residuals import CALIBRATED_ROBOTS, calibration_model, integrate_with_sensitivity
@@ -263,7 +301,10 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
         if np.count_nonzero(samples.valid) < 10:
             return None
         model = calibration_model(robot, [log])
-        free = [k for k, name in enumerate(model.names) if name not in model.unobservable]
+        free = [k for k, name in enumerate(model.names)
+                if name not in model.unobservable and name not in fixed]
+        if not free:
+            return None
         fixes = samples.poses[samples.valid, :2]
 
         def misfit(p: NDArray[np.float64], keep: NDArray[np.bool_] | None = None
@@ -356,8 +397,8 @@ def drift_sigma(log: OdometryLog, robot: Robot, truth: Truth, max_gap: float | N
         # understates it; the spread of the windows' own fits does not.
         windows: tuple[float, ...] = ()
         if batch is not None:
-            if robot.type_name == "diff":  # (c_left, c_right) shown as (E_s, E_d): either's
-                batch[:2] = [max(batch[:2])] * 2
+            if robot.type_name == "diff" and not {"c_left", "c_right"} & set(fixed):
+                batch[:2] = [max(batch[:2])] * 2  # (c_left, c_right) shown as (E_s, E_d): either's
             windows = tuple(max(value, x) for x in batch)
     return AssumedSigma(value, "drift", rms, tau_rows * period, windows, fitted, still)
 
@@ -429,8 +470,56 @@ def _between_windows(misfit: Callable[..., Any], start: NDArray[np.float64], fre
     return (sigmas if all(math.isfinite(x) for x in sigmas) else None), len(fits), still
 
 
-def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSigma | None = None
-                       ) -> list[Finding]:
+def _unique(A: NDArray[np.float64], i: int) -> float:
+    """‖r_i‖: the part of column ``i`` of ``A`` (2n, P) that the other columns cannot reproduce
+    (the residual of its least-squares projection on them)."""
+    others = np.delete(A, i, axis=1)
+    coef, *_ = np.linalg.lstsq(others, A[:, i], rcond=None)
+    return float(np.linalg.norm(A[:, i] - others @ coef))
+
+
+def _standard_error(unique: float, sigma: float, value: float) -> float:
+    """σ/‖r_i‖/value: a marginal standard error at σ per axis, relative to ``value`` (inf
+    where the other columns mimic the parameter's wholly: ``unique`` 0)."""
+    return math.inf if unique == 0 else sigma / unique / value
+
+
+def _shown(par: _Parameter, se: float) -> str:
+    """``±0.25 %`` or ``±3e-05 rad``: a standard error in its parameter's unit."""
+    unit = _LIMITS[par.kind][0]
+    return f"±{100 * se:.2g} %" if unit == "%" else f"±{se:.2g} {unit}"
+
+
+def _pinning_fixes(A: NDArray[np.float64], params: list[tuple[_Parameter, float]], beyond: list[int],
+                   assumed: AssumedSigma, held_sigma: Callable[[str], AssumedSigma] | None
+                   ) -> list[tuple[str, str]]:
+    """The parameters beyond their plausible range whose holding (``calibrate --fix NAME``)
+    leaves every other one pinned inside its own, each with those others' standard errors
+    (``"steering offset ±5e-06 rad, ..."``): its column left out of ``A``, each other's σ
+    from ``held_sigma(NAME)`` (the windows refitted with it held) where given, else its own."""
+    out = []
+    for i in beyond:
+        name = params[i][0].name
+        if name is None or len(params) < 2:
+            continue
+        held = held_sigma(name) if held_sigma is not None else None
+        reduced = np.delete(A, i, axis=1)
+        rest = [j for j in range(len(params)) if j != i]
+        said = []
+        for k, j in enumerate(rest):
+            par, value = params[j]
+            sigma = (held.for_parameter(k) if held is not None else assumed.for_parameter(j)).value
+            se = _standard_error(_unique(reduced, k), sigma, value)
+            if not se <= _plausible_reach(par.kind):
+                break
+            said.append(f"{par.label} {_shown(par, se)}")
+        else:
+            out.append((name, ", ".join(said)))
+    return out
+
+
+def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSigma | None = None, *,
+                       held_sigma: Callable[[str], AssumedSigma] | None = None) -> list[Finding]:
     """How well this log's motion pins each calibration parameter (trajectory fit).
 
     With J the sensitivity of the positions (about one a second) to the parameters, the
@@ -459,6 +548,19 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSig
     with time and a yaw-rate scale with turning: straight driving pins a bias and not the
     scale, a steady turn one way (turning in step with time) neither. A compass robot is
     not calibrated, so not checked.
+
+    A standard error so large that ±1 of it covers the whole range calibrate fits the
+    parameter in (:func:`_plausible_reach`: half to twice the robot file's value for a scale
+    or a length, ±:data:`~odomkit.calibrate.positions.MAX_STEERING_OFFSET` for a steering
+    offset) is "not identifiable from this drive", whatever σ it rests on (a calibration
+    runs it to the edge of that range, or anywhere in it): its advice names each ``calibrate
+    --fix NAME`` that holds one such parameter at the robot file's value and leaves every
+    other one inside its range, their standard errors recomputed without it at the σ
+    ``held_sigma(NAME)`` gives (:func:`identifiability_sigma` with ``fixed``: the windows'
+    spread with it held), or at their own σ where it is None. A comma2k19 RAV4's minute on a
+    highway pinned its steering offset to ±7e+02 rad and its wheel base to ±6.1e+07 % by the
+    windows' spread, said as weakly identified, while ``calibrate`` ran the wheel base to its
+    edge; with the wheel base held, the offset is pinned.
     """
     from odomkit.calibrate.residuals import CALIBRATED_ROBOTS
 
@@ -491,14 +593,16 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSig
             "time alone, which understates a heading's random walk",
             "check a --span where the robot drives throughout, or record a drive that keeps moving"))
     norms = np.linalg.norm(A, axis=0)
-    for i, (par, value) in enumerate(params):
-        others = np.delete(A, i, axis=1)
-        coef, *_ = np.linalg.lstsq(others, A[:, i], rcond=None)
-        unique = float(np.linalg.norm(A[:, i] - others @ coef))
+    uniques = [_unique(A, i) for i in range(len(params))]
+    ses = [_standard_error(uniques[i], assumed.for_parameter(i).value, value)
+           for i, (_, value) in enumerate(params)]
+    beyond = [i for i, (par, _) in enumerate(params) if ses[i] > _plausible_reach(par.kind)]
+    fixes = _pinning_fixes(A, params, beyond, assumed, held_sigma) if beyond else []
+    for i, (par, _) in enumerate(params):
         used = assumed.for_parameter(i)
-        se = math.inf if unique == 0 else used.value / unique / value
-        unit, weak, unidentified = _LIMITS[par.kind]
-        shown = f"±{100 * se:.2g} %" if unit == "%" else f"±{se:.2g} {unit}"
+        se = ses[i]
+        _, weak, unidentified = _LIMITS[par.kind]
+        shown = _shown(par, se)
         # The σ behind the figure, and whether it is a lower bound (BMW user study: ±8.9e-09
         # rad at the fixes' 26.5 mm scatter, beside an odometry that drifts metres): it is,
         # unless it counts the odometry's drift against a truth (TUC SLAM and smartLoc studies:
@@ -510,10 +614,19 @@ def check_identifiable(log: OdometryLog, robot: Robot, sigma: float | AssumedSig
             found.append(Finding("identifiable", "warn", f"{par.label}: its standard error could not be "
                                  "computed (not a number): not checked", "check the log's values"))
             continue
-        ratio = unique / norms[i] if norms[i] > 0 else 0.0
+        ratio = uniques[i] / norms[i] if norms[i] > 0 else 0.0
         why = (" (its effect on the track is almost all one that the other parameters can mimic)"
                if ratio < 0.1 and norms[i] > 0 else "")
-        if se > unidentified and not used.lower_bound:
+        if i in beyond:
+            # Beyond the range calibrate fits it in: no figure of precision, drift or not (a RAV4's
+            # highway minute: "weakly identified (±6.1e+07 %)", and calibrate ran it to the edge).
+            hold = "".join(f"; or odomkit calibrate --fix {name}: it holds {name} at the robot file's value "
+                           f"and fits the rest, which this drive then pins ({rest})" for name, rest in fixes)
+            found.append(Finding("identifiable", "warn" if not used.lower_bound else "fail",
+                                 f"{par.label}: not identifiable from this drive (standard error {shown}: "
+                                 f"wider than the whole range calibrate fits it in, {_range_text(par.kind)})"
+                                 f"{why}", par.advice + hold, se))
+        elif se > unidentified and not used.lower_bound:
             # A realistic figure, drift and all: the motion may pin it where a better odometry
             # or a shorter drive would; weak, not a failure of the log's motion.
             found.append(Finding("identifiable", "warn", f"{par.label}: weakly identified (standard error "

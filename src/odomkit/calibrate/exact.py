@@ -44,7 +44,7 @@ the weighted residuals with their Jacobian are in :mod:`odomkit.calibrate.residu
 from __future__ import annotations
 
 import warnings
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from dataclasses import dataclass, replace
 from typing import Any, Literal
 
@@ -69,7 +69,7 @@ from odomkit.robot import DiffDrive
 from odomkit.truth import Truth, scatter_sigma, truth_from_log
 
 __all__ = ["BETWEEN_RUNS_FACTOR", "between_runs", "between_runs_warning", "SCALE_OBSERVABLE_BELOW",
-           "calibrate_exact", "ExactCalibration", "jackknife_runs", "Source", "truth_noise",
+           "calibrate_exact", "ExactCalibration", "held_note", "jackknife_runs", "Source", "truth_noise",
            "warn_if_drifting"]
 
 Source = Literal["endpoints", "trajectory"]
@@ -150,6 +150,10 @@ class ExactCalibration:
         ``positions`` of whole runs: a run's residuals are mostly the odometry's own drift,
         not the truth's noise, so the fit is biased (:func:`odomkit.calibrate.positions.drift_bias`
         warned; JSON ``drift_dominated``, given only where True). Fit such runs in windows.
+    held : tuple of str
+        The parameters the caller held at the robot's values (``fixed``, ``calibrate --fix``):
+        their values are the robot's and their standard errors 0 (JSON ``held``, given only
+        where some are).
     """
 
     robot: CalibratedRobot
@@ -174,6 +178,7 @@ class ExactCalibration:
     windows_left_out: int = 0
     window: str | None = None
     drift_dominated: bool = False
+    held: tuple[str, ...] = ()
 
     @property
     def E_d(self) -> float:
@@ -218,6 +223,8 @@ class ExactCalibration:
                 out["truth_time_offset"]["std_error_between_runs"] = self.time_offset_std_error_between_runs
         if self.drift_dominated:
             out["drift_dominated"] = True
+        if self.held:
+            out["held"] = list(self.held)
         if self.n_windows is not None:
             out["windows"] = {"length": self.window, "fitted": self.n_windows,
                               "left_out": self.windows_left_out}
@@ -228,6 +235,11 @@ class ExactCalibration:
             out.update(E_d=self.E_d, E_b=self.E_b, E_s=self.E_s,
                        wheel_base=self.robot.effective_wheel_base)
         return out
+
+
+def held_note(name: str, value: float) -> str:
+    """The note of a parameter the caller held (``fixed``, ``calibrate --fix``) at ``value``."""
+    return f"{name} held at the robot file's value {value:.6g} (fixed: not fitted, standard error 0)"
 
 
 def _hold_fixed(offset: NDArray[np.float64], T: NDArray[np.float64], held: Sequence[int],
@@ -428,6 +440,7 @@ def calibrate_exact(
     method: Method = "exact",
     steering_cubic: bool = False,
     truth_sigma: float | None = None,
+    fixed: Collection[str] = (),
 ) -> ExactCalibration:
     """Fit a robot's systematic parameters to ground truth on the exact kinematics.
 
@@ -473,6 +486,11 @@ def calibrate_exact(
         The ground truth's position noise [m per axis] (``--truth-sigma``). A single
         trajectory (no runs to compare) is warned about where its residuals exceed it
         (:func:`warn_if_drifting`; not given: the truth's scatter about a smooth path).
+    fixed : collection of str
+        Parameter names held at the robot's values (``calibrate --fix``), as
+        :func:`odomkit.calibrate.positions.calibrate_positions` holds them: not fitted,
+        standard error 0, named in the result's ``held`` and a note. An unknown name is a
+        ModelError naming the parameters.
 
     Returns
     -------
@@ -504,6 +522,9 @@ def calibrate_exact(
     if truth_sigma is not None:
         truth_sigma = validate.non_negative(truth_sigma, "truth_sigma", unit="m")
     model = calibration_model(robot, runs, steering_cubic=steering_cubic)
+    unknown = sorted(set(fixed) - set(model.names))
+    if unknown:
+        raise ModelError(f"fixed names {', '.join(unknown)}; the parameters are {', '.join(model.names)}")
     if heading_weight is None:
         lengths = [float(np.sum(np.abs(model.steps(model.p0, i)[0]))) for i in range(len(runs))]
         heading_weight = 0.25 * float(np.mean(lengths))
@@ -519,6 +540,11 @@ def calibrate_exact(
     held = [k for k, name in enumerate(model.names) if name in model.unobservable]
     for k in held:
         notes.append(f"{model.names[k]} held at {p0[k]:.6g}: {model.unobservable[model.names[k]]}")
+    asked = tuple(name for k, name in enumerate(model.names) if name in set(fixed) and k not in held)
+    for name in asked:
+        k = model.names.index(name)
+        held.append(k)
+        notes.append(held_note(name, float(p0[k])))
     if fix_scale is None:
         fix_scale = sens < SCALE_OBSERVABLE_BELOW
         if fix_scale and 0 not in held:
@@ -603,8 +629,10 @@ def calibrate_exact(
     return ExactCalibration(
         robot=model.make_robot(p), names=model.names, values=p, std_errors=std, cov=cov,
         corr=corr, residual_variance=var_res, n_residuals=n_res, n_runs=len(runs),
-        source=source, scale_fixed=bool(fix_scale) or 0 in held, scale_sensitivity=sens,
-        notes=tuple(notes), std_errors_between_runs=between, determined=determined,
+        source=source, scale_sensitivity=sens, notes=tuple(notes), std_errors_between_runs=between,
+        determined=determined, held=asked,
+        scale_fixed=(bool(fix_scale) or (0 in held and model.names[0] not in asked)
+                     or bool({"c_scale", "m_per_tick"} & set(asked)) or {"c_left", "c_right"} <= set(asked)),
     )
 
 

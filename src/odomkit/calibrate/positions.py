@@ -70,6 +70,7 @@ from odomkit.calibrate.exact import (
     ExactCalibration,
     between_runs,
     between_runs_warning,
+    held_note,
     truth_noise,
     warn_if_drifting,
 )
@@ -86,6 +87,7 @@ from odomkit.errors import InputError, ModelError
 from odomkit.evaluate import umeyama_se2
 from odomkit.kinematics import Method, body_steps
 from odomkit.log import OdometryLog, clock_text
+from odomkit.robot import Car, Tricycle
 from odomkit.truth import Truth, clock_unit_hint
 from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
@@ -431,6 +433,74 @@ def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_ti
     return lower, upper
 
 
+#: The length whose calibrated value stands for a steered vehicle's turning gain: the turning
+#: per metre is tan(steer)/wheel_base (a car), sin(steer)/wheel_to_axle (a tricycle).
+_TURNING_LENGTHS = {"wheel_base": "tan(steer)", "wheel_to_axle": "sin(steer)"}
+#: The parameters that are lengths [m] (the others at a range's edge are shown without a unit).
+_LENGTH_NAMES = ("wheel_base", "wheel_to_axle", "m_per_tick")
+
+
+def _edge_said(model: CalibrationModel, free: NDArray[np.intp], g: NDArray[np.float64],
+               lower: NDArray[np.float64], upper: NDArray[np.float64], at_bound: Sequence[str]) -> str:
+    """What a fit run to the edge of its range says after the names (``at_bound``, of
+    ``model.names[free]`` and ``"truth time offset"``; ``g`` the fitted global parameters
+    within ``lower`` .. ``upper``): each value reached against the robot file's and the
+    range, what a steered vehicle's length there means, and what to check.
+
+    A car's wheel base (a tricycle's wheel-to-axle distance) stands for every gain on the
+    steering: the turning per metre is tan(steer)/wheel_base, so its value reached says how
+    much the vehicle turns against what the robot file says, a steering ratio or understeer
+    (a comma2k19 RAV4's highway minute: the turning pins only tan(steer)/(ratio·L), the car
+    turning about half what its steering says at speed), and ``--fix`` holds it (the channel
+    signs, and turning both ways, do not help there)."""
+    robot = model.robot
+    names = [*(model.names[k] for k in free), "truth time offset"]
+    parts, meaning, other = [], [], False
+    for name in at_bound:
+        j = names.index(name)
+        value = float(g[j])
+        upward = bool(np.isclose(value, upper[j], rtol=1e-6, atol=0.0))
+        if name == "truth time offset":
+            parts.append(f"the truth's clock offset {value:+.3g} s reached, the range ±{MAX_TIME_OFFSET:g} s")
+            other = True
+            continue
+        file = float(model.p0[free[j]])
+        if name == "steering_offset":
+            parts.append(f"steering_offset {value:+.4g} rad reached against the robot file's "
+                         f"{file:+.4g} rad, the range ±{MAX_STEERING_OFFSET:g} rad about it")
+            other = True
+            continue
+        if name == "steering_cubic":
+            parts.append(f"steering_cubic {value:+.4g} rad⁻² reached, the range ±1/s² for the largest "
+                         "angle s driven (a ratio that varies at most 2× over it: a drive that hardly turns "
+                         "cannot pin it)")
+            other = True
+            continue
+        unit = " m" if name in _LENGTH_NAMES else ""
+        parts.append(f"{name} {value:.4g}{unit} reached against the robot file's {file:.4g}{unit}, the range "
+                     "half to twice it")
+        if name not in _TURNING_LENGTHS or not isinstance(robot, Car | Tricycle):
+            other = True
+            continue
+        gain = file / value  # the turning per metre against the robot file's
+        ratio = float(robot.steering_ratio)
+        more, less = ("or less", "or more") if upward else ("or more", "or less")
+        why = ("or understeer at speed" if isinstance(robot, Car) else "or the wheels slipping in turns"
+               ) if upward else "or a steering angle read in the wrong unit"
+        meaning.append(
+            f"the turning per metre is {_TURNING_LENGTHS[name]}/{name}, so the steering turns the vehicle "
+            f"{gain:.2g}× as much as the robot file says, {more} (a steering_ratio of {ratio / gain:.3g} "
+            f"{less} rather than the file's {ratio:.3g}, {why}); if the {name.replace('_', ' ')} is known, "
+            f"calibrate --fix {name} holds it at the robot file's value and fits the rest")
+    said = "; ".join(parts) + ")"
+    if meaning:
+        said += ": " + "; ".join(meaning)
+    if other or not meaning:
+        said += ("; " if meaning else ": ") + (
+            "check the channel signs, the robot file and the truth's clock, and that the runs turn both ways")
+    return said
+
+
 def _spread(xy: NDArray[np.float64]) -> float:
     """RMS distance [m] of positions (n, 2) from their centroid (0 for none)."""
     return float(np.sqrt(np.mean(np.sum((xy - xy.mean(axis=0)) ** 2, axis=1)))) if len(xy) else 0.0
@@ -712,7 +782,9 @@ def calibrate_positions(
         gyro_bias, gyro_scale), car (c_scale,
         steering_offset, wheel_base).
     fixed : collection of str
-        Parameter names held at the robot's values.
+        Parameter names held at the robot's values (``calibrate --fix``): not fitted, standard
+        error 0, named in the result's ``held`` and a note. An unknown name is a ModelError
+        naming the parameters.
     min_first_fixes : int
         Fewest fixes per run in the first stage of the growing horizon.
     method : {"exact", "midpoint", "euler"}
@@ -783,6 +855,8 @@ def calibrate_positions(
         raise ModelError(f"fixed names {', '.join(unknown)}; the parameters are {', '.join(model.names)}")
     notes: list[str] = [f"{name} held at the robot file's value: {why}"
                         for name, why in model.unobservable.items() if name not in fixed]
+    held = tuple(name for name in model.names if name in set(fixed))  # asked (--fix), in the model's order
+    notes += [held_note(name, float(model.p0[k])) for k, name in enumerate(model.names) if name in held]
     fixed = set(fixed) | set(model.unobservable)
     free = np.array([k for k, n in enumerate(model.names) if n not in fixed], dtype=np.intp)
     margin = MAX_TIME_OFFSET if fit_time_offset else 0.0
@@ -852,15 +926,8 @@ def calibrate_positions(
                 if np.isclose(g[j], lower[j], rtol=1e-6, atol=0.0)
                 or np.isclose(g[j], upper[j], rtol=1e-6, atol=0.0)]
     if at_bound:
-        ranges = {"steering_offset": f"steering offset ±{MAX_STEERING_OFFSET} rad",
-                  "steering_cubic": "steering_cubic ±1/s² for the largest angle s driven (a ratio that "
-                  "varies at most 2× over it: a drive that hardly turns cannot pin it)",
-                  "truth time offset": f"clock offset ±{MAX_TIME_OFFSET:g} s"}
-        scale = "a scale or length: half to twice the robot file's value"
-        said = "; ".join(dict.fromkeys(ranges.get(name, scale) for name in at_bound))
-        raise ModelError(f"the calibration ran to the edge of the plausible range for "
-                         f"{', '.join(at_bound)} ({said}): check the channel signs, the robot file and the "
-                         "truth's clock, and that the runs turn both ways"
+        raise ModelError(f"the calibration ran to the edge of the plausible range for {', '.join(at_bound)} ("
+                         + _edge_said(model, free, g, lower, upper, at_bound)
                          + ("" if biased is None else
                             "; " + str(drift_bias(sources, res_xy, sizes_xy, fitted_xy, truths, short=True))))
     dof = res.size - g.size - n_starts
@@ -965,6 +1032,7 @@ def calibrate_positions(
         windows_left_out=sum(cut.few) + sum(cut.still) if cut is not None else 0,
         window=cut.length if cut is not None else None,
         drift_dominated=biased is not None,
+        held=held,
     )
 
 

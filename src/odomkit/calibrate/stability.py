@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Collection
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -190,7 +191,7 @@ def weakly_pinned(joint: ExactCalibration, start: Robot) -> list[str]:
 
 def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
                      steering_cubic: bool = False, nominal: Robot | None = None,
-                     heading_weight: float = 0.0) -> list[HalfFit]:
+                     heading_weight: float = 0.0, fixed: Collection[str] = ()) -> list[HalfFit]:
     """Each half of one drive calibrated alone from its fixes, and each half's parameters
     tried on the other half, beside the nominal robot's.
 
@@ -206,6 +207,8 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
         held against on the other half (default ``robot``)
     heading_weight : W [m/rad] comparing the truth's heading in each half's fit as in the
         whole drive's (:func:`odomkit.calibrate.positions.calibrate_positions`)
+    fixed : parameter names each half holds at ``robot``'s values, as the whole drive's fit
+        held them (``calibrate --fix``)
 
     Returns
     -------
@@ -235,7 +238,7 @@ def calibrate_halves(log: OdometryLog, truth: Truth, robot: CalibratedRobot, *,
             with warnings.catch_warnings():  # the whole drive's fit has said what they would say
                 warnings.simplefilter("ignore")
                 fits.append(calibrate_positions([half], [fixes], robot, steering_cubic=steering_cubic,
-                                                heading_weight=heading_weight))
+                                                heading_weight=heading_weight, fixed=fixed))
         except (InputError, ModelError) as exc:
             raise type(exc)(f"the {label} alone: {exc}") from exc
     base = robot if nominal is None else nominal

@@ -4,7 +4,7 @@
 
     odomkit calibrate RUN.csv ... --robot ROBOT.toml [--method exact|umbmark]
         [--from endpoints|trajectory] [--side S] [--out-robot new.toml]
-        [--truth GT ... [TRUTH OPTIONS]] [--window 60s|20m]
+        [--truth GT ... [TRUTH OPTIONS]] [--window 60s|20m] [--fix NAME ...]
         [--ros-yaml params.yaml --wheel-radius R] [--twist-speed V --controller-period T]
         [LOG OPTIONS] [--force] [--json]
     odomkit calibrate-noise RUN.csv ... --robot ROBOT.toml [--components x,y,theta]
@@ -18,7 +18,8 @@ position-only, noisy truth such as GPS works. ``--window`` cuts each run into wi
 fitted from its own start pose (a long drive whose heading wanders biases a whole-run fit);
 without ``--truth`` the logs' own ground truth is then compared as position fixes.
 ``--heading-weight`` W [m/rad] compares the truth's heading too, W·wrap(θ − θ_truth) beside
-each fix's position.
+each fix's position. ``--fix NAME`` (repeatable) holds a parameter at the robot file's value
+in every fit (a car whose drive hardly turns: ``--fix wheel_base``).
 """
 
 from __future__ import annotations
@@ -93,6 +94,9 @@ def calibrate_command(
                          "start pose, the robot's parameters shared: 60s (time) or 20m (odometry travel). "
                          "For long drives whose heading drifts (a whole-run fit shrinks the path); "
                          "without --truth the logs' own truth is compared as positions.")] = None,
+    fix: Annotated[list[str] | None, typer.Option(
+        "--fix", help="exact: hold this parameter at the robot file's value (repeatable), e.g. wheel_base "
+                      "for a car whose drive hardly turns (it pins only tan(steer)/wheel_base).")] = None,
     force: Annotated[bool, typer.Option("--force", help="Replace existing output files.")] = False,
     truth: TruthListOption = None,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
@@ -114,7 +118,8 @@ def calibrate_command(
                               twist_speed=twist_speed, controller_period=controller_period,
                               velocity_window=velocity_window,
                               overwrite=force, log_options=options, truth=per_run, own_truth=base,
-                              heading_weight=heading_weight, steering_cubic=fit_steering_cubic, window=window)
+                              heading_weight=heading_weight, steering_cubic=fit_steering_cubic, window=window,
+                              fixed=list(fix or ()))
     if json_out:
         print_json(with_warnings(out, warned))
         return
@@ -130,7 +135,11 @@ def _print_text(out: dict[str, Any]) -> None:
         print(f"exact calibration from {out['source']} of {out['n_runs']} run(s){cut}")
         between = out.get("std_errors_between_runs", {})
         clusters = "runs" if windows is None else "windows"
+        held = out.get("held", ())
         for name, value in out["parameters"].items():
+            if name in held:  # --fix: not fitted
+                print(f"  {name:16s} {value:.6f}  held at the robot file's value (--fix)")
+                continue
             # The standard error to two significant digits: a fixed six decimals shows
             # "± 0.000000" for a steering offset pinned to 1e-7 rad.
             line = f"  {name:16s} {value:.6f} ± {out['std_errors'][name]:.2g}"

@@ -76,6 +76,7 @@ def calibrate_files(
     steering_cubic: bool = False,
     cubic_hint: str = CUBIC_HINT,
     window: str | WindowSpec | None = None,
+    fixed: Sequence[str] = (),
     **exact_kwargs: Any,
 ) -> dict[str, Any]:
     """Read runs and a robot file, calibrate, write the requested outputs (CLI backend).
@@ -131,6 +132,14 @@ def calibrate_files(
         ``--heading-weight``), so ``--from`` does not apply. JSON ``windows`` (length, fitted, left_out);
         ``std_errors_between_runs`` are then between windows, and a single run's halves are
         not calibrated alone (``halves`` absent).
+    fixed : parameter names held at the robot file's values (``--fix``, exact only), in every
+        fit: the runs' together, each run's and each half's alone, and from whichever start
+        the fit takes (:func:`odomkit.calibrate.positions.calibrate_positions`,
+        :func:`odomkit.calibrate.exact.calibrate_exact`). Their standard errors are 0 and
+        the summary names them (``held``). A name the robot's calibration does not fit is an
+        InputError naming those it does; so is holding every one. For a car whose drive
+        hardly turns, ``["wheel_base"]``: the turning pins only tan(steer)/wheel_base, a
+        steering ratio or understeer as much as the length.
     **exact_kwargs : passed to :func:`odomkit.calibrate.exact.calibrate_exact` (exact only).
 
     Returns
@@ -168,6 +177,8 @@ def calibrate_files(
             stray.append("--fit-steering-cubic")
         if spec is not None:
             stray.append("--window")
+        if fixed:
+            stray.append("--fix")
         if stray:
             raise InputError(f"{', '.join(stray)} applies to --method exact only, not to umbmark")
         if side is None:
@@ -176,6 +187,7 @@ def calibrate_files(
     if wheel_radius is not None and ros_yaml is None:
         raise InputError("--wheel-radius applies to --ros-yaml only (the controller's nominal radius)")
     robot, noise = read_robot(robot_path)
+    fixed = _check_fixed(fixed, robot, steering_cubic, robot_path) if method == "exact" else ()
     if ros_yaml is not None:
         if not isinstance(robot, DiffDrive | Tricycle):
             raise InputError(f"--ros-yaml writes diff_drive_controller or tricycle_controller parameters; "
@@ -226,10 +238,16 @@ def calibrate_files(
             given = truth[0].time_offset
             gaps = [o.max_gap for o in truth]
             heading_weight = float(exact_kwargs.get("heading_weight", 0.0))  # the truth's heading compared
+
+            def held(start: Any) -> Any:
+                """``start`` with the --fix parameters at the robot file's values (a start the
+                travel and turning suggest may have moved them)."""
+                return replace(start, **{name: getattr(robot, name) for name in fixed}) if fixed else start
+
             def fit_from(start: Any) -> ExactCalibration:
-                return calibrate_positions(runs, truths, start, fit_time_offset=given is None,
+                return calibrate_positions(runs, truths, held(start), fit_time_offset=given is None,
                                            steering_cubic=steering_cubic, window=spec,
-                                           heading_weight=heading_weight)
+                                           heading_weight=heading_weight, fixed=fixed)
 
             try:
                 first = _fit_said(fit_from, robot)
@@ -262,12 +280,12 @@ def calibrate_files(
             if len(runs) > 1:
                 # Each run alone (each half) from the start the joint fit came from.
                 summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_positions(
-                    [runs[i]], [truths[i]], start, fit_time_offset=given is None,
-                    steering_cubic=steering_cubic, window=spec, heading_weight=heading_weight))
+                    [runs[i]], [truths[i]], held(start), fit_time_offset=given is None,
+                    steering_cubic=steering_cubic, window=spec, heading_weight=heading_weight, fixed=fixed))
             elif spec is None:  # windows: their spread is the between-window standard errors
-                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], start, given is None,
+                summary["halves"] = _each_half_alone(cal, runs[0], truths[0], held(start), given is None,
                                                      steering_cubic, cubic_hint, nominal=robot,
-                                                     heading_weight=heading_weight)
+                                                     heading_weight=heading_weight, fixed=fixed)
             new_robot = cal.robot
             if own_columns and given:  # a --truth-time-offset moved the gt_* columns: said
                 summary["truth_time_offset"] = {"value": given, "std_error": 0.0, "fitted": False}
@@ -281,7 +299,8 @@ def calibrate_files(
             # A single trajectory's residuals are held against the truth's stated noise.
             stated = own_truth.sigma if own_truth is not None else None
             cal = calibrate_exact(runs, robot, source or "endpoints",  # type: ignore[arg-type]
-                                  steering_cubic=steering_cubic, truth_sigma=stated, **exact_kwargs)
+                                  steering_cubic=steering_cubic, truth_sigma=stated, fixed=fixed,
+                                  **exact_kwargs)
             summary = cal.to_dict()
             new_robot = cal.robot
             if len(runs) > 1 and source == "trajectory":
@@ -289,7 +308,7 @@ def calibrate_files(
                 # parameters); their between-run standard errors need none.
                 summary["per_run"] = _each_run_alone(cal, runs, lambda i: calibrate_exact(
                     [runs[i]], robot, "trajectory", steering_cubic=steering_cubic,  # type: ignore[arg-type]
-                    truth_sigma=stated, **exact_kwargs))
+                    truth_sigma=stated, fixed=fixed, **exact_kwargs))
             if side is not None and isinstance(robot, DiffDrive):
                 summary["e_max_syst_before"] = e_max_syst_of_runs(runs, robot)
                 summary["e_max_syst_after"] = e_max_syst_of_runs(runs, new_robot)
@@ -431,7 +450,8 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot,
         warnings.warn(f"the calibrated {name} {after:.4g} m is {100 * (after / before - 1):+.0f} % from the "
                       f"robot file's {before:.4g} m: the turning per metre is {law}/{name}, so it stands in "
                       f"for every gain on the steering ({gains}) as well as the length; if the length is "
-                      "known, check the steering's unit and ratio (odomkit check --truth compares turning)",
+                      "known, check the steering's unit and ratio (odomkit check --truth compares turning), "
+                      f"or hold it: calibrate --fix {name} keeps the robot file's value and fits the rest",
                       UserWarning, stacklevel=3)
 
 
@@ -581,7 +601,7 @@ def _each_run_alone(joint: ExactCalibration, runs: list[OdometryLog],
 
 def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, robot: Any,
                      clock_fitted: bool, steering_cubic: bool = False, cubic_hint: str = CUBIC_HINT, *,
-                     nominal: Robot | None = None, heading_weight: float = 0.0
+                     nominal: Robot | None = None, heading_weight: float = 0.0, fixed: Sequence[str] = ()
                      ) -> list[dict[str, Any]] | None:
     """One drive's halves calibrated alone from ``robot`` and tried on each other, beside the
     ``nominal`` robot (the robot file's; JSON ``halves``), and a warning where the calibration
@@ -596,7 +616,7 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
         truth = replace(truth, t=truth.t - joint.time_offset)
     try:
         halves = calibrate_halves(log, truth, robot, steering_cubic=steering_cubic, nominal=nominal,
-                                  heading_weight=heading_weight)
+                                  heading_weight=heading_weight, fixed=fixed)
     except ModelError as exc:
         weak = weakly_pinned(joint, robot)
         # Where the whole drive pins a parameter near the edge of its range, a half may reach
@@ -621,6 +641,27 @@ def _each_half_alone(joint: ExactCalibration, log: OdometryLog, truth: Truth, ro
     if said:
         warnings.warn(said, UserWarning, stacklevel=2)
     return [half.to_dict() for half in halves]
+
+
+def _check_fixed(fixed: Sequence[str], robot: Robot, steering_cubic: bool, robot_path: str | Path
+                 ) -> tuple[str, ...]:
+    """The ``--fix`` names, each once, checked against the parameters the robot's
+    calibration fits (:func:`odomkit.calibrate.residuals.calibration_model`): one line naming
+    those where a name is not one of them, or where every one is held."""
+    from odomkit.calibrate.residuals import calibration_model
+
+    names = tuple(dict.fromkeys(fixed))
+    if not names or not isinstance(robot, CALIBRATED_ROBOTS):
+        return names  # a robot calibrate does not fit is refused where it is calibrated
+    valid = calibration_model(robot, [], steering_cubic=steering_cubic).names
+    unknown = [name for name in names if name not in valid]
+    if unknown:
+        raise InputError(f"--fix {', '.join(unknown)}: not a parameter calibrate fits for a "
+                         f"{robot.type_name!r} robot; give one of {', '.join(valid)}", source=str(robot_path))
+    if set(valid) <= set(names):
+        raise InputError(f"--fix holds every parameter ({', '.join(valid)}): nothing is left to calibrate; "
+                         "hold fewer", source=str(robot_path))
+    return names
 
 
 def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapping[str, Any],
