@@ -219,3 +219,19 @@ def test_calibrate_a_car_log_with_gps_truth_on_its_own_clock(tmp_path, run_cli):
         for name, value in result["parameters"].items():
             assert row["parameters"][name] == pytest.approx(value, rel=1e-6, abs=1e-9), name
     assert not any("runs disagree" in w for w in both.get("warnings", [])) and "runs disagree" not in err
+
+
+def test_a_yaw_rate_scale_far_off_names_a_twist_from_commanded_steering():
+    """An F1TENTH car's VESC odometry computes its yaw rate from the commanded steering angle
+    and turned 1.8x its motion capture (yaw_rate_scale 0.57, a user study); the warning named
+    only a skid-steer base's twist or a unit."""
+    import warnings
+
+    from odomkit.robot import Unicycle
+    from odomkit.workflows.calibration import _warn_far_from_file
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        _warn_far_from_file(Unicycle(), Unicycle(yaw_rate_scale=0.57))
+    (said,) = [str(w.message) for w in caught if "yaw_rate_scale" in str(w.message)]
+    assert "-43 %" in said and "commanded steering" in said and "skid-steer" in said

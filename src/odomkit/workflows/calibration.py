@@ -419,9 +419,12 @@ def _warn_far_from_file(robot: Robot, new_robot: Robot,
                               "(--span)", UserWarning, stacklevel=3)
                 continue
             # A unicycle's yaw rate is often a base controller's twist, computed from its wheels
-            # with a nominal track width: a skid-steer base's turns slip by tens of per cent.
-            why = (f"no gyro is that far off, but the yaw rate of a skid-steer or tracked base's odometry "
-                   f"twist is ({_SKID}); otherwise a unit" if name == "yaw_rate_scale" else
+            # with a nominal track width (a skid-steer base's turns slip by tens of per cent), or
+            # from a car's commanded steering (an F1TENTH's VESC odometry: 0.57, a user study).
+            why = (f"no gyro is that far off, but a yaw rate that is computed, not measured, is: a "
+                   f"skid-steer or tracked base's odometry twist ({_SKID}), or a car's twist from its "
+                   "commanded steering angle (an RC car's VESC odometry turned 1.8x its motion capture); "
+                   "otherwise a unit" if name == "yaw_rate_scale" else
                    "no wheel or gyro is that far off its own; a unit")
             warnings.warn(f"the calibrated {name} {after:.4g} is {100 * off:+.0f} % from the "
                           f"robot file's {before:.4g}: {why} or a robot-file entry is wrong, or the fit "
