@@ -20,7 +20,7 @@ import pytest
 
 from odomkit.calibrate.positions import MAX_TIME_OFFSET, _Problem, _runs_with_truth, calibrate_positions
 from odomkit.calibrate.residuals import calibration_model
-from odomkit.errors import ModelError
+from odomkit.errors import InputError, ModelError
 from odomkit.log import OdometryLog
 from odomkit.robot import Car
 from odomkit.track import dead_reckon_log
@@ -32,7 +32,8 @@ TRUE_VALUES = np.array([TRUE_CAR.c_scale, TRUE_CAR.steering_offset, TRUE_CAR.whe
 DT, FIX_PHASE, FIX_PERIOD = 0.1, 0.037, 0.2  # log rows every 0.1 s; fixes at 0.037 + 0.2 k s
 
 
-def drive(seed: int, delta: float, n: int = 1500, sigma: float = 0.0) -> tuple[OdometryLog, Truth]:
+def drive(seed: int, delta: float, n: int = 1500, sigma: float = 0.0, fix_period: float = FIX_PERIOD
+          ) -> tuple[OdometryLog, Truth]:
     """A car log of ``n`` rows (every DT s) driving smooth random turns at a speed that
     varies (1.5–10.5 m/s: without accelerations δ would be one with the start position along
     the track), and 5 Hz position fixes of its true path (``TRUE_CAR`` through odomkit's
@@ -46,7 +47,7 @@ def drive(seed: int, delta: float, n: int = 1500, sigma: float = 0.0) -> tuple[O
     speed = 6.0 + 3.0 * np.sin(t / 9.0) + 1.5 * np.sin(t / 3.1 + 1.0)
     log = OdometryLog(t, {"speed": speed, "steer": steer}, source=f"run{seed}")
     poses = dead_reckon_log(log, TRUE_CAR, pose0=(10.0, -5.0, 0.3)).poses
-    stamps = np.arange(FIX_PHASE, t[-1], FIX_PERIOD)
+    stamps = np.arange(FIX_PHASE, t[-1], fix_period)
     xy = np.column_stack([np.interp(stamps - delta, t, poses[:, i]) for i in (0, 1)])
     if sigma > 0:
         xy = xy + rng.normal(0.0, sigma, xy.shape)
@@ -81,6 +82,42 @@ def test_an_offset_beyond_the_fitted_range_is_refused_at_its_edge():
     with pytest.raises(ModelError, match=r"edge of the plausible range for .*truth time offset \(.*clock "
                        r"offset \+2 s reached, the range ±2 s\)"):
         calibrate_positions([log], [truth], NOMINAL_CAR, fit_time_offset=True)
+
+
+def slalom(seed: int, delta: float, seconds: float = 3.3, fix_period: float = 0.01
+           ) -> tuple[OdometryLog, Truth]:
+    """A car accelerating through a slalom for ``seconds`` (rows every 0.02 s), and fixes of
+    its true path (``TRUE_CAR``) every ``fix_period`` s on a clock ``delta`` s late."""
+    t = 0.02 * np.arange(int(round(seconds / 0.02)) + 1)
+    speed, steer = 2.0 + 1.5 * t + 0.3 * seed, 0.3 * np.sin(2 * np.pi * t / 1.6 + seed)
+    log = OdometryLog(t, {"speed": speed, "steer": steer}, source=f"slalom{seed}")
+    poses = dead_reckon_log(log, TRUE_CAR, pose0=(1.0, 2.0, 0.3)).poses
+    stamps = np.arange(0.007, t[-1], fix_period)
+    xy = np.column_stack([np.interp(stamps - delta, t, poses[:, i]) for i in (0, 1)])
+    return log, Truth(stamps, xy, None, 0.0, f"slalom fixes{seed}")
+
+
+def test_a_run_of_a_few_seconds_fits_its_clock_within_a_quarter_of_its_length():
+    """A 3.3 s run (an F1TENTH car's slalom, a user study) kept no fix at 2 s from either
+    end and was refused with "check the clocks" while its truth overlapped it. The clock is
+    fitted within a quarter of the shortest run (clock_range), here ±0.825 s: δ and the car
+    come back exactly (noise-free, the model exact), and an offset beyond that range is
+    refused at its edge naming the range and --truth-time-offset."""
+    from odomkit.calibrate.positions import clock_range
+
+    logs, truths = zip(*(slalom(seed, 0.12) for seed in (1, 2, 3)), strict=True)
+    assert clock_range(logs) == pytest.approx(0.25 * 3.3)
+    cal = calibrate_positions(logs, truths, NOMINAL_CAR, fit_time_offset=True)
+    assert cal.time_offset == pytest.approx(0.12, abs=1e-6)
+    np.testing.assert_allclose(cal.values, TRUE_VALUES, rtol=1e-6)
+    late = [slalom(seed, 1.0) for seed in (1, 2, 3)]
+    with pytest.raises(ModelError, match=r"clock offset \+0\.825 s reached, the range ±0\.825 s "
+                       r"\(0\.25 of the shortest run; give --truth-time-offset"):
+        calibrate_positions([a for a, _ in late], [b for _, b in late], NOMINAL_CAR, fit_time_offset=True)
+    # A 5 Hz truth over the same runs leaves too few fixes: said so, not "does not move".
+    sparse = [slalom(seed, 0.12, fix_period=0.2) for seed in (1, 2, 3)]
+    with pytest.raises(InputError, match=r"only \d+ truth fixes of the run are compared"):
+        calibrate_positions([a for a, _ in sparse], [b for _, b in sparse], NOMINAL_CAR, fit_time_offset=True)
 
 
 def _problem(log: OdometryLog, truth: Truth) -> _Problem:

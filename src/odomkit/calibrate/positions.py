@@ -29,8 +29,9 @@ its noise, and rows without truth. Here:
   or a commanded velocity's lag behind the motion makes the truth look late by a constant;
   left out, it reads as an along-track error proportional to speed. Its Jacobian column
   is −(the odometry's velocity at t − δ), the slope of the log segment the fix falls in
-  (the residual is piecewise linear in δ). Fixes within :data:`MAX_TIME_OFFSET` of either
-  end of the log are then left out, so the same fixes are compared at every δ;
+  (the residual is piecewise linear in δ). δ is fitted within :func:`clock_range`
+  (:data:`MAX_TIME_OFFSET`, or a quarter of the shortest run), and fixes within that of
+  either end of the log are left out, so the same fixes are compared at every δ;
 * a long run whose dead-reckoned heading wanders (metres of drift in a small arena) biases
   the fit of the whole run, which shrinks the track to shorten its residuals
   (:func:`drift_bias` says so); with ``window`` each run is cut into windows, each fitted
@@ -91,7 +92,8 @@ from odomkit.robot import Car, Tricycle
 from odomkit.truth import Truth, clock_unit_hint
 from odomkit.windows import WindowSpec, cumulative_travel, parse_window, split_windows, why_no_windows
 
-__all__ = ["DRIFT_GIST", "DRIFT_SHARE", "DRIFT_WINDOW", "MAX_STEERING_OFFSET", "MAX_TIME_OFFSET",
+__all__ = ["CLOCK_SHARE", "clock_range", "DRIFT_GIST", "DRIFT_SHARE", "DRIFT_WINDOW", "MAX_STEERING_OFFSET",
+           "MAX_TIME_OFFSET",
            "MIN_FIRST_FIXES", "MIN_WINDOW_FIXES", "calibrate_positions", "compared_fixes", "drift_bias",
            "drift_shares", "runs_disagree", "scale_range", "truth_spreads", "windows_drift"]
 
@@ -101,6 +103,18 @@ MIN_FIRST_FIXES = 30
 #: command's lag is a fraction of a second; beyond this the clocks differ, and the truth
 #: file's times need shifting (``--truth-time-offset``).
 MAX_TIME_OFFSET = 2.0
+#: ... and at most this share of the shortest run: fixes within the range of either end of a
+#: run are left out (a fitted offset could move them out of the log), and a run of 3.3 s (an
+#: F1TENTH car's slalom, a user study) kept none at 2 s, refused with "check the clocks".
+CLOCK_SHARE = 0.25
+
+
+def clock_range(runs: Sequence[OdometryLog]) -> float:
+    """The largest truth clock offset [s] :func:`calibrate_positions` fits for these runs:
+    :data:`MAX_TIME_OFFSET`, or :data:`CLOCK_SHARE` of the shortest run where that is less.
+    Fixes within it of either end of a run are left out of the fit."""
+    shortest = min((float(log.t[-1] - log.t[0]) for log in runs if len(log) > 1), default=0.0)
+    return min(MAX_TIME_OFFSET, CLOCK_SHARE * shortest) if shortest > 0 else MAX_TIME_OFFSET
 
 
 @dataclass(frozen=True)
@@ -166,7 +180,7 @@ def _runs_with_truth(runs: Sequence[OdometryLog], truths: Sequence[Truth], margi
         inside = compared_fixes(t, truth.t, margin)
         tau = truth.t[inside]
         if tau.size < 4:
-            within = f" (less {margin:g} s at each end, the largest clock offset fitted)" if margin else ""
+            within = f" (less {margin:.3g} s at each end, the largest clock offset fitted)" if margin else ""
             # A log in ms against a truth in s wants --time-unit ms, not the truth's flags (the
             # log's span before --span cut it: a cut log spans less by design).
             uncut = log.meta.get("uncut_clock")
@@ -407,17 +421,17 @@ def scale_range(value: float) -> tuple[float, float]:
     return value / 2, value * 2
 
 
-def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_time_offset: bool
-            ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _bounds(model: CalibrationModel, free: NDArray[np.intp], n_runs: int, fit_time_offset: bool,
+            clock: float = MAX_TIME_OFFSET) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Plausible ranges of q = (free robot parameters, clock offset, start poses): a scale
     or length within half to twice the robot file's value (a factor 2 is a wrong robot
     file, not a calibration), a steering offset within ±0.5 rad, a car's steering_cubic
-    within ±1/s² for the largest steering angle s driven, the clock offset within
-    ±:data:`MAX_TIME_OFFSET`; start poses free."""
+    within ±1/s² for the largest steering angle s driven, the clock offset within ±``clock``
+    [s] (:func:`clock_range`); start poses free."""
     n = free.size + int(fit_time_offset) + 3 * n_runs
     lower, upper = np.full(n, -np.inf), np.full(n, np.inf)
     if fit_time_offset:
-        lower[free.size], upper[free.size] = -MAX_TIME_OFFSET, MAX_TIME_OFFSET
+        lower[free.size], upper[free.size] = -clock, clock
     for j, k in enumerate(free):
         value = float(model.p0[k])
         if model.names[k] == "steering_offset":
@@ -461,7 +475,10 @@ def _edge_said(model: CalibrationModel, free: NDArray[np.intp], g: NDArray[np.fl
         value = float(g[j])
         upward = bool(np.isclose(value, upper[j], rtol=1e-6, atol=0.0))
         if name == "truth time offset":
-            parts.append(f"the truth's clock offset {value:+.3g} s reached, the range ±{MAX_TIME_OFFSET:g} s")
+            parts.append(f"the truth's clock offset {value:+.3g} s reached, the range ±{upper[j]:.3g} s"
+                         + ("" if upper[j] >= MAX_TIME_OFFSET else
+                            f" ({CLOCK_SHARE:g} of the shortest run; give --truth-time-offset if the clocks "
+                            "differ by more)"))
             other = True
             continue
         file = float(model.p0[free[j]])
@@ -534,6 +551,12 @@ def _first_horizon(problem: _Problem, min_fixes: int, min_spread: Sequence[float
     problem.horizon = 1.0
     for i in range(len(problem.runs)):
         if not enough(i):
+            n = int(np.count_nonzero(problem.used(i)))
+            if n < min_fixes:  # not "does not move": a short run of a sparse truth has too few
+                raise InputError(f"only {n} truth fixes of the run are compared, fewer than the {min_fixes} "
+                                 "a calibration aligns its start to (a run too short for its truth's rate; "
+                                 "fixes near its ends are left out where the clock offset is fitted): give "
+                                 "longer runs, a denser truth, or --truth-time-offset", source=sources[i])
             raise InputError(f"the run's truth fixes do not spread {min_spread[i]:.3g} m or more (three "
                              "times the truth's σ, at least 1 cm) over the whole run: it does not move "
                              "enough to calibrate from", source=sources[i])
@@ -790,7 +813,8 @@ def calibrate_positions(
     method : {"exact", "midpoint", "euler"}
     fit_time_offset : bool
         Fit the truth's clock offset δ [s] too, one for all runs (a fix stamped t is the pose
-        at log time t − δ), within ±:data:`MAX_TIME_OFFSET`; fixes within that of either
+        at log time t − δ), within ±:func:`clock_range` (:data:`MAX_TIME_OFFSET`, or a quarter
+        of the shortest run); fixes within that of either
         end of a log are left out.
     steering_cubic : bool
         A car's ``steering_cubic`` [rad⁻²] is fitted too, as a fourth parameter (a steering
@@ -859,7 +883,7 @@ def calibrate_positions(
     notes += [held_note(name, float(model.p0[k])) for k, name in enumerate(model.names) if name in held]
     fixed = set(fixed) | set(model.unobservable)
     free = np.array([k for k, n in enumerate(model.names) if n not in fixed], dtype=np.intp)
-    margin = MAX_TIME_OFFSET if fit_time_offset else 0.0
+    margin = clock_range(runs) if fit_time_offset else 0.0
     with_truth = _runs_with_truth(runs, truths, margin)
     cut = None
     fitted_logs, fitted_runs, min_spread = list(runs), with_truth, [_min_spread(t) for t in truths]
@@ -880,7 +904,7 @@ def calibrate_positions(
     # best start pose for them (_Problem.reduced): no dense Jacobian of 3 columns per window.
     joint = cut is None
     starts = problem.reduced(g)[2] if joint else None
-    lower, upper = _bounds(model, free, len(fitted_runs) if joint else 0, fit_time_offset)
+    lower, upper = _bounds(model, free, len(fitted_runs) if joint else 0, fit_time_offset, margin)
     while True:
         n_res = sum(problem.per_fix * int(np.count_nonzero(problem.used(i))) for i in range(len(fitted_runs)))
         if n_res > n_global + n_starts and (joint or n_global):
@@ -958,7 +982,7 @@ def calibrate_positions(
                          "channel signs and the robot file")
     for k, (log, run) in enumerate(zip(runs, with_truth, strict=True)):
         left = ([f"{run.outside} outside the log's span"] if run.outside else []) + (
-            [f"{run.near_ends} within {run.margin:g} s of its ends (where a fitted clock offset could "
+            [f"{run.near_ends} within {run.margin:.3g} s of its ends (where a fitted clock offset could "
              "move them out)"] if run.near_ends else [])
         if cut is not None and cut.between[k]:
             left.append(f"{cut.between[k]} between the windows given")

@@ -690,13 +690,14 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
     return errors before and after; None, with a warning saying why, when there is nothing
     to draw. The log's own truth starts each run at its first pose; ``--truth`` fixes (on
     the log's clock by the offset calibrated) are the ones the calibration compared (inside
-    the log's span; with ``clock_fitted``, their own stamps :data:`MAX_TIME_OFFSET` inside
-    it), each run started from the pose fitted to them as the calibration fits it
+    the log's span; with ``clock_fitted``, their own stamps the clock offset's range inside
+    it, :func:`odomkit.calibrate.positions.clock_range`), each run started from the pose
+    fitted to them as the calibration fits it
     (:func:`odomkit.workflows.figures.calibration_figure`): position-only truth (GPS) has no
     start heading to take."""
     import numpy as np
 
-    from odomkit.calibrate.positions import MAX_TIME_OFFSET, compared_fixes
+    from odomkit.calibrate.positions import clock_range, compared_fixes
     from odomkit.calibrate.realdata import return_errors_from_runs
     from odomkit.workflows.figures import calibration_figure
 
@@ -706,8 +707,8 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
             found = load_truth(truth[i], log)
             assert found is not None  # the calibration found it
             # the fixes calibrate_positions compared: with the clock fitted, those whose own
-            # stamps lie MAX_TIME_OFFSET inside the log (the same ones at every offset tried)
-            margin, own = ((MAX_TIME_OFFSET, found.t + (truth[i].time_offset or 0.0)) if clock_fitted
+            # stamps lie the clock's range inside the log (the same ones at every offset tried)
+            margin, own = ((clock_range(runs), found.t + (truth[i].time_offset or 0.0)) if clock_fitted
                            else (0.0, found.t))
             inside = compared_fixes(log.t, own, margin) & np.all(np.isfinite(found.xy), axis=1)
             if np.count_nonzero(inside) < 2:
