@@ -18,7 +18,9 @@ With e = truth − odometry at the window end, to first order
 
 where P_start is the start pose's covariance (the truth's own noise ``truth.sigma``² on
 x and y and ``truth.heading_sigma``² on θ; where the truth has no heading, the variance of
-the heading fitted to the truth positions, :func:`odomkit.truth.heading_by_alignment`),
+the heading fitted to the truth positions, :func:`odomkit.truth.heading_by_alignment`, at
+the window's start or, where the robot stands there, once it moves:
+:func:`odomkit.windows.standing_start`),
 Φ its transition to the window end (the engines carry it), R_end = diag(σ², σ², σθ²) the
 truth's noise at the end (σθ where the truth has heading), and
 B_j the covariance that unit variance in noise parameter j alone gives
@@ -29,7 +31,8 @@ sum is exact to rounding (Chong–Kleeman eq. 2; Kelly eq. 11).
 The truth's clock
 -----------------
 A truth fix δ seconds off the log's clock is off by the pose's rate times δ; the rate is
-taken from the window's own dead reckoning over its first and last 0.2 s. Its heading share
+taken from the window's own dead reckoning over its first and last 0.2 s (the heading's at
+the row its heading was fitted at, where the robot stood at its start). Its heading share
 (ω·δ) is kept only at a start whose heading was fitted to position-only truth: there the
 fixes' clock turns the fitted heading by ω·δ, which swings the whole window (a 1 Hz GPS
 0.2 s late on a car turning at 0.3 rad/s: 0.06 rad, 14 m across 240 m), and θ is never
@@ -43,7 +46,7 @@ variance fitted to zero and the truth's σ to 0.8 m).
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -54,9 +57,10 @@ from odomkit.angles import wrap_angle
 from odomkit.errors import InputError, ModelError
 from odomkit.integrate import dead_reckon
 from odomkit.kinematics import BodySteps, body_steps
-from odomkit.log import OdometryLog
+from odomkit.log import OdometryLog, clock_text
 from odomkit.noise import NoiseModel, NoiseSet
 from odomkit.robot import Robot
+from odomkit.truth import WIDEST_HEADING_SPAN
 from odomkit.windows import (
     Window,
     WindowSpec,
@@ -65,6 +69,8 @@ from odomkit.windows import (
     rows_at_fixes,
     run_start,
     split_windows,
+    standing_start,
+    stands_at,
 )
 
 if TYPE_CHECKING:
@@ -72,9 +78,13 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
 
 __all__ = [
+    "HEADLESS",
+    "NO_FIT",
+    "STANDS",
     "TRUTH_NOISE",
     "WindowBasis",
     "WindowErrors",
+    "headless_note",
     "log_window_basis",
     "window_covariance_basis",
     "window_errors",
@@ -108,6 +118,12 @@ class WindowErrors:
         Log row of each window end.
     dropped : int
         Windows left out because no start heading could be fitted to the truth positions.
+    start : ndarray, shape (W, 3)
+        The pose each window starts from [m, m, rad]: the truth's, with its heading fitted
+        where the truth has none.
+    left_out : tuple of (Window, str)
+        The windows dropped (``dropped`` of them) and why (:data:`STANDS` or :data:`NO_FIT`;
+        :func:`headless_note` says it).
     """
 
     windows: list[Window]
@@ -116,6 +132,34 @@ class WindowErrors:
     start_cov: NDArray[np.float64]
     end_rows: NDArray[np.int64]
     dropped: int
+    start: NDArray[np.float64] = field(default_factory=lambda: np.empty((0, 3)))
+    left_out: tuple[tuple[Window, str], ...] = ()
+
+
+#: Why windows are left out for want of a start heading (after their count, and the log's name).
+HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
+#: Why one such window is left out (:attr:`WindowErrors.left_out`): the robot stands at its start
+#: and the fixes give no heading soon after it moves (:func:`odomkit.windows.standing_start`), ...
+STANDS = ("the robot stands at its start, and the fixes give no heading within "
+          f"{WIDEST_HEADING_SPAN / 2:g} s of its moving off")
+#: ... or the robot moves there and the fixes around it give none
+#: (:func:`odomkit.truth.start_heading`).
+NO_FIT = ("the fixes around its start are too few or on one side only, stray from a smooth path by more "
+          "than 3 --truth-sigma, or barely move")
+
+
+def headless_note(t: ArrayLike, left_out: Sequence[tuple[Window, str]], length: WindowSpec | None = None,
+                  limit: int = 3) -> str:
+    """:data:`HEADLESS` naming the windows left out (at most ``limit``, by their log times ``t``
+    (N,) [s] and ``length``) and why, to follow their count (and a log's name before it):
+    ``"window(s) left out: no start heading could be fitted to the position-only truth: the
+    10 s window 20..30 s (the fixes around its start are too few ...)"``."""
+    times = np.asarray(t, dtype=float)
+    what = "window" if length is None else f"{length} window"
+    named = [f"the {what} {clock_text(times[w.start])}..{clock_text(times[w.end])} s ({why})"
+             for w, why in left_out[:limit]]
+    more = f"; and {len(left_out) - limit} more" if len(left_out) > limit else ""
+    return f"{HEADLESS}: " + "; ".join(named) + more
 
 
 @dataclass(frozen=True)
@@ -131,8 +175,12 @@ class _Prepared:
     heading_from_truth: NDArray[np.bool_]  # (W,): the start heading is the truth's own
     start_rate: NDArray[np.float64]  # (W, 3): d(pose)/dt where the window starts (_pose_rates)
     end_rate: NDArray[np.float64]  # (W, 3): and where it ends
-    dropped: int
+    left_out: tuple[tuple[Window, str], ...]  # the windows dropped for want of a start heading, and why
     method: str
+
+    @property
+    def dropped(self) -> int:
+        return len(self.left_out)
 
 
 #: Span [s] over which a window's start and end pose rates are taken from its own dead
@@ -195,11 +243,13 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
     parts: list[BodySteps] = []
     tracks: list[NDArray[np.float64]] = []
     starts, errors, from_truth, rates = [], [], [], []
-    dropped = 0
+    left_out: list[tuple[Window, str]] = []
     odometry: NDArray[np.float64] | None = None
+    travel: NDArray[np.float64] | None = None
     log_t = np.asarray(log.t, dtype=float)
     for w in windows:
         a, b = w.start, w.end
+        later = a  # the row whose fixes gave the start heading (a later one where the robot stood)
         if not (0 <= a < b < n) or not (ok[a] and ok[b]):
             raise ModelError(f"window rows {a}..{b} need valid truth at both ends of a "
                              f"{n}-row log")
@@ -224,15 +274,21 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
             from odomkit.truth import start_heading
 
             fitted = start_heading(truth, float(log.t[a]), log_t, odometry)
-            if fitted is None:
-                dropped += 1
-                continue
+            if fitted is None:  # a robot standing at the window's start: the heading it leaves with
+                travel = cumulative_travel(steps) if travel is None else travel
+                standing = standing_start(log_t, truth, ok, odometry, travel, a, b)
+                if standing is None:
+                    left_out.append((w, STANDS if stands_at(travel, a) else NO_FIT))
+                    continue
+                fitted, later = standing[:2], standing[2]
             pose0[2], cov0[2, 2] = fitted
         poses = dead_reckon(part.dd, part.dtheta, pose0, method)  # type: ignore[arg-type]
         err = gt[b] - poses[-1]
         err[2] = wrap_angle(err[2])
         fitted_heading = not (own_heading or robot.measures_heading)
         rate_a, rate_b = _pose_rates(part, poses, fitted_heading)
+        if later > a:  # the heading was fitted where the robot had left: its clock turns it there
+            rate_a[2] = _pose_rates(_slice_steps(part, later - a, b - a), poses[later - a:], True)[0][2]
         cov0 += time2 * np.outer(rate_a, rate_a)
         kept.append(w)
         parts.append(part)
@@ -247,7 +303,7 @@ def _prepare(log: OdometryLog, robot: Robot, truth_poses: ArrayLike, truth_valid
     end_cov = np.diag([sigma2, sigma2, heading2])[None] + time2 * np.einsum("wa,wb->wab", rate[:, 1],
                                                                               rate[:, 1])
     return _Prepared(kept, parts, tracks, start, error, end_cov, np.array(from_truth, dtype=bool),
-                     rate[:, 0], rate[:, 1], dropped, method)
+                     rate[:, 0], rate[:, 1], tuple(left_out), method)
 
 
 def _end_covariance(part: BodySteps, poses: NDArray[np.float64], noise: NoiseArg,
@@ -279,8 +335,11 @@ def window_errors(
     ``truth``), and its end gets the same truth noise; where the truth has no
     heading (θ NaN in ``truth_poses``), the start heading is fitted to the truth positions
     (the odometry's own path aligned to them, :func:`odomkit.truth.heading_by_alignment`) and its
-    variance enters the start covariance; a window where that fails is dropped and
-    counted. A compass robot starts from its measured heading, as ``odomkit track`` does.
+    variance enters the start covariance; a window that starts while the robot stands takes
+    the heading it leaves with (:func:`odomkit.windows.standing_start`: fitted once it moves,
+    turned back by the odometry's own turn since the start), and a window where neither
+    gives one is dropped, counted and named (``left_out``, :func:`headless_note`). A compass
+    robot starts from its measured heading, as ``odomkit track`` does.
 
     Parameters
     ----------
@@ -320,7 +379,9 @@ def window_errors(
     for i, (part, poses) in enumerate(zip(prep.steps, prep.poses, strict=True)):
         covs[i] = _end_covariance(part, poses, noise, prep.start_cov[i], method) + prep.end_cov[i]
     ends = np.array([w.end for w in prep.windows], dtype=np.int64)
-    return WindowErrors(prep.windows, prep.error, covs, prep.start_cov, ends, prep.dropped)
+    start = np.array([poses[0] for poses in prep.poses]).reshape(-1, 3)
+    return WindowErrors(prep.windows, prep.error, covs, prep.start_cov, ends, prep.dropped, start,
+                        prep.left_out)
 
 
 @dataclass(frozen=True)
@@ -363,6 +424,8 @@ class WindowBasis:
     per_spec : tuple of int
         How many of the windows each window length given to :func:`log_window_basis` cut,
         in its order (empty for a basis made otherwise).
+    left_out : tuple of (Window, str)
+        The windows dropped for want of a start heading, and why (:attr:`WindowErrors.left_out`).
     """
 
     windows: list[Window]
@@ -377,13 +440,15 @@ class WindowBasis:
     dropped: int
     notes: tuple[str, ...] = ()
     per_spec: tuple[int, ...] = ()
+    left_out: tuple[tuple[Window, str], ...] = ()
 
     def select(self, keep: ArrayLike) -> WindowBasis:
         """The windows where ``keep`` (bool, shape (W,)) is true, as a basis of their own."""
         idx = np.flatnonzero(np.asarray(keep, dtype=bool))
         return WindowBasis([self.windows[i] for i in idx], self.error[idx], self.fixed[idx],
                            self.white[idx], self.sens[idx], self.bias_weights, self.white_names,
-                           self.bias_names, self.turning[idx], self.dropped, self.notes)
+                           self.bias_names, self.turning[idx], self.dropped, self.notes,
+                           left_out=self.left_out)
 
     @staticmethod
     def merge(bases: list[WindowBasis]) -> WindowBasis:
@@ -409,7 +474,8 @@ class WindowBasis:
                            first.white_names, first.bias_names,
                            np.concatenate([b.turning for b in bases]),
                            sum(b.dropped for b in bases),
-                           tuple(dict.fromkeys(n for b in bases for n in b.notes)))
+                           tuple(dict.fromkeys(n for b in bases for n in b.notes)),
+                           left_out=tuple(x for b in bases for x in b.left_out))
 
     def covariance(self, variances: ArrayLike) -> NDArray[np.float64]:
         """Each window end's covariance (W, 3, 3) at variance parameters ``variances``
@@ -525,7 +591,7 @@ def window_covariance_basis(
     turning = np.array([float(np.sum(np.abs(part.dtheta))) for part in prep.steps])
     names = tuple(name for name, _ in white_units) + (TRUTH_NOISE if truth_columns else ())
     return WindowBasis(prep.windows, prep.error, fixed, white, sens, weights, names, tuple(bias_names),
-                       turning, prep.dropped)
+                       turning, prep.dropped, left_out=prep.left_out)
 
 
 def log_window_basis(
@@ -584,6 +650,9 @@ def log_window_basis(
         if windows:
             parts.append(window_covariance_basis(log, robot, models, samples.poses, valid, windows,
                                                  truth=truth, method=method, truth_columns=truth_columns))
+            if spec is not None and parts[-1].left_out:  # (the whole-log window's: _whole_log_rows)
+                gone = parts[-1].left_out
+                notes.append(f"{log.source}: {len(gone)} {headless_note(log.t, gone, spec)}")
         counts.append(len(parts[-1].windows) if windows else 0)  # less the windows dropped
     if not parts:
         return None, skipped

@@ -6,8 +6,9 @@ one error sample per window. :func:`split_windows` cuts a log by time (``30s``) 
 odometry travel (``5m``) over the rows with truth (:func:`truth_stretches`), and
 :func:`why_no_windows` says why it found none; :func:`run_start` is the one rule for where a
 run with truth starts (the whole run of ``odomkit evaluate``, its whole-log window and
-``fit-noise``'s, ``odomkit track --truth``). What a window's end is scored against, its error
-and predicted covariance, is :mod:`odomkit.window_errors`'s
+``fit-noise``'s, ``odomkit track --truth``), and :func:`standing_start` the start heading of a
+window that starts while the robot stands, against position-only truth. What a window's
+end is scored against, its error and predicted covariance, is :mod:`odomkit.window_errors`'s
 (:func:`odomkit.window_errors.window_errors`, the honesty test of ``odomkit evaluate
 --window``; :func:`odomkit.window_errors.window_covariance_basis`, ``odomkit fit-noise``).
 """
@@ -31,6 +32,7 @@ if TYPE_CHECKING:
     from odomkit.truth import Truth
 
 __all__ = [
+    "REST_TRAVEL",
     "SPARSE_TRUTH",
     "START_STRIDE",
     "Window",
@@ -43,6 +45,8 @@ __all__ = [
     "rows_at_fixes",
     "run_start",
     "split_windows",
+    "standing_start",
+    "stands_at",
     "truth_stretches",
     "why_no_windows",
 ]
@@ -388,6 +392,77 @@ def run_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike 
                      "stray from a "
                      "smooth path by more than 3 --truth-sigma, or the robot hardly moves), so there is no "
                      f"pose to start from{end}", source=truth.source)
+
+
+#: Odometry travel [m] below which the robot is taken to stand (:func:`standing_start`): a
+#: millimetre, more than rounding and less than any drive (a turn on the spot travels none).
+REST_TRAVEL = 1e-3
+
+
+def stands_at(travel: ArrayLike, row: int) -> bool:
+    """Whether the robot stands at log row ``row``: its odometry travels at most
+    :data:`REST_TRAVEL` over the step after it (``travel``: :func:`cumulative_travel`, (N,));
+    False at the last row."""
+    s = np.asarray(travel, dtype=float)
+    return row + 1 < s.size and float(s[row + 1] - s[row]) <= REST_TRAVEL
+
+
+def standing_start(t: ArrayLike, truth: Truth, valid: ArrayLike, odometry: ArrayLike, travel: ArrayLike,
+                   start: int, end: int) -> tuple[float, float, int] | None:
+    """The start heading of a run from log row ``start`` where the robot stands still, taken
+    from the first fixes after it moves: (heading [rad], its variance [rad²], the row ``r`` it
+    was fitted at), or None where the robot does not stand at ``start`` or no heading is had
+    in reach.
+
+    Fixes of a robot standing still give no heading (:func:`odomkit.truth.start_heading`),
+    but a robot leaves with the heading it stood at. So where the odometry travels less than
+    :data:`REST_TRAVEL` over the first step from ``start``, the heading is fitted as
+    :func:`run_start` fits a run's (the odometry's own path aligned to the fixes), at the
+    first row ``r`` after ``start`` where the fixes give one, and turned back by the
+    odometry's own turn from ``start`` to ``r`` (a turn on the spot while standing): the
+    heading at ``start`` is θ_r − (θ_odo[r] − θ_odo[start]), with θ_r's variance. Rows are
+    tried up to :data:`odomkit.truth.WIDEST_HEADING_SPAN` / 2 seconds after the robot
+    moves (the widest fit centred there holds only fixes after it: past that, a heading
+    that cannot be had is not for want of motion) and before ``end``.
+
+    The odometry's turn from ``start`` to ``r`` has the odometry's error, which the run's own
+    covariance from ``start`` then counts once more: conservative, and nothing while the
+    robot stands (no motion, no noise).
+
+    Parameters
+    ----------
+    t : array_like, shape (N,)
+        Time of each log row [s], non-decreasing.
+    truth : Truth
+        Position-only truth.
+    valid : array_like of bool, shape (N,)
+        Rows with valid truth (:func:`odomkit.truth.truth_at`).
+    odometry : array_like, shape (N, 3)
+        The odometry's own path at ``t`` (dead-reckoned from the origin, any frame).
+    travel : array_like, shape (N,)
+        Odometry path length from row 0 to each row [m] (:func:`cumulative_travel`).
+    start, end : int
+        The run's first and last rows (a window's).
+    """
+    from odomkit.truth import WIDEST_HEADING_SPAN
+
+    t = np.asarray(t, dtype=float)
+    moved = np.asarray(travel, dtype=float)[start:end + 1] - float(np.asarray(travel, dtype=float)[start])
+    if moved.size < 2 or not stands_at(travel, start):
+        return None
+    stands = int(np.argmax(moved > REST_TRAVEL)) - 1 if np.any(moved > REST_TRAVEL) else moved.size - 1
+    reach = int(np.searchsorted(t, t[start + stands] + WIDEST_HEADING_SPAN / 2, side="right")) - 1
+    rows = np.zeros(t.size, dtype=bool)
+    rows[start + 1:min(reach, end - 1) + 1] = True
+    rows &= np.asarray(valid, dtype=bool)
+    if not rows.any():
+        return None
+    poses = np.asarray(odometry, dtype=float)
+    try:
+        row, pose, cov = run_start(t, truth, rows, poses, None)
+    except InputError:
+        return None
+    return float(pose[2] - (poses[row, 2] - poses[start, 2])), float(cov[2, 2]), row
 
 
 _LATE_START = " starts at "

@@ -47,12 +47,12 @@ def test_text_reports_say_what_a_single_run_means(run_cli, tmp_path):
     assert "this is the test to trust" not in out
 
 
-def _per_log_lines(run_cli):
-    """``evaluate`` of two built-in runs in 10 s windows: each log's JSON figures (per_log)
-    and the text line the text report gives that log."""
+def _per_log_lines(run_cli, window="10s"):
+    """``evaluate`` of two built-in runs in 10 s windows (9 ends each; 2 s: 28): each log's
+    JSON figures (per_log) and the text line the text report gives that log."""
     import json
 
-    args = ("evaluate", RUN, RUN2, "--robot", ROBOT, "--window", "10s")
+    args = ("evaluate", RUN, RUN2, "--robot", ROBOT, "--window", window)
     code, out, _ = run_cli(*args)
     _, js, _ = run_cli(*args, "--json")
     assert code == 0
@@ -72,9 +72,11 @@ def test_windowed_text_lists_each_logs_ends_when_there_are_several(run_cli):
 
 def test_each_logs_line_gives_its_heading_where_the_truth_has_one(run_cli, tmp_path):
     """The per-log lines of several logs give the heading's coverage, NEES mean and verdict
-    beside the position's (the per_log figures of the JSON), and nothing of a heading where
-    the truth has positions only."""
-    for one, line in _per_log_lines(run_cli):
+    beside the position's (the per_log figures of the JSON; a verdict from 20 ends or more:
+    tests/cli/test_evaluate_per_log_few_ends.py), and nothing of a heading where the truth has
+    positions only."""
+    for one, line in _per_log_lines(run_cli, "2s"):
+        assert one["windows"] >= 20 and one["few_ends"] is None
         c = one["coverage_heading"]
         assert (f"heading inside 95 % / 50 %: {c['0.95']:.2f} / {c['0.5']:.2f}, NEES mean "
                 f"{one['nees_heading_mean']:.3g}, coverage {one['coverage_heading_overall']}") in line, line
@@ -109,7 +111,7 @@ def test_evaluate_json_keys(run_cli, tmp_path):
     assert set(got["coverage"]) == {"0.5", "0.9", "0.95", "0.99"} and set(got["rpe"]) == {"0.5", "1"}
     assert set(got["coverage_bounds"]) == set(got["coverage_verdict"]) == set(got["coverage"])
     assert got["start_heading"] is None and not got["start_heading_fitted"]  # two logs: each in per_log
-    assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends", "warnings"}] * 2
+    assert [set(p) for p in got["per_log"]] == [keys | {"log", "window_ends", "few_ends", "warnings"}] * 2
     assert all(p["start_heading"] is not None and not p["start_heading_fitted"] for p in got["per_log"])
     assert [len(p["window_ends"]) for p in got["per_log"]] == [p["windows"] for p in got["per_log"]]
     assert set(got["per_log"][0]["window_ends"][0]) == {"start", "end", "error", "nees", "heading_error",

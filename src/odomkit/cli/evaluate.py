@@ -161,8 +161,10 @@ def print_report(out: dict[str, Any], windowed: bool, whole_runs: bool = False,
 def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> None:
     """The NEES and coverage lines of one window length (or of the track rows), headed by
     the length scored, and with several logs each log's."""
+    from odomkit.workflows.evaluate import FEW_WINDOW_ENDS
+
     cov = out["coverage"]
-    what = f"{out['windows']} window ends" if windowed else "track rows"
+    what = f"{out['windows']} window {_ends(out['windows'])}" if windowed else "track rows"
     if out["nees_position_mean"] is not None:
         if windowed:
             length = out.get("window")
@@ -197,21 +199,31 @@ def _print_honesty(out: dict[str, Any], windowed: bool, whole_runs: bool) -> Non
                 continue
             c = one["coverage"]
             bounds = one.get("nees_bounds") or (one["nees_position_mean"],) * 2
-            said = f", coverage {one['coverage_overall']}" if one.get("coverage_overall") else ""
-            print(f"  {one['log']}: {one['windows']} ends, inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / "
-                  f"{_fmt(c['0.5'], '.2f')}, NEES mean {_nees_texts(one['nees_position_mean'], *bounds)[0]}"
-                  f"{said}{_log_heading_text(one)}")
+            # Its verdict only from as many ends as the pooled figures need (few_ends: the note).
+            judged = not one.get("few_ends")
+            said = (f", coverage {one['coverage_overall']}" if judged and one.get("coverage_overall") else
+                    "" if judged else f", not judged (under {FEW_WINDOW_ENDS} ends)")
+            mean = _nees_texts(one["nees_position_mean"], *bounds)[0]
+            print(f"  {one['log']}: {one['windows']} {_ends(one['windows'])}, inside 95 % / 50 %: "
+                  f"{_fmt(c['0.95'], '.2f')} / {_fmt(c['0.5'], '.2f')}, NEES mean {mean}{said}"
+                  f"{_log_heading_text(one, judged)}")
 
 
-def _log_heading_text(one: dict[str, Any]) -> str:
+def _ends(n: int) -> str:
+    """"end" or "ends" after a count of ``n`` window ends."""
+    return "end" if n == 1 else "ends"
+
+
+def _log_heading_text(one: dict[str, Any], judged: bool = True) -> str:
     """The heading's part of one log's line, as the position's before it: its coverage of the
-    95 and 50 % intervals, its NEES mean and coverage verdict; nothing where the truth has no
-    heading."""
+    95 and 50 % intervals, its NEES mean and (``judged``: as many ends as the pooled figures
+    need) coverage verdict; nothing where the truth has no heading."""
     if one.get("nees_heading_mean") is None:
         return ""
     c = one["coverage_heading"]
     bounds = one.get("nees_heading_bounds") or (one["nees_heading_mean"],) * 2
-    said = f", coverage {one['coverage_heading_overall']}" if one.get("coverage_heading_overall") else ""
+    said = (f", coverage {one['coverage_heading_overall']}"
+            if judged and one.get("coverage_heading_overall") else "")
     return (f"; heading inside 95 % / 50 %: {_fmt(c['0.95'], '.2f')} / {_fmt(c['0.5'], '.2f')}, NEES mean "
             f"{_nees_texts(one['nees_heading_mean'], *bounds)[0]}{said}")
 
@@ -261,4 +273,5 @@ def _coverage_text(out: dict[str, Any]) -> str:
     overall = out["coverage_overall"]
     parts = [level(k) for k in off + inside]
     return (f"coverage verdict: {overall} ({_MEANING[overall]}): " + ", ".join(parts)
-            + f" (where an honest model's figure falls in 95 % of tests of {out['windows']} ends)")
+            + f" (where an honest model's figure falls in 95 % of tests of {out['windows']} "
+            f"{_ends(out['windows'])})")

@@ -31,7 +31,7 @@ if TYPE_CHECKING:
     from odomkit.workflows.logs import LogOptions
     from odomkit.workflows.truth import TruthOptions
 
-__all__ = ["HEADLESS", "LoadedLog", "score_by_window", "score_loaded", "score_logs", "several_lengths_notes",
+__all__ = ["LoadedLog", "score_by_window", "score_loaded", "score_logs", "several_lengths_notes",
            "START_HEADING_SHARE", "start_heading_note", "STILL", "white_only", "window_specs"]
 
 
@@ -187,9 +187,9 @@ def _windowless_left_out(scored: list[Scored]) -> list[Scored]:
             *scored[1:]]
 
 
-#: Why windows are left out, after their count in a log's warning (``_scoring._pooled_notes``).
+#: Why windows are left out, after their count in a log's warning (``_scoring._pooled_notes``);
+#: for want of a start heading: :func:`odomkit.window_errors.headless_note`.
 STILL = "window(s) travelled less than {:g} m (standing still or turning on the spot) and were left out"
-HEADLESS = "window(s) left out: no start heading could be fitted to the position-only truth"
 
 
 def _score_log(log: OdometryLog, robot: Robot, noise: NoiseArg | None, truth: Truth, max_gap: float | None,
@@ -293,7 +293,7 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
     window (no ``spec``) starts with the whole run (as fit-noise's:
     :func:`odomkit.window_errors.log_window_basis`)."""
     from odomkit.calibrate.fit_noise import first_order_note
-    from odomkit.window_errors import window_errors
+    from odomkit.window_errors import headless_note, window_errors
     from odomkit.windows import late_start_note, rows_at_fixes, split_windows, why_no_windows
 
     notes = list(whole.warnings)
@@ -316,7 +316,7 @@ def _score_windows(log: OdometryLog, robot: Robot, noise: NoiseArg, truth: Truth
         left_out.append((STILL.format(min_travel), skipped))
     found = window_errors(log, robot, noise, samples.poses, valid, windows, truth=truth, method=method)
     if found.dropped:
-        left_out.append((HEADLESS, found.dropped))
+        left_out.append((headless_note(log.t, found.left_out, spec), found.dropped))
     own += [f"{log.source}: {n} {what}" for what, n in left_out]
     # A start heading's error is carried to the window's end unchanged (∂θ/∂θ₀ = 1): its
     # variance is the start's share of the end's.

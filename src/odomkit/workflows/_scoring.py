@@ -251,8 +251,11 @@ def pooled_report(scored: list[Scored], rpe_distances: Sequence[float], window: 
     out: dict[str, Any] = {"window": window, **summarise(scored, rpe_distances)}
     out.update(verdicts(out, scored, windowed=window is not None))
     out.update(_start(scored[0]) if len(scored) == 1 else _start(None))
+    # A log's own verdicts from fewer ends than the pooled figures' rule are not to be judged by
+    # (a user study read "coverage consistent" from one end of NEES 27.1): ``few_ends`` says so.
     out["per_log"] = [{"log": s.label, **(one := summarise([s], rpe_distances)),
                        **verdicts(one, [s], windowed=window is not None), **_start(s), **_window_ends(s),
+                       "few_ends": few_ends_note(one["windows"]) if window is not None else None,
                        "warnings": list(s.warnings)} for s in scored]
     out["warnings"] = _pooled_notes(scored, noun)
     few = few_ends_note(out["windows"])
@@ -427,7 +430,9 @@ FEW_WINDOW_ENDS = 20
 
 def few_ends_note(ends: int) -> str | None:
     """The warning for a windowed test of fewer than :data:`FEW_WINDOW_ENDS` ends: how far
-    an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points)."""
+    an honest model's 95 % coverage then scatters (its binomial 2.5 and 97.5 % points); None
+    for more ends, or none. The pooled figures' warning, and each log's ``few_ends`` in
+    ``per_log`` (its own verdicts then not judged, :func:`pooled_report`)."""
     if not 0 < ends < FEW_WINDOW_ENDS:
         return None
     from odomkit.evaluate import coverage_range

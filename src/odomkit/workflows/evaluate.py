@@ -386,7 +386,8 @@ def _unscored_lengths(specs: Sequence[Any], by_spec: Sequence[Sequence[Scored]],
              if spec is not None and r["windows"] == 0]
     if not empty:
         return
-    from odomkit.workflows._score_logs import HEADLESS, STILL
+    from odomkit.window_errors import HEADLESS
+    from odomkit.workflows._score_logs import STILL
 
     whys: list[str] = []
     reasons: set[str] = set()
@@ -399,7 +400,7 @@ def _unscored_lengths(specs: Sequence[Any], by_spec: Sequence[Sequence[Scored]],
         whys.append("; ".join(f"{n} {what}" for what, n in counts.items()) or "every window was left out")
     still = STILL.split("{")[0]  # its minimum travel is filled in
     advice = []
-    if HEADLESS in reasons:
+    if any(what.startswith(HEADLESS) for what in reasons):  # (the windows named after it)
         advice.append("longer windows (each must start where the fixes give a heading: the robot moving, "
                       "fixes on both sides) or truth with heading")
     if any(what.startswith(still) for what in reasons):
