@@ -96,3 +96,19 @@ def test_real_odometry_noise_is_fitted_and_not_warned_of(run_cli, tmp_path, nois
     assert np.sqrt(np.mean(k**2)) == pytest.approx(0.01, rel=0.5), result["variances"]
     assert not any(w.startswith(NO_GROWTH) for w in result["warnings"]), result["warnings"]
     assert NO_GROWTH not in err
+
+
+def test_an_undetermined_fit_names_the_window_length_that_had_no_window(run_cli, tmp_path, noisy_diff_log):
+    """A 25 s log fitted with --window 10s --window 30s: the 30 s length has no window, the 10 s
+    ones are too few for the default models, and the fit is undetermined. A user study's half
+    log was told only "2 window(s) give 4 numbers for 7 free noise parameter(s)"; the error now
+    says the 30 s length had none."""
+    log, _, _ = noisy_diff_log(tmp_path, k_true=0.01, k_model=0.01, seconds=25.0, truth_noise=FIX_NOISE)
+    robot = tmp_path / "bare.toml"
+    robot.write_text(ROBOT_TEXT)
+    code, out, err = run_cli("fit-noise", "--robot", robot, "--log", log, "--truth", tmp_path / "xy.csv",
+                             "--columns", COLUMNS, "--window", "10s", "--window", "30s",
+                             "--out", tmp_path / "fit.toml")
+    assert code == 2 and out == "" and err.count("\n") == 1, err
+    assert "numbers for" in err and "free noise parameter" in err
+    assert "--window 30 s: no log has a window of that length" in err

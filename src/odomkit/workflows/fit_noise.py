@@ -470,9 +470,14 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
                          "no start heading could be fitted to the position-only truth around its start (too "
                          "few fixes, fixes off a smooth path by more than 3 --truth-sigma, too noisy, or the "
                          "robot hardly moves there)")), source=None if why else used[0].name)
-    if dropped:
+    if dropped and not any("window(s) left out" in n for b in bases for n in b.notes):
         notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
                      "position-only truth")
+    # What left the windows few, for an error that the fit finds too few of them: a user
+    # study's half log was told only "1 window(s) give 2 numbers for 7 free noise
+    # parameter(s)", its first window dropped and its 30 s length without a window unsaid.
+    why_few = [n for n in ([unused] if unused else []) if n] + [
+        n for b in bases for n in b.notes if "window(s) left out" in n]
     names = [p.name for p in used]
     labels = [p.window_labels for p in used]
     if groups is not None:
@@ -483,9 +488,14 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
                   for name in names]
     scatter = _pooled_scatter(used)
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
-        fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
-                        level=level, log_names=names, cross_validate=cross_validate,
-                        trim=trim, truth_held=held, window_labels=labels, truth_scatter=scatter)
+        try:
+            fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
+                            level=level, log_names=names, cross_validate=cross_validate,
+                            trim=trim, truth_held=held, window_labels=labels, truth_scatter=scatter)
+        except InputError as exc:
+            if not why_few:
+                raise
+            raise InputError(f"{exc}; " + "; ".join(why_few)) from exc
     # An interval's upper bound may be infinite (the data do not bound it; JSON null).
     check_result("the noise fit", {"parameters": list(fit.parameters.values()),
                                    "variances": list(fit.variances.values()),
