@@ -375,3 +375,13 @@ def test_a_slalom_under_a_quarter_turn_each_way_is_not_called_hardly_turning():
     (f,) = [f for f in check_motion(log, ROBOT) if f.check == "turning"]
     assert f.status == "warn" and "hardly" not in f.message
     assert "under a quarter turn either way" in f.message
+
+
+def test_a_cars_turning_advice_names_a_drive_a_car_can_make():
+    """A car on a highway was told to drive "a square each way" (a user study's RAV4)."""
+    from odomkit.robot import Car
+
+    t = np.arange(0, 60.0, 0.1)
+    log = OdometryLog(t, {"speed": np.full(t.size, 17.0), "steer": np.full(t.size, 0.001)})
+    (f,) = [f for f in check_motion(log, Car(2.65)) if f.check == "turning"]
+    assert f.status == "warn" and "roundabout" in (f.advice or "") and "square" not in (f.advice or "")

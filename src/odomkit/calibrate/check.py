@@ -451,7 +451,9 @@ def check_motion(log: OdometryLog, robot: Robot) -> list[Finding]:
         # Not "hardly any turning": a slalom's 1.47 and 1.32 rad are turning, only not far
         # enough either way (a user study's F1TENTH car).
         found.append(Finding("turning", "warn", f"{turns}: under a quarter turn either way",
-                             "drive turns both ways, at least a half turn each (e.g. a square each way)"))
+                             "drive turns both ways, at least a half turn each (e.g. "
+                             + ("a loop round a block, or a roundabout, each way" if robot.type_name == "car"
+                                else "a square each way") + ")"))
     elif min(ccw, cw) < 0.5 * math.pi:
         way = "clockwise" if cw < ccw else "counter-clockwise"
         pair = _MIMIC.get(robot.type_name, "two calibration parameters")
