@@ -15,13 +15,40 @@ import numpy as np
 from numpy.typing import NDArray
 
 from odomkit import validate
-from odomkit.errors import ModelError
+from odomkit.errors import InputError, ModelError
 from odomkit.kinematics import car_measured_steer, car_speed_factor
 from odomkit.log import OdometryLog
 from odomkit.robot import Car, CompassOdometry, DiffDrive, GyroOdometry, Robot, Tricycle, Unicycle
 
-__all__ = ["diff_drive_controller_parameters", "tricycle_controller_parameters", "turn_noise_note",
-           "twist_covariance", "TwistCovariance"]
+__all__ = ["controller_radius", "diff_drive_controller_parameters", "tricycle_controller_parameters",
+           "turn_noise_note", "twist_covariance", "TwistCovariance"]
+
+
+def controller_radius(given: float | None, file_radius: float | None,
+                      source: str | None = None) -> float | None:
+    """The nominal wheel radius [m] of a ROS 2 controller's parameters (``calibrate --ros-yaml``,
+    ``report``'s snippet): ``given`` (``--wheel-radius``), else the robot file's own
+    (``file_radius``: :func:`odomkit.workflows.calibration.file_wheel_radius`, the mean of its
+    wheels), else None (a file in metres per tick, wheel speeds logged with ``m_per_tick = 1``).
+
+    A ``given`` radius that is not a positive number of metres, or that differs from the
+    file's, is an :class:`~odomkit.errors.InputError` naming ``source`` (the robot file): the
+    multipliers are computed against the file's nominal wheels.
+
+    Examples
+    --------
+    >>> controller_radius(0.035, None), controller_radius(None, 0.05), controller_radius(None, None)
+    (0.035, 0.05, None)
+    """
+    if given is None:
+        return file_radius
+    if not (isinstance(given, int | float) and math.isfinite(given) and given > 0):
+        raise InputError(f"--wheel-radius must be a positive number of metres, got {given!r}")
+    if file_radius is not None and abs(given - file_radius) > 1e-9 * file_radius:
+        raise InputError(f"--wheel-radius {given:g} m conflicts with the robot file's wheel size "
+                         f"(radius {file_radius:g} m): the multipliers are relative to the file's wheels; "
+                         "leave --wheel-radius out or fix the file", source=source)
+    return float(given)
 
 
 def diff_drive_controller_parameters(

@@ -2,7 +2,7 @@
 
 ::
 
-    odomkit report LOG --robot ROBOT.toml [--truth GT] --out report.html [--force] [--json]
+    odomkit report LOG --robot ROBOT.toml [--truth GT] --out report.html [--wheel-radius R] [--force] [--json]
 """
 
 from __future__ import annotations
@@ -51,6 +51,10 @@ def report(
     method: Annotated[str, typer.Option(help="exact | midpoint | euler")] = "exact",
     initial_pose: Annotated[str | None, typer.Option(
         help="x,y,theta [m, m, rad] of the track's start; default: the truth pose at the first row")] = None,
+    wheel_radius: Annotated[float | None, typer.Option(
+        "--wheel-radius", help="Nominal wheel radius [m] for the ROS 2 controller snippet, as calibrate's "
+                               "for --ros-yaml: needed where the robot file gives metres per tick (wheel "
+                               "speeds: m_per_tick = 1), not a wheel size.")] = None,
     force: Annotated[bool, typer.Option(help="Replace an existing --out file.")] = False,
     json_out: Annotated[bool, typer.Option("--json", help="Print one JSON object.")] = False,
     *,
@@ -71,7 +75,8 @@ def report(
     with reported_warnings() as warned, progress_bar(json_out) as progress:
         result = run_report(log, robot, out, truth=topts,
                             log_options=options, window=window, kinds=fitted, method=method,
-                            pose0=parse_pose(initial_pose), overwrite=force, progress=progress)
+                            pose0=parse_pose(initial_pose), wheel_radius=wheel_radius, overwrite=force,
+                            progress=progress)
     result = with_warnings(result, warned)
     if json_out:
         print_json(result)

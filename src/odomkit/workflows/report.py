@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from odomkit import __version__
-from odomkit.errors import OdomkitError
+from odomkit.errors import InputError, OdomkitError
 from odomkit.progress import NO_PROGRESS, Progress, stage
 from odomkit.report import Cell, Code, Figure, Paragraph, Section, Table, number, render_report, svg_figure
 from odomkit.workflows.results import collected_warnings
@@ -439,7 +439,11 @@ def _calibrated_in_windows(cal: dict[str, Any] | None, problems: list[str],
 def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before: dict[str, Any],
                          after: dict[str, Any] | None, run: TrackRun, run_after: TrackRun | None,
                          figures: ReportFigures, windowed: str | None = None,
-                         robot_name: str = "") -> Section:
+                         robot_name: str = "", *, aligned: tuple[float | None, float | None] = (None, None),
+                         clock: tuple[float, str] | None = None) -> Section:
+    """``aligned``: the ATE [m] before and after with each track moved rigidly onto the truth
+    (:func:`_aligned_ate`); ``clock``: the truth's clock offset [s] the calibration held, and
+    where it came from (:func:`_clock_held`), None where it fitted it or there is none."""
     names = ", ".join((cal or {}).get("parameters", {})) or "its calibration parameters"
     blocks: list[Any] = [Paragraph(
         f"The robot's systematic errors ({names}) are fitted to this log's truth (odomkit "
@@ -468,7 +472,7 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
         if name in cal:
             rows.append((name, number(cal[name], "", 6, key=f"calibration.{name}"), Cell(""),
                          *((Cell(""),) if between else ())))
-    clock = cal.get("truth_time_offset")
+    held, clock = clock, cal.get("truth_time_offset")
     if isinstance(clock, dict) and clock.get("fitted"):
         # The truth's clock, fitted with the robot: every command that reads the calibrated
         # robot file's [truth] time_offset moves the truth by it (a user study missed it here).
@@ -477,6 +481,10 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
                      number(clock.get("std_error"), "", 2, key="calibration.std_error.truth_time_offset"),
                      *([number(clock.get("std_error_between_runs"), "", 2,
                                key="calibration.std_error_between.truth_time_offset")] if between else [])))
+    elif held is not None:  # not fitted: the page says whose it is (a user study's 8328 s clock)
+        rows.append((f"truth clock offset [s], {held[1]}",
+                     number(held[0], "", 6, key="calibration.truth_time_offset"), Cell(""),
+                     *((Cell(""),) if between else ())))
     header = (("parameter", "fitted", "standard error, the fit's own", f"standard error between {clusters}")
               if between else ("parameter", "fitted", "standard error"))
     if between:
@@ -485,18 +493,109 @@ def _calibration_section(cal: dict[str, Any] | None, problem: str | None, before
     blocks.append(Table(header, tuple(rows),
                         f"Calibration ({cal.get('method', 'exact')}, from {cal.get('source', 'truth')})"))
     pairs = zip(_metric_rows(before, "before."), _metric_rows(after, "after."), strict=True)
-    blocks.append(Table(("metric", "before", "after"), tuple((b[0], b[1], a[1]) for b, a in pairs),
+    compared: list[tuple[str | Cell, ...]] = [(b[0], b[1], a[1]) for b, a in pairs]
+    compared.append((f"{_ALIGNED_ATE} (odomkit evaluate --align se2)",
+                     number(aligned[0], "m", 4, key="before.aligned.ate_rmse"),
+                     number(aligned[1], "m", 4, key="after.aligned.ate_rmse")))
+    blocks.append(Paragraph(_FOOTING))
+    blocks.append(Table(("metric", "before", "after"), tuple(compared),
                         "Error metrics with the robot file's parameters and with the calibrated ones"))
+    if (swapped := _footings_disagree(before["ate_rmse"], after["ate_rmse"], *aligned)) is not None:
+        blocks.append(Paragraph(swapped, "note"))
     if run_after is not None:
         def draw(plot: ModuleType, ax: list[Axes]) -> None:
             plot.draw_track(ax[0], run.track.poses, truth=run.truth, label="before calibration")
             plot.draw_track(ax[0], run_after.track.poses, label="after calibration")
 
         fig = figures.draw(("draw_track",), draw, "The track with the robot file's parameters and with the "
-                           "calibrated ones, against the ground truth.",
-                           "Tracks before and after calibration", size=(7.0, 5.6))
+                           "calibrated ones, both from the same start pose (the first track's), against the "
+                           "ground truth.", "Tracks before and after calibration", size=(7.0, 5.6))
         blocks += [f for f in (fig,) if f is not None]
     return Section("calibration", "Calibration before and after", tuple(blocks))
+
+
+#: The label of the ATE with each track moved rigidly onto the truth.
+_ALIGNED_ATE = "ATE, each track moved rigidly onto the truth (SE(2))"
+#: What the footings of the before-and-after table are, and what flatters which.
+_FOOTING = (
+    "Both columns stand on the same footing, row by row. Each row but the last starts both tracks from the "
+    "truth at the first usable row, as odomkit evaluate does: where the truth has positions only, the "
+    "heading there is fitted to the fixes around it, so a first fix a few cm off the robot, or that "
+    "heading's own uncertainty, turns and shifts each whole track, by amounts that differ between the "
+    "columns. The last row moves each track rigidly onto the truth first (the rotation and translation "
+    "that fit it best, odomkit evaluate --align se2), which is the same as starting each from the start "
+    "pose that fits it best: neither track's start counts, only its shape. That flatters both columns "
+    "alike (three numbers fitted to the truth). The calibration fitted the robot's parameters with its own "
+    "start pose to this same truth, so 'after' is in-sample on either footing.")
+
+
+def _aligned_ate(scored: Sequence[Scored]) -> float | None:
+    """The ATE [m] of ``scored``'s whole runs (their evaluated rows,
+    :class:`~odomkit.workflows.evaluate.Scored` ``rows``) with each track moved rigidly onto the truth by
+    :func:`odomkit.evaluate.align_track` ``"se2"``, pooled over the runs as ``ate_rmse`` is: what
+    ``odomkit evaluate --align se2`` prints for them. None where a run kept no rows or has
+    too few to align."""
+    from odomkit.errors import ModelError
+    from odomkit.evaluate import align_track
+
+    errors = []
+    for s in scored:
+        if s.rows is None or s.rows.poses.shape[0] < 2:
+            return None
+        try:
+            est, _ = align_track(s.rows.poses, s.rows.truth, "se2")
+        except ModelError:  # the truth does not spread (the robot stands still)
+            return None
+        errors.append(np.hypot(*(est[:, :2] - s.rows.truth[:, :2]).T))
+    return float(np.sqrt(np.mean(np.concatenate(errors) ** 2))) if errors else None
+
+
+def _footings_disagree(before: float, after: float, aligned_before: float | None,
+                       aligned_after: float | None) -> str | None:
+    """What the page says where the ATE from the truth's first row and the aligned ATE
+    disagree on whether the calibration helped (a user study's LEGO robot: 0.058 m before,
+    0.084 m after from the first fix; 0.054 m and 0.019 m aligned), else None."""
+    if aligned_before is None or aligned_after is None:
+        return None
+    if (after > before) == (aligned_after > aligned_before):
+        return None
+    larger, smaller = ("larger", "smaller") if after > before else ("smaller", "larger")
+    return (f"The two footings disagree: from the truth at the first usable row the calibrated track's ATE "
+            f"is the {larger} ({after:.3g} m against {before:.3g} m), moved onto the truth the {smaller} "
+            f"({aligned_after:.3g} m against {aligned_before:.3g} m). What differs between the rows is where "
+            "each track starts, not the robot's parameters: the aligned row judges those.")
+
+
+def _clock_held(robot: Path, given: TruthOptions, own_fixes: bool) -> tuple[float, str] | None:
+    """The truth's clock offset [s] that every step of the report holds rather than fits, and
+    whose it is, for a truth on its own clock (a truth file; ``own_fixes``, a bag's GPS topic):
+    ``--truth-time-offset`` (``given.time_offset``), else the robot file's ``[truth]
+    time_offset``; None where neither gives one (the calibration fits it) or the truth is the
+    log's own gt_* columns (on the log's clock)."""
+    from odomkit.io.robotfile import read_truth_table
+
+    if given.path is None and not own_fixes:
+        return None
+    if given.time_offset is not None:
+        return given.time_offset, "as given by --truth-time-offset"
+    table = read_truth_table(robot)
+    if "time_offset" not in table:
+        return None
+    return float(table["time_offset"]), "held at the robot file's [truth] time_offset"
+
+
+def _robot_file_clock(robot: Path, options: TruthOptions) -> TruthOptions:
+    """``options`` with the truth's clock offset, where none is given, the robot file's
+    ``[truth] time_offset`` (:func:`~odomkit.workflows.truth.clock_from_robot`, as every other
+    command takes it), for every step of the report, the calibration too (which fits the
+    clock only where neither gives one: a user study's truth 8328 s off was fitted from 0, and
+    the calibration left out); as they are where the robot file has none."""
+    from odomkit.io.robotfile import read_truth_table
+    from odomkit.workflows.truth import clock_from_robot
+
+    if options.time_offset is not None or "time_offset" not in read_truth_table(robot):
+        return options
+    return clock_from_robot(robot, [options])[0]
 
 
 def _which_to_quote(own: dict[str, float], between: dict[str, float], clusters: str, n: int | None) -> str:
@@ -607,12 +706,15 @@ def _without_truth_section(robot_type: str = "diff", bag: bool = False) -> Secti
 
 
 def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: str,
-              amcl_yaml: str | None, notes: list[str], said: bool = False, geometry: str = "") -> list[Code]:
+              amcl_yaml: str | None, notes: list[str], said: bool = False, geometry: str = "",
+              radius: float | None = None) -> list[Code]:
     """The controller YAML (with the twist covariance of the noise), nav2 AMCL's α's and the
     final pose covariance in ROS's 6×6 layout (robot_localization reads it from odometry).
 
     ``robot_file`` (default ``robot_path``) gives the geometry and the noise, which ``what``
-    names ("the calibrated robot and the fitted noise"); the wheel radius is ``robot_path``'s.
+    names ("the calibrated robot and the fitted noise"); ``radius`` [m] is the controller's
+    nominal wheel radius (:func:`odomkit.calibrate.export.controller_radius`: ``--wheel-radius``
+    or ``robot_path``'s own; None: no controller snippet, and a note naming the flag).
     ``geometry`` names the robot nav2 AMCL's α's were fitted with.
     A pose covariance past the first-order limit gets a note (:func:`_ros_covariance_note`;
     ``said``: the track's own warning has said what that means)."""
@@ -620,17 +722,16 @@ def _snippets(run: TrackRun, robot_path: Path, robot_file: Path | None, what: st
     from odomkit.io.robotfile import read_robot
     from odomkit.io.ros import ros2_controller_yaml, ros_pose_covariance
     from odomkit.robot import DiffDrive, Tricycle
-    from odomkit.workflows.calibration import file_wheel_radius
 
     out = []
     robot, noise = read_robot(robot_file or robot_path)
-    radius = file_wheel_radius(robot_path)
     if not isinstance(robot, DiffDrive | Tricycle):
         notes.append(f"no controller snippet: ROS 2's diff_drive and tricycle controllers take a diff or "
                      f"tricycle robot, this is a {robot.type_name!r} one")
     elif radius is None:
         notes.append("no controller snippet: the robot file gives metres per tick, not the wheel size "
-                     "(wheel_radius or wheel_diameter) the controller needs")
+                     "(wheel_radius or wheel_diameter) the controller needs: give it with --wheel-radius R "
+                     "(the controller's nominal radius, m), as calibrate --ros-yaml takes it")
     else:
         twist = None
         dt = np.diff(run.log.t)
@@ -718,6 +819,7 @@ def run_report(
     kinds: Sequence[str] = ("white",),
     method: str = "exact",
     pose0: tuple[float, float, float] | None = None,
+    wheel_radius: float | None = None,
     overwrite: bool = False,
     progress: Progress = NO_PROGRESS,
 ) -> dict[str, Any]:
@@ -736,6 +838,11 @@ def run_report(
     pose0 : start of the track (x, y, θ) [m, m, rad]; default the truth pose at the first
         row, else the origin (as ``odomkit track``). The error metrics start from the truth
         as ``odomkit evaluate`` does, whatever ``pose0``.
+    wheel_radius : the nominal wheel radius [m] of the ROS 2 controller snippet
+        (``--wheel-radius``, as ``calibrate --ros-yaml`` takes it); default the robot file's
+        own (``wheel_radius``/``wheel_diameter``), and an error where it differs, or where the
+        robot is none that ROS 2's diff_drive or tricycle controller takes. A file in metres
+        per tick (wheel speeds logged with ``m_per_tick = 1``) gets the snippet only with it.
     progress : :class:`~odomkit.progress.Progress`; the track's stages (reading, dead
         reckoning, covariance), then one stage of the steps that need truth (scoring,
         calibration, noise fit, AMCL).
@@ -750,10 +857,12 @@ def run_report(
     from odomkit.workflows.track import run_track
 
     started = time.perf_counter()
-    options = truth or TruthOptions()
+    given = truth or TruthOptions()
     log_path, robot_path = Path(log_path), Path(robot_path)
     check_outputs({"--out": out}, overwrite=overwrite,
-                  inputs=[p for p in (log_path, robot_path, options.path) if p is not None])
+                  inputs=[p for p in (log_path, robot_path, given.path) if p is not None])
+    options = _robot_file_clock(robot_path, given)
+    radius = _wheel_radius(robot_path, wheel_radius)  # a bad one is one line before any work
     if window is not None:
         parse_window(window)  # a bad value is one line before any work
     figures = ReportFigures()
@@ -769,15 +878,16 @@ def run_report(
             ros_notes: list[str] = []
             what = f"{_robot_file(robot_path.name)} and its noise"
             snippets = _snippets(run, robot_path, None, what, None, ros_notes,
-                                 said=_first_order_from(run) is not None)
+                                 said=_first_order_from(run) is not None, radius=radius)
             kind, bag = run.track.steps.robot.type_name, run.log.meta.get("format") == "bag"
             sections += [_without_truth_section(kind, bag), _ros_section(snippets, ros_notes, what)]
             sections.insert(0, _summary_section(run, None, None, None, None, None, robot_path.name))
         else:
             with stage(progress, _TRUTH_STEPS, "report: scoring, calibration, noise fit, AMCL") as step:
-                summary_section, *rest = _with_truth(run, log_path, robot_path, options, log_options,
-                                                     window, kinds, method, figures, step,
-                                                     start_said=pose0 is None)
+                summary_section, *rest = _with_truth(
+                    run, log_path, robot_path, options, log_options, window, kinds, method, figures, step,
+                    start_said=pose0 is None, radius=radius,
+                    clock=_clock_held(robot_path, given, _own_fixes(run) is not None))
             sections = [summary_section, *sections, *rest]
         notes += [n for n in figures.notes if n not in notes]
     title = f"odomkit report: {log_path.name}"
@@ -796,6 +906,24 @@ def run_report(
     return {"report": str(written), "sections": [s.key for s in sections], "warnings": list(notes)}
 
 
+def _wheel_radius(robot_path: Path, given: float | None) -> float | None:
+    """The controller snippet's nominal wheel radius [m]: ``given`` or the robot file's own
+    (:func:`odomkit.calibrate.export.controller_radius`, calibrate's rule), None for neither; a
+    radius given for a robot no ROS 2 controller here takes is an InputError."""
+    from odomkit.calibrate.export import controller_radius
+    from odomkit.io.robotfile import read_robot
+    from odomkit.robot import DiffDrive, Tricycle
+    from odomkit.workflows.calibration import file_wheel_radius
+
+    if given is not None:
+        robot = read_robot(robot_path)[0]
+        if not isinstance(robot, DiffDrive | Tricycle):
+            raise InputError(f"--wheel-radius is the nominal wheel radius of ROS 2's diff_drive or "
+                             f"tricycle controller; the robot file describes a {robot.type_name!r} robot, "
+                             "which neither takes: leave --wheel-radius out", source=str(robot_path))
+    return controller_radius(given, file_wheel_radius(robot_path), str(robot_path))
+
+
 def _own_fixes(run: TrackRun) -> Truth | None:
     """The log's own position-only truth on its own clock (a ROS bag's GPS topic,
     ``--truth-topic /fix``), which is compared fix by fix, not row by row; else None."""
@@ -808,11 +936,14 @@ def _own_fixes(run: TrackRun) -> Truth | None:
 def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                 log_options: LogOptions | None, window: str | None, kinds: Sequence[str], method: str,
                 figures: ReportFigures, step: Progress = NO_PROGRESS,
-                start_said: bool = True) -> list[Section]:
+                start_said: bool = True, clock: tuple[float, str] | None = None,
+                radius: float | None = None) -> list[Section]:
     """The sections that need ground truth: the summary, errors, honesty, calibration, noise, ROS
     (``step`` advances once per step, :data:`_TRUTH_STEPS` in all; the workflows called
     report no progress of their own, so that stages do not nest). ``start_said``: the track
-    started from the truth and said where (:func:`_scored`)."""
+    started from the truth and said where (:func:`_scored`). ``clock``: the truth's clock
+    offset every step holds, and whose it is (:func:`_clock_held`); ``radius``: the controller's
+    nominal wheel radius [m] (:func:`_snippets`)."""
     from odomkit.calibrate.positions import DRIFT_WINDOW
     from odomkit.io.robotfile import TRUTH_SIGMAS, read_robot, read_truth_table
     from odomkit.workflows.calibration import calibrate_files
@@ -864,15 +995,18 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
                 f"the whole-run calibration, replaced by the one in windows: {w.message}")
             warnings.warn_explicit(message, w.category, w.filename, w.lineno)
         after = run_after = None
+        aligned: tuple[float | None, float | None] = (_aligned_ate(scored), None)
         if cal is not None:
-            after = _scored(log, cal_path, options, log_options, window if file_noise else None, method,
-                            "after calibration: ", scored)[1]
+            scored_after, after = _scored(log, cal_path, options, log_options, window if file_noise else None,
+                                          method, "after calibration: ", scored)
+            aligned = (aligned[0], _aligned_ate(scored_after))
             start = run.track.poses[0]  # where the track before calibration started
             run_after = run_track(log, cal_path, method=method, log_options=log_options,  # type: ignore[arg-type]
                                   truth=options, pose0=(float(start[0]), float(start[1]), float(start[2])),
                                   note_first_order=False)
         sections.append(_calibration_section(cal, problems[-1] if problems else None, ev, after, run,
-                                             run_after, figures, windowed, name))
+                                             run_after, figures, windowed, name, aligned=aligned,
+                                             clock=clock))
         used = _robot_used(name, cal is not None)
         step.advance()
         base = cal_path if cal is not None else robot
@@ -913,15 +1047,18 @@ def _with_truth(run: TrackRun, log: Path, robot: Path, options: TruthOptions,
         source, noise = (fit_path, "the fitted noise") if fit else (base, "the robot file's noise")
         what = f"{used}, and {noise}"
         snippets = _snippets(run_after or run, robot, source, what, amcl_yaml, notes,
-                             said=_first_order_from(run) is not None, geometry=used)
+                             said=_first_order_from(run) is not None, geometry=used, radius=radius)
     sections.append(_ros_section(snippets, notes, what))
-    sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit, name))
+    sections.insert(0, _summary_section(run, ev, cal, after, fit, ev_fit, name, aligned))
     return sections
 
 
 def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, Any] | None,
                      after: dict[str, Any] | None, fit: dict[str, Any] | None,
-                     ev_fit: dict[str, Any] | None, robot_name: str) -> Section:
+                     ev_fit: dict[str, Any] | None, robot_name: str,
+                     aligned: tuple[float | None, float | None] = (None, None)) -> Section:
+    """``aligned``: the ATE [m] before and after calibration with each track moved rigidly onto
+    the truth (:func:`_aligned_ate`), None where not scored."""
     cov = run.track.cov
     rows: list[tuple[str | Cell, ...]] = [("distance travelled", number(run.track.path_length, "m"))]
     if cov is not None:
@@ -945,6 +1082,11 @@ def _summary_section(run: TrackRun, ev: dict[str, Any] | None, cal: dict[str, An
                          number(ev["coverage_heading"]["0.95"], key="coverage_heading.0.95", decimals=2)))
     if cal is not None and after is not None:
         rows.append(("ATE after calibration", number(after["ate_rmse"], "m", key="after.ate_rmse")))
+        # Both moved onto the truth: neither track's start counts (see 'Calibration before and after').
+        rows += [(f"ATE {when} calibration, each track moved rigidly onto the truth (SE(2))",
+                  number(value, "m", key=f"{key}.aligned.ate_rmse"))
+                 for when, key, value in (("before", "before", aligned[0]), ("after", "after", aligned[1]))
+                 if value is not None]
     if fit is not None and ev_fit is not None:
         rows.append(("inside the 95 % ellipse, fitted noise (in-sample)",
                      number(ev_fit["coverage"]["0.95"], key="fitted.coverage.0.95", decimals=2)))
