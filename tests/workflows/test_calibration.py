@@ -235,3 +235,27 @@ def test_a_yaw_rate_scale_far_off_names_a_twist_from_commanded_steering():
         _warn_far_from_file(Unicycle(), Unicycle(yaw_rate_scale=0.57))
     (said,) = [str(w.message) for w in caught if "yaw_rate_scale" in str(w.message)]
     assert "-43 %" in said and "commanded steering" in said and "skid-steer" in said
+
+
+def test_calibrate_fits_the_clock_about_the_robot_files_offset(tmp_path, run_cli, noisy_diff_log):
+    """A truth stamped 1000.25 s late, the robot file's [truth] time_offset 1000 s (what an
+    earlier calibration or fit-noise wrote): the clock's fit starts there and fits the rest,
+    and the total comes back. An F1TENTH car's motion capture 8328 s off its odometry was
+    refused with "only 0 truth fixes" although the file named the offset (user study)."""
+    import json
+
+    import numpy as np
+
+    log, _, robot = noisy_diff_log(tmp_path, k_true=0.0, k_model=0.0, seconds=120.0, truth_noise=0.001)
+    fixes = np.loadtxt(tmp_path / "xy.csv", delimiter=",", skiprows=1)
+    fixes[:, 0] += 1000.25
+    late = tmp_path / "late.csv"
+    np.savetxt(late, fixes, delimiter=",", header="t,x,y", comments="")
+    with_clock = tmp_path / "clocked.toml"
+    with_clock.write_text(robot.read_text() + "[truth]\ntime_offset = 1000.0\n")
+    code, out, err = run_cli("calibrate", log, "--robot", with_clock, "--columns",
+                             "t=t,dist_left=L,dist_right=R", "--truth", late, "--json")
+    assert code == 0, err
+    clock = json.loads(out)["truth_time_offset"]
+    assert clock["fitted"] and clock["fitted_about"] == 1000.0
+    assert abs(clock["value"] - 1000.25) < max(3 * clock["std_error"], 0.01)

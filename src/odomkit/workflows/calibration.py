@@ -227,15 +227,20 @@ def calibrate_files(
                 raise InputError("calibration from truth positions fits a diff, tricycle, car, unicycle or "
                                  f"gyro robot; the robot file describes a {robot.type_name!r} robot",
                                  source=str(robot_path))
+            # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
+            # truths below are already on the log's clock). The fit starts from the robot file's
+            # [truth] time_offset, what an earlier calibration fitted, and fits what is left
+            # within its range: a truth 8328 s off the log (an F1TENTH car's motion capture) was
+            # refused with "only 0 truth fixes" though the file named the offset (user study).
+            given = truth[0].time_offset
+            base = (float(truth_table.get("time_offset", 0.0)) if given is None and not own_columns
+                    and all(o.path is not None for o in truth) else 0.0)
             truths = []
             for log, options in zip(runs, truth, strict=True):
-                found = load_truth(options, log)
+                found = load_truth(replace(options, time_offset=base) if base else options, log)
                 if found is None:
                     raise InputError("no truth: give --truth or a log with gt_* columns", source=log.source)
                 truths.append(found)
-            # The truth's clock offset is fitted unless --truth-time-offset gives it (then the
-            # truths above are already on the log's clock).
-            given = truth[0].time_offset
             gaps = [o.max_gap for o in truth]
             heading_weight = float(exact_kwargs.get("heading_weight", 0.0))  # the truth's heading compared
 
@@ -290,9 +295,13 @@ def calibrate_files(
             if own_columns and given:  # a --truth-time-offset moved the gt_* columns: said
                 summary["truth_time_offset"] = {"value": given, "std_error": 0.0, "fitted": False}
             elif not own_columns:  # the gt_* columns are on the log's clock: no offset to report
-                summary["truth_time_offset"] = (
-                    {"value": given, "std_error": 0.0, "fitted": False} if given is not None else
-                    {**summary["truth_time_offset"], "fitted": True})
+                if given is not None:
+                    summary["truth_time_offset"] = {"value": given, "std_error": 0.0, "fitted": False}
+                else:
+                    fitted_clock = summary["truth_time_offset"]
+                    total = base + float(fitted_clock["value"])
+                    summary["truth_time_offset"] = {**fitted_clock, "value": total, "fitted": True,
+                                                    **({"fitted_about": base} if base else {})}
                 truth_table["time_offset"] = float(summary["truth_time_offset"]["value"])
                 truth = [replace(o, time_offset=truth_table["time_offset"]) for o in truth]
         else:
@@ -346,8 +355,9 @@ def calibrate_files(
         outputs["ros_yaml"] = str(write_ros2_yaml(ros_yaml, new_robot, wheel_radius,
                                                   overwrite=overwrite, twist=twist))
     if plot is not None:
-        clock_fitted = bool(summary.get("truth_time_offset", {}).get("fitted"))
-        drawn = _calibration_plot(plot, runs, truth, robot, new_robot, side, clock_fitted)
+        clock = summary.get("truth_time_offset", {})
+        drawn = _calibration_plot(plot, runs, truth, robot, new_robot, side, bool(clock.get("fitted")),
+                                  float(clock.get("fitted_about", 0.0)))
         if drawn is not None:  # else a warning has said why nothing was drawn
             outputs["plot"] = str(drawn)
     summary["method"] = method
@@ -684,8 +694,8 @@ def _refuse_trajectory_flags(method: str, source: str | None, exact_kwargs: Mapp
 
 
 def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequence[TruthOptions] | None,
-                      robot: Robot, new_robot: Robot, side: float | None, clock_fitted: bool = False
-                      ) -> Path | None:
+                      robot: Robot, new_robot: Robot, side: float | None, clock_fitted: bool = False,
+                      clock_base: float = 0.0) -> Path | None:
     """The runs against their truth, and with square runs of a differential drive UMBmark's
     return errors before and after; None, with a warning saying why, when there is nothing
     to draw. The log's own truth starts each run at its first pose; ``--truth`` fixes (on
@@ -708,7 +718,9 @@ def _calibration_plot(plot: str | Path, runs: Sequence[OdometryLog], truth: Sequ
             assert found is not None  # the calibration found it
             # the fixes calibrate_positions compared: with the clock fitted, those whose own
             # stamps lie the clock's range inside the log (the same ones at every offset tried)
-            margin, own = ((clock_range(runs), found.t + (truth[i].time_offset or 0.0)) if clock_fitted
+            # (their stamps moved by the robot file's offset the fit started from, ``clock_base``)
+            margin, own = ((clock_range(runs), found.t + (truth[i].time_offset or 0.0) - clock_base)
+                           if clock_fitted
                            else (0.0, found.t))
             inside = compared_fixes(log.t, own, margin) & np.all(np.isfinite(found.xy), axis=1)
             if np.count_nonzero(inside) < 2:
@@ -766,19 +778,15 @@ def _check_twist(speed: float | None, period: float | None, noise: Sequence[obje
 def _controller_radius(robot_path: str | Path, given: float | None) -> float:
     """The nominal wheel radius for the ROS controller: ``given`` (``--wheel-radius``) or the
     robot file's own (mean of the two wheels), and an error when the two disagree, since the
-    multipliers are computed against the file's nominal wheels."""
-    radius = file_wheel_radius(robot_path)
-    if given is None:
-        if radius is None:
-            raise InputError("--ros-yaml needs --wheel-radius (the controller's nominal radius, m): "
-                             "the robot file gives metres per tick, not a wheel size",
-                             source=str(robot_path))
-        return radius
-    if radius is not None and abs(given - radius) > 1e-9 * radius:
-        raise InputError(f"--wheel-radius {given:g} m conflicts with the robot file's wheel size "
-                         f"(radius {radius:g} m): the multipliers are relative to the file's wheels; "
-                         "leave --wheel-radius out or fix the file", source=str(robot_path))
-    return given
+    multipliers are computed against the file's nominal wheels
+    (:func:`odomkit.calibrate.export.controller_radius`, which report's snippet shares)."""
+    from odomkit.calibrate.export import controller_radius
+
+    radius = controller_radius(given, file_wheel_radius(robot_path), str(robot_path))
+    if radius is None:
+        raise InputError("--ros-yaml needs --wheel-radius (the controller's nominal radius, m): "
+                         "the robot file gives metres per tick, not a wheel size", source=str(robot_path))
+    return radius
 
 
 def file_wheel_radius(robot_path: str | Path) -> float | None:
