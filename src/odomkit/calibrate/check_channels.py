@@ -31,6 +31,11 @@ __all__ = ["check_channels"]
 
 #: The mappings that flip the turn channel alone, which a truth with x and y swapped mimics.
 _TURN_FLIPS = frozenset(f"the {what} sign flipped" for what in ("steering", "yaw-rate", "heading", "turn"))
+#: The mappings that drive the odometry backwards: against a truth with a heading, a truth
+#: whose heading points backwards (π off) reads alike (a lawn mower's RTK truth, its heading
+#: offset by π, was told "the distance sign flipped": user study).
+_BACKWARDS = frozenset(("the distance sign flipped", "the traction sign flipped",
+                        "both channels' signs flipped"))
 
 def _hypotheses(robot: Robot, log: OdometryLog) -> list[tuple[str, dict[str, Any]]]:
     """(description, channel changes) for each wrong mapping a robot's log can have."""
@@ -277,6 +282,9 @@ def _verdict(given: float, others: list[tuple[float, str, str]], *, floor: float
             # drive's lat and lon given swapped was told "the yaw-rate sign flipped": user study).
             advice += ("; if that channel's sign is right, the truth is mirrored: its x and y (lat and lon) "
                        "swapped")
+        elif words in _BACKWARDS and what == "the truth":
+            advice += ("; if the distance's sign is right, the truth's heading points backwards (π off: a "
+                       "motion-capture body's axis reversed, a heading offset by π)")
         return Finding("channels", "fail", f"the channels look mapped wrong: with {words} the odometry "
                        f"matches {what} (misfit {best:.3g}) far better than as given ({given:.3g}){detail}"
                        f"{note}", advice, given)

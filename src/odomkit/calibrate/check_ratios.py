@@ -258,6 +258,9 @@ class UnseenTurning:
         return self.odometry / floor if floor > 0 else math.inf
 
 
+#: A truth heading whose turning ratio to the odometry's lies within this of 1, with a
+#: standard error below it, is the odometry's own heading (:func:`check_truth_motion`).
+OWN_HEADING = 1e-6
 #: The odometry's turns between stretches vary by at least this RMS [rad] (3°) before
 #: :func:`unseen_turning`'s finding judges them: an encoder's or a gyro's own wobble along a
 #: straight drive is smaller.
@@ -934,7 +937,17 @@ def check_truth_motion(log: OdometryLog, robot: Robot, truth: Truth | None,
         found.append(Finding("travel_ratio", "ok", f"only {r.travel_stretches} straight stretch(es) where "
                              "the truth moves beyond its noise: the odometry's travel not compared with the "
                              "truth's"))
-    if math.isfinite(r.turn):
+    if math.isfinite(r.turn) and truth.theta is not None and abs(r.turn - 1.0) < OWN_HEADING and \
+            r.turn_se < OWN_HEADING:
+        # Agreement no sensor gives: the truth's heading is the odometry's own (a lawn mower's
+        # "ground truth" heading was its integrated gyro, to 1e-15: user study).
+        found.append(Finding("turn_ratio", "warn", f"the odometry turns {r.turn:.9g} ± {r.turn_se:.2g} × as "
+                             f"much as the truth over {r.turns} turns: an agreement no two sensors give, so "
+                             "the truth's heading is the odometry's own (integrated from the same gyro or "
+                             "wheels)",
+                             "compare against an independent heading, or read the truth as positions only "
+                             "(--truth-columns without theta), which then checks the turning"))
+    elif math.isfinite(r.turn):
         found.append(_turn_finding(r, robot, judged, clock))
     elif (r.unseen is not None and r.unseen.odometry >= UNSEEN_TURN and r.unseen.times >= NOT_NOISE
           and clock is None):

@@ -216,11 +216,13 @@ def _warn_if_heading_off_motion(truth: Truth) -> None:
     start aligned to it, starts off the robot's heading. A heading in degrees read as
     radians, or a TUM quaternion written w first, scored a circle's windows at heading NEES
     243 and 18.5, silently."""
-    from odomkit.truth import HEADING_OFF_CAUSES, heading_off_motion
+    from odomkit.truth import HEADING_OFF_CAUSES, heading_backwards, heading_off_motion
 
     if note := heading_off_motion(truth):
         warnings.warn(f"{truth.source}: {note}: every window or start taken from it starts off the robot's "
                       f"heading. Likely {HEADING_OFF_CAUSES}; odomkit check compares the two", stacklevel=3)
+    elif note := heading_backwards(truth):
+        warnings.warn(f"{truth.source}: {note}", stacklevel=3)
 
 
 def _warn_if_units_off(truth: Truth, log: OdometryLog | None) -> None:
