@@ -564,6 +564,9 @@ NULL_KEYS: dict[str, str] = {
     "coverage_overall": "evaluate: no --window, no verdict",
     "nees_verdict": "evaluate: no --window, no verdict",
     "verdict_note": "evaluate: NEES and coverage agree",
+    # evaluate: a log's caution where it has too few window ends to judge (none from 20 on,
+    # or without --window, where no verdict is given at all)
+    "few_ends": "evaluate: enough window ends for a verdict, or no --window",
     # evaluate: the heading's NEES and coverage need truth with heading (position-only truth
     # has none) and a covariance; its verdicts need --window too, as the position's
     "nees_heading_mean": "evaluate: truth without heading, or no covariance",
