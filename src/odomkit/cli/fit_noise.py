@@ -143,8 +143,10 @@ def print_fit(out: dict[str, Any], already_said: Sequence[str] = ()) -> None:
     key = next(k for k in out if k.startswith("interval"))
     trimmed = (f" ({out['windows_trimmed']} more left out: outside the {100 * out['trim']:g} % "
                "ellipse)" if out.get("windows_trimmed") else "")
+    of = (f"{out['logs_in_groups']} log(s) in {out['groups']} group(s)" if out.get("groups") else
+          f"{out['logs']} log(s)")
     print(f"fitted {len(out['parameters'])} parameter(s) on {out['windows']} window(s){trimmed} of "
-          f"{out['logs']} log(s); log-likelihood {out['log_likelihood']:.6g}")
+          f"{of}; log-likelihood {out['log_likelihood']:.6g}")
     for name, value in out["parameters"].items():
         lo, hi = out[key][name]
         print(f"  {name:20s} {out['kinds'][name]:5s} {value:.6g}   ({100 * out['level']:g} % "
@@ -159,8 +161,14 @@ def print_fit(out: dict[str, Any], already_said: Sequence[str] = ()) -> None:
           + " / ".join(f"{cov[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
     if "cross_validation" in out:
         cv = out["cross_validation"]["coverage"]
-        print("leave-one-log-out coverage: "
+        # With --group a fold leaves out one group's logs (a robot's), not one log.
+        what = "group" if out.get("groups") else "log"
+        print(f"leave-one-{what}-out coverage ({out['cross_validation']['folds']} folds"
+              + (", every length pooled" if "by_length" in out["cross_validation"] else "") + "): "
               + " / ".join(f"{cv[k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
+        for length, each in out["cross_validation"].get("by_length", {}).items():
+            print(f"  {length} windows ({each['windows']}): "
+                  + " / ".join(f"{each['coverage'][k]:.3f}" for k in ("0.5", "0.9", "0.95", "0.99")))
     from odomkit.workflows.results import grouped_warnings
 
     said = set(already_said) | set(grouped_warnings(already_said))

@@ -97,6 +97,8 @@ class PreparedLog:
     interpolated: str | None = None
     # The truth's median fix spacing over the log's span [s], or None (fewer than two fixes there).
     spacing: float | None = None
+    # Each window's --window length, in the basis's order ("10 s"; "" for one window per log)
+    window_lengths: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -159,8 +161,10 @@ def prepare_loaded(task: LoadedTask) -> PreparedLog:
 
         inside = truth.t[(truth.t >= log.t[0]) & (truth.t <= log.t[-1])]
         spacing = float(np.median(np.diff(inside))) if inside.size > 1 else None
+        lengths = tuple(str(spec) if spec is not None else ""
+                        for spec, n in zip(task.specs, basis.per_spec, strict=False) for _ in range(n))
         return PreparedLog(name, basis, len(log), skipped, None, scatter, tuple(off), labels,
-                           interpolated_note(truth), spacing)
+                           interpolated_note(truth), spacing, lengths)
     # Why there is no window (the failure path only: sampled again for the message).
     samples = truth_at(truth, log.t, task.max_gap)
     if int(samples.valid.sum()) < 2:
@@ -480,18 +484,22 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
         n for b in bases for n in b.notes if "window(s) left out" in n]
     names = [p.name for p in used]
     labels = [p.window_labels for p in used]
+    lengths = [p.window_lengths for p in used]
     if groups is not None:
         of_used = [g for p, g in zip(prepared, groups, strict=True) if p.basis is not None]
         bases, names = _grouped(bases, of_used)
         # Merged as the bases are (WindowBasis.merge: the group's logs in order).
         labels = [tuple(x for lab, g in zip(labels, of_used, strict=True) if g == name for x in lab)
                   for name in names]
+        lengths = [tuple(x for lab, g in zip(lengths, of_used, strict=True) if g == name for x in lab)
+                   for name in names]
     scatter = _pooled_scatter(used)
     with numeric_guard("the noise fit"), stage(progress, None, "fitting"):
         try:
             fit = fit_noise(bases, models, robot, kinds=kinds, fixed=set(fixed) | default_fixed,
                             level=level, log_names=names, cross_validate=cross_validate,
-                            trim=trim, truth_held=held, window_labels=labels, truth_scatter=scatter)
+                            trim=trim, truth_held=held, window_labels=labels, truth_scatter=scatter,
+                            window_lengths=lengths)
         except InputError as exc:
             if not why_few:
                 raise
@@ -510,6 +518,9 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
     said = notes + list(fit.warnings) + [w for w in (below, clock) if w]
     result["warnings"] = said
     result["truth_scatter_sigma"] = scatter
+    if groups is not None:  # "logs" counts the groups then (each one basis): the logs too
+        result["groups"] = len(names)
+        result["logs_in_groups"] = len(used)
     result.update({
         "window": None if specs == (None,) else ",".join(str(x) for x in specs),
         "windows_skipped": sum(p.skipped for p in prepared),
