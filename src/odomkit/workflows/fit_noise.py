@@ -430,6 +430,7 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
     ``[noise]`` when ``from_file``), ``held`` the truth noise given."""
     from odomkit.calibrate.fit_noise import defaults_left_out, fit_noise
     from odomkit.io.robotfile import TRUTH_SIGMAS
+    from odomkit.window_errors import HEADLESS
     from odomkit.workflows._scoring import issue_notes
     from odomkit.workflows.results import check_result, numeric_guard
 
@@ -474,14 +475,14 @@ def _fitted(prepared: Sequence[PreparedLog], robot: Robot, file_models: tuple[No
                          "no start heading could be fitted to the position-only truth around its start (too "
                          "few fixes, fixes off a smooth path by more than 3 --truth-sigma, too noisy, or the "
                          "robot hardly moves there)")), source=None if why else used[0].name)
-    if dropped and not any("window(s) left out" in n for b in bases for n in b.notes):
-        notes.append(f"{dropped} window(s) left out: no start heading could be fitted to the "
-                     "position-only truth")
+    # The windows left out, each named with its times by its log (window_errors.headless_note).
+    named = [n for b in bases for n in b.notes if HEADLESS in n]
+    if dropped and not named:
+        notes.append(f"{dropped} {HEADLESS}")
     # What left the windows few, for an error that the fit finds too few of them: a user
     # study's half log was told only "1 window(s) give 2 numbers for 7 free noise
     # parameter(s)", its first window dropped and its 30 s length without a window unsaid.
-    why_few = [n for n in ([unused] if unused else []) if n] + [
-        n for b in bases for n in b.notes if "window(s) left out" in n]
+    why_few = ([unused] if unused else []) + named
     names = [p.name for p in used]
     labels = [p.window_labels for p in used]
     lengths = [p.window_lengths for p in used]
